@@ -1,0 +1,669 @@
+#include "svdag/Builder.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <numeric>
+#include <stdexcept>
+#include <string>
+
+namespace svdag
+{
+namespace
+{
+constexpr uint32_t S = layout::CELL_SIZE; // 16
+constexpr uint32_t LeavesPerCell = 64;    // 4^3 leaves of 4^3 voxels
+
+uint32_t bitWidth(uint64_t v)
+{
+  uint32_t n = 0;
+  while (v)
+  {
+    ++n;
+    v >>= 1;
+  }
+  return n;
+}
+
+uint64_t mix64(uint64_t x)
+{
+  x ^= x >> 30;
+  x *= 0xbf58476d1ce4e5b9ULL;
+  x ^= x >> 27;
+  x *= 0x94d049bb133111ebULL;
+  x ^= x >> 31;
+  return x;
+}
+
+// Open-addressing hash set of 32-bit ids whose keys live elsewhere (in a pool). Keys are compared
+// exactly through the pool, so a hash collision never merges two different nodes.
+class IdTable
+{
+public:
+  template <class Hash, class Equal, class Insert>
+  uint32_t intern(uint64_t hash, const Equal& equalsId, const Insert& insert, const Hash& hashOfId)
+  {
+    if ((count + 1) * 2 > slots.size())
+    {
+      grow(hashOfId);
+    }
+    const size_t mask = slots.size() - 1;
+    for (size_t i = size_t(hash) & mask;; i = (i + 1) & mask)
+    {
+      const uint32_t id = slots[i];
+      if (id == Empty)
+      {
+        slots[i] = insert();
+        ++count;
+        return slots[i];
+      }
+      if (equalsId(id))
+      {
+        return id;
+      }
+    }
+  }
+  void clear() { std::vector<uint32_t>().swap(slots); count = 0; }
+
+private:
+  static constexpr uint32_t Empty = 0xFFFFFFFFu;
+  template <class Hash>
+  void grow(const Hash& hashOfId)
+  {
+    std::vector<uint32_t> old(std::max<size_t>(1024, slots.size() * 2), Empty);
+    old.swap(slots);
+    const size_t mask = slots.size() - 1;
+    for (uint32_t id : old)
+    {
+      if (id == Empty)
+        continue;
+      size_t i = size_t(hashOfId(id)) & mask;
+      while (slots[i] != Empty)
+        i = (i + 1) & mask;
+      slots[i] = id;
+    }
+  }
+  std::vector<uint32_t> slots;
+  size_t count = 0;
+};
+
+// Unpacked node pool used while building: [header][child refs...] per node, ids in first-seen order.
+// Child references hold ids (not yet bit offsets) until finish() packs the stream.
+class NodePool
+{
+public:
+  // Returns the id of the node (header, refs), inserting it if new.
+  uint32_t intern(uint32_t header, const uint32_t* refs)
+  {
+    const uint32_t n = layout::bitCount(layout::nodeMixedMask(header));
+    uint64_t h = mix64(header);
+    for (uint32_t r = 0; r < n; ++r)
+      h = mix64(h ^ refs[r]);
+    return table.intern(
+      h,
+      [&](uint32_t id) {
+        const uint32_t* w = words.data() + starts[id];
+        return w[0] == header && std::equal(refs, refs + n, w + 1);
+      },
+      [&]() {
+        starts.push_back(uint64_t(words.size()));
+        words.push_back(header);
+        words.insert(words.end(), refs, refs + n);
+        return uint32_t(starts.size() - 1);
+      },
+      [&](uint32_t id) { return hashOf(id); });
+  }
+  size_t size() const { return starts.size(); }
+  uint32_t header(uint32_t id) const { return words[starts[id]]; }
+  const uint32_t* refs(uint32_t id) const { return words.data() + starts[id] + 1; }
+  void release()
+  {
+    table.clear();
+    std::vector<uint32_t>().swap(words);
+    std::vector<uint64_t>().swap(starts);
+  }
+
+private:
+  uint64_t hashOf(uint32_t id) const
+  {
+    const uint32_t* w = words.data() + starts[id];
+    const uint32_t n = layout::bitCount(layout::nodeMixedMask(w[0]));
+    uint64_t h = mix64(w[0]);
+    for (uint32_t r = 0; r < n; ++r)
+      h = mix64(h ^ w[1 + r]);
+    return h;
+  }
+  IdTable table;
+  std::vector<uint32_t> words;
+  std::vector<uint64_t> starts;
+};
+
+class LeafPool
+{
+public:
+  uint32_t intern(uint64_t mask)
+  {
+    return table.intern(
+      mix64(mask), [&](uint32_t id) { return masks[id] == mask; },
+      [&]() {
+        masks.push_back(mask);
+        return uint32_t(masks.size() - 1);
+      },
+      [&](uint32_t id) { return mix64(masks[id]); });
+  }
+  std::vector<uint64_t> masks;
+  void releaseTable() { table.clear(); }
+
+private:
+  IdTable table;
+};
+
+// Child state while assembling a node: empty, full, or mixed with a reference.
+enum : uint32_t
+{
+  ChildEmpty = 0,
+  ChildFull = 1,
+  ChildMixed = 2
+};
+
+// Makes a node canonical (voxel (0,0,0) empty) and returns whether it was complemented.
+bool canonicalize(uint32_t& mixed, uint32_t& full, uint32_t* refs)
+{
+  const bool firstSolid = (full & 1u) || ((mixed & 1u) && (refs[0] & 1u));
+  if (!firstSolid)
+    return false;
+  full = ~(mixed | full) & 0xFFu;
+  for (uint32_t r = 0; r < layout::bitCount(mixed); ++r)
+    refs[r] ^= 1u;
+  return true;
+}
+
+// One label's voxels inside one cell, as 64 leaf masks (leaf index lx + 4 ly + 16 lz).
+struct CellLabel
+{
+  uint64_t value;
+  uint64_t masks[LeavesPerCell];
+};
+
+struct CellResult
+{
+  std::vector<CellLabel> labels; // first-seen order within the cell scan
+};
+
+template <class T>
+void scanCell(const T* slab, int64_t rowStride, int64_t sliceStride, uint32_t nx, uint32_t ny,
+  uint32_t nz, T background, const std::vector<uint64_t>& excluded, CellResult& out)
+{
+  out.labels.clear();
+  // Local label slots; slot -1 marks a value left out (background or excluded).
+  T cachedValue = background;
+  int cachedSlot = -1;
+  std::vector<std::pair<T, int>> seen;
+  for (uint32_t z = 0; z < nz; ++z)
+  {
+    for (uint32_t y = 0; y < ny; ++y)
+    {
+      const T* row = slab + z * sliceStride + y * rowStride;
+      const uint32_t leafYZ = 4 * (y >> 2) + 16 * (z >> 2);
+      const uint32_t bitYZ = 4 * (y & 3) + 16 * (z & 3);
+      for (uint32_t x = 0; x < nx; ++x)
+      {
+        const T v = row[x];
+        if (v != cachedValue)
+        {
+          cachedValue = v;
+          cachedSlot = -2;
+          for (const auto& s : seen)
+          {
+            if (s.first == v)
+            {
+              cachedSlot = s.second;
+              break;
+            }
+          }
+          if (cachedSlot == -2)
+          {
+            const uint64_t pattern = uint64_t(int64_t(v));
+            const bool leftOut =
+              std::binary_search(excluded.begin(), excluded.end(), uint64_t(pattern));
+            cachedSlot = leftOut ? -1 : int(out.labels.size());
+            seen.emplace_back(v, cachedSlot);
+            if (!leftOut)
+            {
+              out.labels.emplace_back();
+              CellLabel& l = out.labels.back();
+              l.value = pattern;
+              std::memset(l.masks, 0, sizeof(l.masks));
+            }
+          }
+        }
+        if (cachedSlot >= 0)
+        {
+          out.labels[size_t(cachedSlot)].masks[(x >> 2) + leafYZ] |= uint64_t(1)
+            << ((x & 3) + bitYZ);
+        }
+      }
+    }
+  }
+}
+
+// Tight cell-local bounds of a set of leaf masks, from per-axis projections of each leaf.
+void leafBounds(const uint64_t* masks, std::array<uint8_t, 3>& lo, std::array<uint8_t, 3>& hi)
+{
+  uint32_t proj[3] = { 0, 0, 0 }; // bit c set if any voxel with that coordinate (0..15)
+  for (uint32_t l = 0; l < LeavesPerCell; ++l)
+  {
+    const uint64_t m = masks[l];
+    if (!m)
+      continue;
+    const uint32_t lx = l & 3, ly = (l >> 2) & 3, lz = l >> 4;
+    uint64_t t = m | (m >> 32);
+    t |= t >> 16; // low 16 bits: x + 4 y over all z
+    uint32_t px = uint32_t(t | (t >> 4) | (t >> 8) | (t >> 12)) & 0xFu;
+    uint32_t py = 0, pz = 0;
+    for (uint32_t c = 0; c < 4; ++c)
+    {
+      py |= ((t >> (4 * c)) & 0xFu) ? (1u << c) : 0u;
+      pz |= ((m >> (16 * c)) & 0xFFFFu) ? (1u << c) : 0u;
+    }
+    proj[0] |= px << (4 * lx);
+    proj[1] |= py << (4 * ly);
+    proj[2] |= pz << (4 * lz);
+  }
+  for (int a = 0; a < 3; ++a)
+  {
+    lo[a] = uint8_t(__builtin_ctz(proj[a]));
+    hi[a] = uint8_t(31 - __builtin_clz(proj[a]));
+  }
+}
+
+struct PendingBlock
+{
+  uint32_t cell;
+  std::array<uint8_t, 3> lo, hi;
+  uint32_t label; // build-time label id
+  uint32_t root;  // root id << 1 | complement
+};
+
+void writeBits(std::vector<uint32_t>& stream, uint64_t offset, uint32_t width, uint32_t value)
+{
+  if (width == 0)
+    return;
+  const uint64_t word = offset >> 5;
+  const uint32_t shift = uint32_t(offset & 31);
+  stream[word] |= value << shift;
+  if (shift + width > 32)
+    stream[word + 1] |= value >> (32 - shift);
+}
+
+} // namespace
+
+std::string checkGeometry(const Geometry& g)
+{
+  for (int a = 0; a < 3; ++a)
+  {
+    if (g.dims[a] < 1)
+      return "dimensions must be at least 1 voxel along each axis (got " +
+        std::to_string(g.dims[0]) + " x " + std::to_string(g.dims[1]) + " x " +
+        std::to_string(g.dims[2]) + ")";
+    if (!std::isfinite(g.spacing[a]) || g.spacing[a] <= 0)
+      return "spacing must be finite and positive";
+    if (!std::isfinite(g.origin[a]))
+      return "origin must be finite";
+  }
+  for (double d : g.direction)
+  {
+    if (!std::isfinite(d))
+      return "direction matrix must be finite";
+  }
+  const auto n = g.cellCounts();
+  const uint64_t cells = uint64_t(n[0]) * uint64_t(n[1]) * uint64_t(n[2]);
+  if (cells > (uint64_t(1) << 32))
+    return "volume too large: more than 2^32 cells of 16^3 voxels";
+  return "";
+}
+
+struct Builder::Impl
+{
+  Geometry geometry;
+  ScalarType type;
+  BuildOptions options;
+  ParallelFor parallel;
+  std::array<int32_t, 3> cells;
+  int32_t nextZ = 0;
+
+  std::vector<CellResult> cellResults;
+  LeafPool leaves;
+  NodePool mids;
+  NodePool roots;
+  std::vector<PendingBlock> blocks;
+  std::vector<LabelInfo> labels; // build-time ids, first-seen order
+  // Label value -> build-time id, through the same exact-compare hash table.
+  IdTable labelTable;
+
+  uint32_t labelId(uint64_t value)
+  {
+    return labelTable.intern(
+      mix64(value), [&](uint32_t id) { return labels[id].value == value; },
+      [&]() {
+        LabelInfo info;
+        info.value = value;
+        info.bounds = { { INT32_MAX, INT32_MIN, INT32_MAX, INT32_MIN, INT32_MAX, INT32_MIN } };
+        labels.push_back(info);
+        return uint32_t(labels.size() - 1);
+      },
+      [&](uint32_t id) { return mix64(labels[id].value); });
+  }
+
+  // Interns the occupancy of one label in one cell and records the block.
+  void addBlock(uint32_t cell, const std::array<int32_t, 3>& cellOrigin, const CellLabel& cl)
+  {
+    PendingBlock b;
+    b.cell = cell;
+    leafBounds(cl.masks, b.lo, b.hi);
+    uint64_t voxels = 0;
+    uint32_t rootMixed = 0, rootFull = 0, rootRefs[8];
+    for (uint32_t o = 0; o < 8; ++o)
+    {
+      const uint32_t ox = o & 1, oy = (o >> 1) & 1, oz = o >> 2;
+      uint32_t mixed = 0, full = 0, refs[8], n = 0;
+      for (uint32_t c = 0; c < 8; ++c)
+      {
+        const uint32_t lx = 2 * ox + (c & 1), ly = 2 * oy + ((c >> 1) & 1), lz = 2 * oz + (c >> 2);
+        uint64_t m = cl.masks[lx + 4 * ly + 16 * lz];
+        if (m == 0)
+          continue;
+        if (m == ~uint64_t(0))
+        {
+          full |= 1u << c;
+          voxels += 64;
+          continue;
+        }
+        voxels += uint64_t(__builtin_popcountll(m));
+        const uint32_t complement = uint32_t(m & 1u);
+        if (complement)
+          m = ~m;
+        mixed |= 1u << c;
+        refs[n++] = (leaves.intern(m) << 1) | complement;
+      }
+      if (!mixed && !full)
+        continue;
+      if (!mixed && full == 0xFFu)
+      {
+        rootFull |= 1u << o;
+        continue;
+      }
+      const uint32_t complement = canonicalize(mixed, full, refs) ? 1u : 0u;
+      rootRefs[layout::bitCount(rootMixed)] = (mids.intern(mixed | (full << 8), refs) << 1) | complement;
+      rootMixed |= 1u << o;
+    }
+    const uint32_t complement = canonicalize(rootMixed, rootFull, rootRefs) ? 1u : 0u;
+    b.root = (roots.intern(rootMixed | (rootFull << 8), rootRefs) << 1) | complement;
+    b.label = labelId(cl.value);
+    LabelInfo& info = labels[b.label];
+    info.voxels += voxels;
+    for (int a = 0; a < 3; ++a)
+    {
+      info.bounds[2 * a] = std::min(info.bounds[2 * a], cellOrigin[a] + int32_t(b.lo[a]));
+      info.bounds[2 * a + 1] = std::max(info.bounds[2 * a + 1], cellOrigin[a] + int32_t(b.hi[a]));
+    }
+    blocks.push_back(b);
+  }
+};
+
+Builder::Builder(
+  const Geometry& geometry, ScalarType type, const BuildOptions& options, ParallelFor parallel)
+  : impl(new Impl)
+{
+  const std::string problem = checkGeometry(geometry);
+  if (!problem.empty())
+    throw std::invalid_argument(problem);
+  impl->geometry = geometry;
+  impl->type = type;
+  impl->options = options;
+  // Background is left out like an excluded label; patterns are normalised to the type's width.
+  auto& ex = impl->options.excluded;
+  ex.push_back(options.background);
+  for (auto& v : ex)
+  {
+    uint64_t tmp = 0;
+    scalarStore(type, &tmp, 0, v);
+    v = scalarLoad(type, &tmp, 0);
+  }
+  impl->options.background = ex.back();
+  std::sort(ex.begin(), ex.end());
+  ex.erase(std::unique(ex.begin(), ex.end()), ex.end());
+  impl->parallel = parallel ? parallel : ParallelFor(sequentialFor);
+  impl->cells = geometry.cellCounts();
+  impl->cellResults.resize(size_t(impl->cells[0]) * size_t(impl->cells[1]));
+}
+
+Builder::~Builder() = default;
+
+int32_t Builder::nextSlab() const
+{
+  return impl->nextZ;
+}
+
+void Builder::addSlab(int32_t z0, int32_t nz, const void* data)
+{
+  Impl& m = *impl;
+  const auto& d = m.geometry.dims;
+  if (z0 != m.nextZ || nz != std::min<int32_t>(SlabDepth, d[2] - z0) || nz <= 0)
+    throw std::logic_error("slab out of order: expected z0 = " + std::to_string(m.nextZ));
+  const int64_t rowStride = d[0], sliceStride = int64_t(d[0]) * d[1];
+  const uint32_t ncx = uint32_t(m.cells[0]);
+  const ScalarType type = m.type;
+  const uint64_t background = m.options.background;
+  const auto& excluded = m.options.excluded;
+  auto& results = m.cellResults;
+  m.parallel(0, results.size(), 1, [&](uint64_t begin, uint64_t end) {
+    for (uint64_t c = begin; c < end; ++c)
+    {
+      const uint32_t cx = uint32_t(c % ncx), cy = uint32_t(c / ncx);
+      const uint32_t nx = std::min<uint32_t>(S, uint32_t(d[0]) - cx * S);
+      const uint32_t ny = std::min<uint32_t>(S, uint32_t(d[1]) - cy * S);
+      const size_t origin = size_t(cx) * S + size_t(cy) * S * size_t(rowStride);
+      switch (type)
+      {
+#define SVDAG_SCAN(Enum, T)                                                                        \
+  case ScalarType::Enum:                                                                           \
+    scanCell<T>(static_cast<const T*>(data) + origin, rowStride, sliceStride, nx, ny,              \
+      uint32_t(nz), T(background), excluded, results[c]);                                          \
+    break;
+        SVDAG_SCAN(Int8, int8_t)
+        SVDAG_SCAN(UInt8, uint8_t)
+        SVDAG_SCAN(Int16, int16_t)
+        SVDAG_SCAN(UInt16, uint16_t)
+        SVDAG_SCAN(Int32, int32_t)
+        SVDAG_SCAN(UInt32, uint32_t)
+        SVDAG_SCAN(Int64, int64_t)
+        SVDAG_SCAN(UInt64, uint64_t)
+#undef SVDAG_SCAN
+      }
+    }
+  });
+  // Merge in cell order: ids and block order depend on the data only.
+  const uint32_t cz = uint32_t(z0) / S;
+  for (size_t c = 0; c < results.size(); ++c)
+  {
+    const uint32_t cx = uint32_t(c % ncx), cy = uint32_t(c / ncx);
+    const uint32_t cell = uint32_t(c + results.size() * cz);
+    const std::array<int32_t, 3> origin{ { int32_t(cx * S), int32_t(cy * S), int32_t(cz * S) } };
+    for (const CellLabel& cl : results[c].labels)
+      m.addBlock(cell, origin, cl);
+  }
+  m.nextZ = z0 + nz;
+}
+
+Volume Builder::finish()
+{
+  Impl& m = *impl;
+  if (m.nextZ != m.geometry.dims[2])
+    throw std::logic_error("missing slabs: next expected z0 = " + std::to_string(m.nextZ));
+  std::vector<CellResult>().swap(m.cellResults);
+  m.leaves.releaseTable();
+
+  Volume v;
+  v.geometry = m.geometry;
+  v.scalarType = m.type;
+  v.background = m.options.background;
+  FieldWidths& w = v.widths;
+
+  auto checkWidth = [](uint32_t bits, const char* what) {
+    if (bits > 32)
+      throw std::length_error(std::string("SVDAG too large: ") + what + " need more than 32 bits");
+    return bits;
+  };
+  // Leaves keep their ids. A reference is (id << 1) | complement.
+  v.leaves = std::move(m.leaves.masks);
+  w.leafRefBits = checkWidth(bitWidth(v.leaves.empty() ? 0 : v.leaves.size() - 1) + 1, "leaf references");
+
+  // Packs a node pool whose child references are ids into a bit stream whose child references
+  // are (childOffset[id] << 1 | complement), returning each node's bit offset.
+  auto pack = [](const NodePool& pool, const std::vector<uint64_t>* childOffsets, uint32_t refBits,
+                std::vector<uint32_t>& stream) {
+    std::vector<uint64_t> offsets(pool.size());
+    uint64_t bits = 0;
+    for (uint32_t id = 0; id < pool.size(); ++id)
+    {
+      offsets[id] = bits;
+      bits += layout::NODE_HEADER_BITS +
+        uint64_t(layout::bitCount(layout::nodeMixedMask(pool.header(id)))) * refBits;
+    }
+    stream.assign((bits + 31) / 32 + 1, 0u);
+    for (uint32_t id = 0; id < pool.size(); ++id)
+    {
+      const uint32_t header = pool.header(id);
+      uint64_t at = offsets[id];
+      writeBits(stream, at, layout::NODE_HEADER_BITS, header);
+      at += layout::NODE_HEADER_BITS;
+      const uint32_t* refs = pool.refs(id);
+      for (uint32_t r = 0; r < layout::bitCount(layout::nodeMixedMask(header)); ++r, at += refBits)
+      {
+        const uint64_t target = childOffsets ? (*childOffsets)[refs[r] >> 1] : (refs[r] >> 1);
+        writeBits(stream, at, refBits, uint32_t((target << 1) | (refs[r] & 1u)));
+      }
+    }
+    return offsets;
+  };
+
+  v.midCount = m.mids.size();
+  const std::vector<uint64_t> midOffsets = pack(m.mids, nullptr, w.leafRefBits, v.mids);
+  m.mids.release();
+  w.midRefBits = checkWidth(bitWidth(midOffsets.empty() ? 0 : midOffsets.back()) + 1, "mid references");
+
+  v.rootCount = m.roots.size();
+  const std::vector<uint64_t> rootOffsets = pack(m.roots, &midOffsets, w.midRefBits, v.roots);
+  m.roots.release();
+  w.rootRefBits = checkWidth(bitWidth(rootOffsets.empty() ? 0 : rootOffsets.back()) + 1, "root references");
+
+  // Label table sorted by value; blocks refer to the sorted index.
+  std::vector<uint32_t> order(m.labels.size());
+  std::iota(order.begin(), order.end(), 0u);
+  const ScalarType type = m.type;
+  std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
+    return scalarLess(type, m.labels[a].value, m.labels[b].value);
+  });
+  std::vector<uint32_t> rank(order.size());
+  v.labels.resize(order.size());
+  for (uint32_t i = 0; i < order.size(); ++i)
+  {
+    rank[order[i]] = i;
+    v.labels[i] = m.labels[order[i]];
+  }
+  w.labelBits = bitWidth(v.labels.empty() ? 0 : v.labels.size() - 1);
+  const auto n = m.geometry.cellCounts();
+  w.cellBits = bitWidth(uint64_t(n[0]) * uint64_t(n[1]) * uint64_t(n[2]) - 1);
+
+  v.blockCount = m.blocks.size();
+  const uint32_t recordBits = w.blockBits();
+  v.blocks.assign((v.blockCount * recordBits + 31) / 32 + 1, 0u);
+  for (uint64_t i = 0; i < m.blocks.size(); ++i)
+  {
+    const PendingBlock& b = m.blocks[i];
+    const uint64_t base = i * recordBits;
+    writeBits(v.blocks, base, w.cellBits, b.cell);
+    uint32_t box = 0;
+    for (int a = 0; a < 3; ++a)
+      box |= (uint32_t(b.lo[a]) << (4 * a)) | (uint32_t(b.hi[a]) << (12 + 4 * a));
+    writeBits(v.blocks, base + layout::blockBoundsOffset(w.cellBits), layout::BLOCK_BOUNDS_BITS, box);
+    writeBits(v.blocks, base + layout::blockLabelOffset(w.cellBits), w.labelBits, rank[b.label]);
+    const uint64_t root = (rootOffsets[b.root >> 1] << 1) | (b.root & 1u);
+    writeBits(v.blocks, base + layout::blockRootOffset(w.cellBits, w.labelBits), w.rootRefBits,
+      uint32_t(root));
+  }
+  std::vector<PendingBlock>().swap(m.blocks);
+  return v;
+}
+
+Volume Builder::build(const Geometry& geometry, ScalarType type, const void* data,
+  const BuildOptions& options, ParallelFor parallel)
+{
+  Builder builder(geometry, type, options, parallel);
+  const size_t slice = size_t(geometry.dims[0]) * size_t(geometry.dims[1]) * size_t(scalarSize(type));
+  for (int32_t z0 = 0; z0 < geometry.dims[2]; z0 += SlabDepth)
+  {
+    const int32_t nz = std::min(SlabDepth, geometry.dims[2] - z0);
+    builder.addSlab(z0, nz, static_cast<const uint8_t*>(data) + size_t(z0) * slice);
+  }
+  return builder.finish();
+}
+
+void decodeSlab(const Volume& v, int32_t z0, int32_t nz, void* out, const ParallelFor& parallel)
+{
+  const auto& d = v.geometry.dims;
+  if (z0 < 0 || nz < 0 || z0 + nz > d[2])
+    throw std::out_of_range("decodeSlab: z range outside the volume");
+  const size_t sliceSize = size_t(d[0]) * size_t(d[1]);
+  const ScalarType type = v.scalarType;
+  for (size_t i = 0; i < sliceSize * size_t(nz); ++i)
+    scalarStore(type, out, i, v.background);
+  if (nz == 0 || v.blockCount == 0)
+    return;
+  const auto n = v.geometry.cellCounts();
+  const uint32_t cellsPerLayer = uint32_t(n[0]) * uint32_t(n[1]);
+  const uint32_t czFirst = uint32_t(z0) / S, czLast = uint32_t(z0 + nz - 1) / S;
+  // Blocks of the covered cell layers, found once; each cell then decodes independently.
+  const uint64_t first = v.cellBlocks(czFirst * cellsPerLayer).first;
+  const uint64_t last = v.cellBlocks((czLast + 1) * cellsPerLayer).first;
+  std::vector<uint64_t> starts; // block index of each block run start
+  std::vector<uint32_t> runCells;
+  for (uint64_t b = first; b < last; ++b)
+  {
+    const uint32_t cell = v.block(b).cell;
+    if (runCells.empty() || runCells.back() != cell)
+    {
+      runCells.push_back(cell);
+      starts.push_back(b);
+    }
+  }
+  starts.push_back(last);
+  parallel(0, runCells.size(), 1, [&](uint64_t begin, uint64_t end) {
+    std::vector<uint8_t> occ(S * S * S);
+    for (uint64_t r = begin; r < end; ++r)
+    {
+      const uint32_t cell = runCells[r];
+      const int32_t cx = int32_t(cell % uint32_t(n[0]) * S);
+      const int32_t cy = int32_t(cell / uint32_t(n[0]) % uint32_t(n[1]) * S);
+      const int32_t cz = int32_t(cell / cellsPerLayer * S);
+      for (uint64_t b = starts[r]; b < starts[r + 1]; ++b)
+      {
+        const Block blk = v.block(b);
+        const uint64_t value = v.labels[blk.label].value;
+        v.occupancy(b, occ.data());
+        const int32_t zLo = std::max<int32_t>(cz + blk.lo[2], z0);
+        const int32_t zHi = std::min<int32_t>(cz + blk.hi[2], z0 + nz - 1);
+        for (int32_t z = zLo; z <= zHi; ++z)
+          for (int32_t y = cy + blk.lo[1]; y <= cy + blk.hi[1]; ++y)
+            for (int32_t x = cx + blk.lo[0]; x <= cx + blk.hi[0]; ++x)
+            {
+              if (occ[size_t(x - cx) + S * (size_t(y - cy) + S * size_t(z - cz))])
+                scalarStore(type, out, size_t(x) + size_t(d[0]) * (size_t(y) + size_t(d[1]) * size_t(z - z0)), value);
+            }
+      }
+    }
+  });
+}
+
+} // namespace svdag

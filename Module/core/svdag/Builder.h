@@ -1,0 +1,68 @@
+// Builds a Volume from a label volume streamed in slabs of 16 z-slices.
+//
+// Each 16^3 cell of a slab is scanned independently (in parallel); the per-cell results are then
+// merged in cell order into the deduplicated pools, so the output does not depend on the thread
+// count. Peak memory is one slab plus the pools.
+#pragma once
+
+#include "svdag/Parallel.h"
+#include "svdag/Volume.h"
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace svdag
+{
+
+struct BuildOptions
+{
+  uint64_t background = 0;        // label pattern not stored (decodes where no block is)
+  std::vector<uint64_t> excluded; // label patterns left out (decode as background)
+};
+
+// Empty if the geometry can be compressed, else why not (absurd dimensions, spacing, ...).
+std::string checkGeometry(const Geometry& geometry);
+
+class Builder
+{
+public:
+  static constexpr int32_t SlabDepth = 16;
+
+  // Throws std::invalid_argument when checkGeometry fails.
+  Builder(const Geometry& geometry, ScalarType type, const BuildOptions& options = {},
+    ParallelFor parallel = sequentialFor);
+  ~Builder();
+  Builder(const Builder&) = delete;
+  Builder& operator=(const Builder&) = delete;
+
+  // Adds z-slices [z0, z0 + nz): slabs must come in order, z0 = 16 * n and
+  // nz = min(16, dims[2] - z0). `data` holds dims[0] * dims[1] * nz values of the scalar type,
+  // x fastest. Throws std::logic_error on a slab out of order.
+  void addSlab(int32_t z0, int32_t nz, const void* data);
+  // Next expected slab start, or dims[2] when every slab was added.
+  int32_t nextSlab() const;
+
+  // Packs the pools with their final field widths. Throws std::logic_error if slabs are missing,
+  // std::length_error if a pool outgrows the 32-bit reference widths.
+  Volume finish();
+
+  // Compresses a whole volume held in memory (x fastest).
+  static Volume build(const Geometry& geometry, ScalarType type, const void* data,
+    const BuildOptions& options = {}, ParallelFor parallel = sequentialFor);
+
+private:
+  struct Impl;
+  std::unique_ptr<Impl> impl;
+};
+
+// Writes the decoded labels of z-slices [z0, z0 + nz) into `out` (dims[0] * dims[1] * nz values
+// of the volume's scalar type, x fastest).
+void decodeSlab(const Volume& volume, int32_t z0, int32_t nz, void* out,
+  const ParallelFor& parallel = sequentialFor);
+inline void decode(const Volume& volume, void* out, const ParallelFor& parallel = sequentialFor)
+{
+  decodeSlab(volume, 0, volume.geometry.dims[2], out, parallel);
+}
+
+} // namespace svdag

@@ -1,0 +1,110 @@
+/* The one definition of the compressed SVDAG layout, shared by C++ (with GLM) and GLSL.
+ *
+ * Written in the common subset of both languages: constants and pure functions on 32-bit
+ * integers. Storage access differs per language, so stream reads take a macro
+ * SVDAG_WORD(stream, index) that the including file defines.
+ *
+ * A volume is cut into an axis-aligned grid of 16^3 cells. Each (cell, label) pair present
+ * becomes one block. Occupancy of a block is a 3-level tree, every level deduplicated in a pool
+ * shared by all blocks and labels:
+ *
+ *   root  (16^3)  node in the ROOT stream   -> 8 children, each an 8^3 node or empty/full
+ *   mid   (8^3)   node in the MID stream    -> 8 children, each a 4^3 leaf or empty/full
+ *   leaf  (4^3)   64-bit occupancy mask in the LEAF array, bit = x + 4*y + 16*z
+ *
+ * Node encoding (bit stream, LSB first):  [mixed:8][full:8][ref x popcount(mixed)]
+ *   child o = ox + 2*oy + 4*oz (x fastest). A child is "mixed" (stored, has a reference),
+ *   "full" (solid, no reference) or empty (neither bit). References of mixed children follow in
+ *   increasing child order, each CHILD_REF_BITS wide (per level, chosen from the pool size).
+ *
+ * References carry a complement bit (bit 0): ref = (target << 1) | complement. A complemented
+ * reference means the child's occupancy is the inverse of the stored node. Every stored node and
+ * leaf is canonical: its voxel (0,0,0) is empty, so a shape and its inverse are stored once.
+ * For roots and mids, target = bit offset of the node in its stream; for leaves, the index.
+ *
+ * Blocks are fixed-width bit-packed records, sorted by cell index:
+ *   [cell:CELL_BITS][minX:4][minY:4][minZ:4][maxX:4][maxY:4][maxZ:4][label:LABEL_BITS][root:ROOT_REF_BITS]
+ * with the tight voxel bounds (inclusive, cell-local) and the dense label index. A block's root
+ * covers the whole cell; voxels outside the volume are empty.
+ *
+ * All field widths are in [0, 32]. Streams are arrays of 32-bit words padded by one zero word.
+ */
+#ifndef SVDAG_LAYOUT_H
+#define SVDAG_LAYOUT_H
+
+#ifdef __cplusplus
+#include <cstdint>
+namespace svdag
+{
+namespace layout
+{
+typedef uint32_t uint;
+inline uint bitCount(uint v) { return uint(__builtin_popcount(v)); }
+#define SVDAG_CONST constexpr uint
+#define SVDAG_FN inline
+#define SVDAG_NS svdag::layout::
+#define SVDAG_OFFSET_T uint64_t
+#else
+#define SVDAG_CONST const uint
+#define SVDAG_FN
+#define SVDAG_NS
+#define SVDAG_OFFSET_T uint
+#endif
+
+SVDAG_CONST CELL_SIZE = 16u;       // voxels per block edge (root level)
+SVDAG_CONST MID_SIZE = 8u;         // voxels per mid node edge
+SVDAG_CONST LEAF_SIZE = 4u;        // voxels per leaf edge
+SVDAG_CONST NODE_MASK_BITS = 8u;   // one bit per octant
+SVDAG_CONST NODE_HEADER_BITS = 16u; // mixed mask + full mask
+SVDAG_CONST BOUND_BITS = 4u;       // one cell-local coordinate 0..15
+SVDAG_CONST BLOCK_BOUNDS_BITS = 24u;
+
+/* Bit offsets of the block record fields, given the per-volume widths. */
+SVDAG_FN uint blockBoundsOffset(uint cellBits) { return cellBits; }
+SVDAG_FN uint blockLabelOffset(uint cellBits) { return cellBits + BLOCK_BOUNDS_BITS; }
+SVDAG_FN uint blockRootOffset(uint cellBits, uint labelBits)
+{
+  return cellBits + BLOCK_BOUNDS_BITS + labelBits;
+}
+SVDAG_FN uint blockRecordBits(uint cellBits, uint labelBits, uint rootRefBits)
+{
+  return cellBits + BLOCK_BOUNDS_BITS + labelBits + rootRefBits;
+}
+
+/* Octant of a cell-local (root) or node-local coordinate at a level of edge `size`. */
+SVDAG_FN uint octant(uint x, uint y, uint z, uint half)
+{
+  return (x >= half ? 1u : 0u) + (y >= half ? 2u : 0u) + (z >= half ? 4u : 0u);
+}
+/* Bit of voxel (x, y, z) in a 4^3 leaf mask, 0 <= x, y, z < 4. */
+SVDAG_FN uint leafBit(uint x, uint y, uint z) { return x + 4u * y + 16u * z; }
+
+SVDAG_FN uint nodeMixedMask(uint header) { return header & 0xFFu; }
+SVDAG_FN uint nodeFullMask(uint header) { return (header >> 8u) & 0xFFu; }
+/* Position of child o's reference among the node's references. */
+SVDAG_FN uint childRank(uint mixedMask, uint o) { return uint(bitCount(mixedMask & ((1u << o) - 1u))); }
+
+SVDAG_FN uint refTarget(uint ref) { return ref >> 1u; }
+SVDAG_FN bool refComplement(uint ref) { return (ref & 1u) != 0u; }
+
+SVDAG_FN uint lowMask(uint width) { return width >= 32u ? 0xFFFFFFFFu : ((1u << width) - 1u); }
+
+#ifdef __cplusplus
+} // namespace layout
+} // namespace svdag
+#endif
+
+/* Reads `width` (0..32) bits at bit `offset` of a word stream into `result`. The stream must be
+ * padded with one zero word, so that a field ending in the last data word needs no bounds check.
+ * SVDAG_WORD(stream, i) must be defined by the including file. */
+#define SVDAG_READ_BITS(result, stream, offset, width)                                             \
+  {                                                                                                \
+    SVDAG_OFFSET_T svdagWord_ = (offset) >> 5u;                                                    \
+    SVDAG_NS uint svdagShift_ = SVDAG_NS uint((offset) & 31u);                                     \
+    SVDAG_NS uint svdagValue_ = SVDAG_WORD(stream, svdagWord_) >> svdagShift_;                     \
+    if (svdagShift_ != 0u && svdagShift_ + (width) > 32u)                                          \
+      svdagValue_ |= SVDAG_WORD(stream, svdagWord_ + 1u) << (32u - svdagShift_);                   \
+    result = svdagValue_ & SVDAG_NS lowMask(width);                                                \
+  }
+
+#endif

@@ -1,0 +1,140 @@
+// The compressed segmentation volume: blocks, the shared occupancy DAG and the label table.
+// VTK-free core; vtkSegmentationSVDAG wraps it. The bit layout is defined in Layout.h.
+#pragma once
+
+#include "svdag/Layout.h"
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace svdag
+{
+
+// Integer label types. Values are kept as 64-bit patterns (sign-extended for signed types).
+enum class ScalarType : uint8_t
+{
+  Int8 = 0,
+  UInt8,
+  Int16,
+  UInt16,
+  Int32,
+  UInt32,
+  Int64,
+  UInt64
+};
+constexpr int ScalarTypeCount = 8;
+int scalarSize(ScalarType t);
+bool scalarSigned(ScalarType t);
+const char* scalarName(ScalarType t); // numpy-style: "int8", "uint64", ...
+// Smallest and largest value of the type, as 64-bit patterns.
+uint64_t scalarMin(ScalarType t);
+uint64_t scalarMax(ScalarType t);
+// Orders two 64-bit label patterns by the value they hold in type t.
+bool scalarLess(ScalarType t, uint64_t a, uint64_t b);
+// Reads element i of a buffer of type t as a 64-bit pattern.
+uint64_t scalarLoad(ScalarType t, const void* data, size_t i);
+void scalarStore(ScalarType t, void* data, size_t i, uint64_t value);
+
+struct Geometry
+{
+  std::array<int32_t, 3> dims{ { 0, 0, 0 } };
+  std::array<double, 3> spacing{ { 1, 1, 1 } };
+  std::array<double, 3> origin{ { 0, 0, 0 } };
+  std::array<double, 9> direction{ { 1, 0, 0, 0, 1, 0, 0, 0, 1 } }; // row-major, like vtkImageData
+  uint64_t voxelCount() const { return uint64_t(dims[0]) * uint64_t(dims[1]) * uint64_t(dims[2]); }
+  std::array<int32_t, 3> cellCounts() const;
+  bool operator==(const Geometry& o) const;
+};
+
+struct LabelInfo
+{
+  uint64_t value = 0;                  // original label value (pattern, see ScalarType)
+  uint64_t voxels = 0;                 // number of voxels with this label
+  std::array<int32_t, 6> bounds{ {} }; // inclusive voxel bounds: xmin, xmax, ymin, ymax, zmin, zmax
+  bool operator==(const LabelInfo& o) const;
+};
+
+// One decoded block record.
+struct Block
+{
+  uint32_t cell = 0;                // linear cell index: cx + ncx * (cy + ncy * cz)
+  std::array<uint8_t, 3> lo{ {} };  // inclusive cell-local voxel bounds of the label's voxels
+  std::array<uint8_t, 3> hi{ {} };
+  uint32_t label = 0;               // index into the label table
+  uint32_t root = 0;                // reference (offset << 1 | complement) into the root stream
+};
+
+// Per-volume widths of the bit-packed fields (Layout.h).
+struct FieldWidths
+{
+  uint32_t cellBits = 0;
+  uint32_t labelBits = 0;
+  uint32_t rootRefBits = 0; // block -> root node
+  uint32_t midRefBits = 0;  // root -> mid node
+  uint32_t leafRefBits = 0; // mid -> leaf
+  uint32_t blockBits() const
+  {
+    return layout::blockRecordBits(cellBits, labelBits, rootRefBits);
+  }
+  bool operator==(const FieldWidths& o) const;
+};
+
+// Bytes held by each part.
+struct MemoryUsage
+{
+  uint64_t blocks = 0;
+  uint64_t roots = 0;
+  uint64_t mids = 0;
+  uint64_t leaves = 0;
+  uint64_t labels = 0;
+  uint64_t dag() const { return roots + mids + leaves; }
+  // What a renderer holds besides its BVH: blocks + DAG (+ the label table).
+  uint64_t total() const { return blocks + dag() + labels; }
+};
+
+class Volume
+{
+public:
+  Geometry geometry;
+  ScalarType scalarType = ScalarType::UInt32;
+  uint64_t background = 0;
+  std::vector<LabelInfo> labels; // sorted by value
+  FieldWidths widths;
+
+  uint64_t blockCount = 0;
+  std::vector<uint32_t> blocks; // bit-packed records, padded by one word
+  uint64_t rootCount = 0;
+  std::vector<uint32_t> roots;  // node stream, padded by one word
+  uint64_t midCount = 0;
+  std::vector<uint32_t> mids;   // node stream, padded by one word
+  std::vector<uint64_t> leaves; // canonical 4^3 masks (bit 0 clear)
+
+  Block block(uint64_t i) const;
+  // Header (mixed | full << 8) and child reference of the node at a bit offset in a stream.
+  static uint32_t nodeHeader(const std::vector<uint32_t>& stream, uint64_t offset);
+  static uint32_t nodeChildRef(const std::vector<uint32_t>& stream, uint64_t offset,
+    uint32_t childRank, uint32_t refBits);
+  // Bit length of the node at `offset` in a stream whose child references are refBits wide.
+  static uint64_t nodeBits(const std::vector<uint32_t>& stream, uint64_t offset, uint32_t refBits);
+
+  // Occupancy of cell-local voxel (x, y, z) in 0..15 of block i.
+  bool occupied(uint64_t blockIndex, uint32_t x, uint32_t y, uint32_t z) const;
+  // Occupancy of the 16^3 cell of block i, x fastest (4096 entries).
+  void occupancy(uint64_t blockIndex, uint8_t* out4096) const;
+  // Label pattern at voxel (i, j, k); background where no block holds it.
+  uint64_t labelAt(int32_t i, int32_t j, int32_t k) const;
+  // Range [first, last) of the blocks in a cell (blocks are sorted by cell).
+  std::pair<uint64_t, uint64_t> cellBlocks(uint32_t cell) const;
+  // Index of a label value in the table, or -1.
+  int64_t findLabel(uint64_t value) const;
+
+  MemoryUsage memory() const;
+  // Throws std::runtime_error naming the first inconsistency (widths, offsets, bounds, ordering).
+  void validate() const;
+  bool operator==(const Volume& o) const;
+};
+
+} // namespace svdag

@@ -1,0 +1,311 @@
+#include "vtkSegmentationSVDAG.h"
+
+#include "vtkDataArray.h"
+#include "vtkImageData.h"
+#include "vtkInformation.h"
+#include "vtkInformationVector.h"
+#include "vtkMatrix3x3.h"
+#include "vtkObjectFactory.h"
+#include "vtkPointData.h"
+#include "vtkSVDAGParallel.h"
+#include "vtkType.h"
+
+#include "svdag/Builder.h"
+#include "svdag/Volume.h"
+
+vtkStandardNewMacro(vtkSegmentationSVDAG);
+
+namespace
+{
+const int VTKTypes[svdag::ScalarTypeCount] = { VTK_SIGNED_CHAR, VTK_UNSIGNED_CHAR, VTK_SHORT,
+  VTK_UNSIGNED_SHORT, VTK_INT, VTK_UNSIGNED_INT, VTK_LONG_LONG, VTK_UNSIGNED_LONG_LONG };
+
+vtkDataArray* NewArrayOf(svdag::ScalarType type, vtkIdType n)
+{
+  vtkDataArray* a = vtkDataArray::CreateDataArray(VTKTypes[int(type)]);
+  a->SetNumberOfTuples(n);
+  return a;
+}
+} // namespace
+
+vtkSegmentationSVDAG::vtkSegmentationSVDAG() = default;
+vtkSegmentationSVDAG::~vtkSegmentationSVDAG() = default;
+
+int vtkSegmentationSVDAG::ToVTKScalarType(int coreType)
+{
+  return (coreType >= 0 && coreType < svdag::ScalarTypeCount) ? VTKTypes[coreType] : -1;
+}
+
+int vtkSegmentationSVDAG::FromVTKScalarType(int vtkType)
+{
+  // VTK_CHAR's signedness is platform-defined; VTK_LONG and VTK_ID_TYPE are 64-bit here.
+  switch (vtkType)
+  {
+    case VTK_CHAR: return int(std::is_signed<char>::value ? svdag::ScalarType::Int8 : svdag::ScalarType::UInt8);
+    case VTK_SIGNED_CHAR: return int(svdag::ScalarType::Int8);
+    case VTK_UNSIGNED_CHAR: return int(svdag::ScalarType::UInt8);
+    case VTK_SHORT: return int(svdag::ScalarType::Int16);
+    case VTK_UNSIGNED_SHORT: return int(svdag::ScalarType::UInt16);
+    case VTK_INT: return int(svdag::ScalarType::Int32);
+    case VTK_UNSIGNED_INT: return int(svdag::ScalarType::UInt32);
+    case VTK_LONG: return int(sizeof(long) == 8 ? svdag::ScalarType::Int64 : svdag::ScalarType::Int32);
+    case VTK_UNSIGNED_LONG: return int(sizeof(long) == 8 ? svdag::ScalarType::UInt64 : svdag::ScalarType::UInt32);
+    case VTK_LONG_LONG: return int(svdag::ScalarType::Int64);
+    case VTK_UNSIGNED_LONG_LONG: return int(svdag::ScalarType::UInt64);
+    case VTK_ID_TYPE: return int(sizeof(vtkIdType) == 8 ? svdag::ScalarType::Int64 : svdag::ScalarType::Int32);
+    default: return -1;
+  }
+}
+
+void vtkSegmentationSVDAG::Initialize()
+{
+  this->Superclass::Initialize();
+  this->Volume.reset();
+  this->Modified();
+}
+
+void vtkSegmentationSVDAG::SetVolume(std::shared_ptr<const svdag::Volume> volume)
+{
+  this->Volume = std::move(volume);
+  this->Modified();
+}
+
+void vtkSegmentationSVDAG::ShallowCopy(vtkDataObject* src)
+{
+  if (auto* other = vtkSegmentationSVDAG::SafeDownCast(src))
+  {
+    this->Superclass::ShallowCopy(src);
+    this->SetVolume(other->Volume);
+  }
+  else
+  {
+    vtkErrorMacro("ShallowCopy: source is not a vtkSegmentationSVDAG");
+  }
+}
+
+void vtkSegmentationSVDAG::DeepCopy(vtkDataObject* src)
+{
+  if (auto* other = vtkSegmentationSVDAG::SafeDownCast(src))
+  {
+    this->Superclass::DeepCopy(src);
+    this->SetVolume(other->Volume ? std::make_shared<const svdag::Volume>(*other->Volume) : nullptr);
+  }
+  else
+  {
+    vtkErrorMacro("DeepCopy: source is not a vtkSegmentationSVDAG");
+  }
+}
+
+unsigned long vtkSegmentationSVDAG::GetActualMemorySize()
+{
+  unsigned long kib = this->Superclass::GetActualMemorySize();
+  if (this->Volume)
+  {
+    const svdag::Volume& v = *this->Volume;
+    const uint64_t bytes = (v.blocks.size() + v.roots.size() + v.mids.size()) * 4 +
+      v.leaves.size() * 8 + v.labels.size() * sizeof(svdag::LabelInfo);
+    kib += static_cast<unsigned long>((bytes + 1023) / 1024);
+  }
+  return kib;
+}
+
+void vtkSegmentationSVDAG::GetDimensions(int dims[3]) const
+{
+  for (int a = 0; a < 3; ++a)
+    dims[a] = this->Volume ? this->Volume->geometry.dims[a] : 0;
+}
+
+void vtkSegmentationSVDAG::GetSpacing(double spacing[3]) const
+{
+  for (int a = 0; a < 3; ++a)
+    spacing[a] = this->Volume ? this->Volume->geometry.spacing[a] : 1.0;
+}
+
+void vtkSegmentationSVDAG::GetOrigin(double origin[3]) const
+{
+  for (int a = 0; a < 3; ++a)
+    origin[a] = this->Volume ? this->Volume->geometry.origin[a] : 0.0;
+}
+
+void vtkSegmentationSVDAG::GetDirection(double direction[9]) const
+{
+  const svdag::Geometry identity;
+  const auto& d = this->Volume ? this->Volume->geometry.direction : identity.direction;
+  std::copy(d.begin(), d.end(), direction);
+}
+
+vtkIdType vtkSegmentationSVDAG::GetNumberOfVoxels() const
+{
+  return this->Volume ? static_cast<vtkIdType>(this->Volume->geometry.voxelCount()) : 0;
+}
+
+int vtkSegmentationSVDAG::GetLabelScalarType() const
+{
+  return this->Volume ? VTKTypes[int(this->Volume->scalarType)] : VTK_VOID;
+}
+
+vtkIdType vtkSegmentationSVDAG::GetNumberOfLabels() const
+{
+  return this->Volume ? static_cast<vtkIdType>(this->Volume->labels.size()) : 0;
+}
+
+vtkDataArray* vtkSegmentationSVDAG::NewLabelValues() const
+{
+  if (!this->Volume)
+    return nullptr;
+  const svdag::Volume& v = *this->Volume;
+  vtkDataArray* a = NewArrayOf(v.scalarType, static_cast<vtkIdType>(v.labels.size()));
+  a->SetName("LabelValues");
+  for (size_t i = 0; i < v.labels.size(); ++i)
+    svdag::scalarStore(v.scalarType, a->GetVoidPointer(0), i, v.labels[i].value);
+  return a;
+}
+
+vtkDataArray* vtkSegmentationSVDAG::NewBackgroundValue() const
+{
+  if (!this->Volume)
+    return nullptr;
+  vtkDataArray* a = NewArrayOf(this->Volume->scalarType, 1);
+  a->SetName("Background");
+  svdag::scalarStore(this->Volume->scalarType, a->GetVoidPointer(0), 0, this->Volume->background);
+  return a;
+}
+
+vtkIdType vtkSegmentationSVDAG::GetLabelVoxelCount(vtkIdType index) const
+{
+  if (!this->Volume || index < 0 || index >= this->GetNumberOfLabels())
+  {
+    vtkErrorMacro("GetLabelVoxelCount: label index " << index << " out of range");
+    return 0;
+  }
+  return static_cast<vtkIdType>(this->Volume->labels[size_t(index)].voxels);
+}
+
+void vtkSegmentationSVDAG::GetLabelBounds(vtkIdType index, int bounds[6]) const
+{
+  if (!this->Volume || index < 0 || index >= this->GetNumberOfLabels())
+  {
+    vtkErrorMacro("GetLabelBounds: label index " << index << " out of range");
+    std::fill(bounds, bounds + 6, 0);
+    return;
+  }
+  const auto& b = this->Volume->labels[size_t(index)].bounds;
+  std::copy(b.begin(), b.end(), bounds);
+}
+
+vtkIdType vtkSegmentationSVDAG::GetLabelIndexAt(int i, int j, int k) const
+{
+  if (!this->Volume)
+    return -1;
+  const auto& d = this->Volume->geometry.dims;
+  if (i < 0 || j < 0 || k < 0 || i >= d[0] || j >= d[1] || k >= d[2])
+  {
+    vtkErrorMacro("GetLabelIndexAt: voxel (" << i << ", " << j << ", " << k
+                                             << ") is outside the volume");
+    return -1;
+  }
+  const uint64_t value = this->Volume->labelAt(i, j, k);
+  if (value == this->Volume->background)
+    return -1;
+  return static_cast<vtkIdType>(this->Volume->findLabel(value));
+}
+
+vtkIdType vtkSegmentationSVDAG::GetNumberOfBlocks() const
+{
+  return this->Volume ? static_cast<vtkIdType>(this->Volume->blockCount) : 0;
+}
+
+vtkIdType vtkSegmentationSVDAG::GetNumberOfRootNodes() const
+{
+  return this->Volume ? static_cast<vtkIdType>(this->Volume->rootCount) : 0;
+}
+
+vtkIdType vtkSegmentationSVDAG::GetNumberOfMidNodes() const
+{
+  return this->Volume ? static_cast<vtkIdType>(this->Volume->midCount) : 0;
+}
+
+vtkIdType vtkSegmentationSVDAG::GetNumberOfLeaves() const
+{
+  return this->Volume ? static_cast<vtkIdType>(this->Volume->leaves.size()) : 0;
+}
+
+vtkIdType vtkSegmentationSVDAG::GetNumberOfDAGNodes() const
+{
+  return this->GetNumberOfRootNodes() + this->GetNumberOfMidNodes() + this->GetNumberOfLeaves();
+}
+
+vtkTypeInt64 vtkSegmentationSVDAG::GetBlocksMemorySize() const
+{
+  return this->Volume ? static_cast<vtkTypeInt64>(this->Volume->memory().blocks) : 0;
+}
+
+vtkTypeInt64 vtkSegmentationSVDAG::GetDAGMemorySize() const
+{
+  return this->Volume ? static_cast<vtkTypeInt64>(this->Volume->memory().dag()) : 0;
+}
+
+vtkTypeInt64 vtkSegmentationSVDAG::GetLabelTableMemorySize() const
+{
+  return this->Volume ? static_cast<vtkTypeInt64>(this->Volume->memory().labels) : 0;
+}
+
+vtkTypeInt64 vtkSegmentationSVDAG::GetCompressedSize() const
+{
+  return this->Volume ? static_cast<vtkTypeInt64>(this->Volume->memory().total()) : 0;
+}
+
+bool vtkSegmentationSVDAG::DecodeTo(vtkImageData* image) const
+{
+  if (!this->Volume || !image)
+  {
+    vtkErrorMacro("DecodeTo: " << (image ? "no compressed volume" : "no output image"));
+    return false;
+  }
+  const svdag::Volume& v = *this->Volume;
+  const auto& g = v.geometry;
+  image->Initialize();
+  image->SetDimensions(g.dims[0], g.dims[1], g.dims[2]);
+  image->SetSpacing(g.spacing[0], g.spacing[1], g.spacing[2]);
+  image->SetOrigin(g.origin[0], g.origin[1], g.origin[2]);
+  image->SetDirectionMatrix(g.direction.data());
+  vtkDataArray* labels = NewArrayOf(v.scalarType, static_cast<vtkIdType>(g.voxelCount()));
+  labels->SetName("Labels");
+  svdag::decode(v, labels->GetVoidPointer(0), vtkSVDAGParallelFor());
+  image->GetPointData()->SetScalars(labels);
+  labels->Delete();
+  return true;
+}
+
+vtkSegmentationSVDAG* vtkSegmentationSVDAG::GetData(vtkInformation* info)
+{
+  return info ? vtkSegmentationSVDAG::SafeDownCast(info->Get(DATA_OBJECT())) : nullptr;
+}
+
+vtkSegmentationSVDAG* vtkSegmentationSVDAG::GetData(vtkInformationVector* v, int i)
+{
+  return vtkSegmentationSVDAG::GetData(v->GetInformationObject(i));
+}
+
+void vtkSegmentationSVDAG::PrintSelf(ostream& os, vtkIndent indent)
+{
+  this->Superclass::PrintSelf(os, indent);
+  if (!this->Volume)
+  {
+    os << indent << "Volume: (none)\n";
+    return;
+  }
+  const svdag::Volume& v = *this->Volume;
+  const auto& g = v.geometry;
+  const svdag::MemoryUsage m = v.memory();
+  os << indent << "Dimensions: " << g.dims[0] << " " << g.dims[1] << " " << g.dims[2] << "\n";
+  os << indent << "Spacing: " << g.spacing[0] << " " << g.spacing[1] << " " << g.spacing[2] << "\n";
+  os << indent << "Origin: " << g.origin[0] << " " << g.origin[1] << " " << g.origin[2] << "\n";
+  os << indent << "LabelType: " << svdag::scalarName(v.scalarType) << "\n";
+  os << indent << "NumberOfLabels: " << v.labels.size() << "\n";
+  os << indent << "NumberOfBlocks: " << v.blockCount << "\n";
+  os << indent << "DAGNodes (root/mid/leaf): " << v.rootCount << " / " << v.midCount << " / "
+     << v.leaves.size() << "\n";
+  os << indent << "Bytes (blocks/DAG/labels/total): " << m.blocks << " / " << m.dag() << " / "
+     << m.labels << " / " << m.total() << "\n";
+}

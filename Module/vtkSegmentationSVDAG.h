@@ -1,0 +1,118 @@
+/**
+ * @class   vtkSegmentationSVDAG
+ * @brief   a segmentation (label) volume compressed losslessly into blocks and a shared SVDAG
+ *
+ * Each 16^3 cell of the volume holds one block per label present, with tight voxel bounds and
+ * the label's index; the binary occupancy of every block is a tree of 8^3 nodes and 4^3 leaf
+ * masks, deduplicated across all blocks and labels (with complement sharing). The original
+ * label values, of any integer type up to 64 bits, are kept in a sorted label table.
+ *
+ * The object is immutable once built: ShallowCopy shares the compressed volume, DeepCopy
+ * duplicates it. Build one with vtkImageDataToSegmentationSVDAG or vtkSegmentationVolumeReader,
+ * decode it with vtkSegmentationSVDAGToImageData.
+ */
+#ifndef vtkSegmentationSVDAG_h
+#define vtkSegmentationSVDAG_h
+
+#include "vtkDataObject.h"
+#include "vtkSVDAGCoreModule.h" // for export macro
+
+#include <memory> // for std::shared_ptr
+
+class vtkDataArray;
+class vtkImageData;
+class vtkInformation;
+class vtkInformationVector;
+class vtkMatrix3x3;
+#ifndef __VTK_WRAP__
+namespace svdag
+{
+class Volume;
+}
+#endif
+
+class VTKSVDAGCORE_EXPORT vtkSegmentationSVDAG : public vtkDataObject
+{
+public:
+  static vtkSegmentationSVDAG* New();
+  vtkTypeMacro(vtkSegmentationSVDAG, vtkDataObject);
+  void PrintSelf(ostream& os, vtkIndent indent) override;
+
+  void Initialize() override;
+  void ShallowCopy(vtkDataObject* src) override;
+  void DeepCopy(vtkDataObject* src) override;
+  /** Kibibytes held (the compressed volume plus this object), as VTK counts memory. */
+  unsigned long GetActualMemorySize() override;
+
+  /** True when a compressed volume is present. */
+  bool HasVolume() const { return this->Volume != nullptr; }
+
+  ///@{
+  /** Geometry of the original image. */
+  void GetDimensions(int dims[3]) const;
+  void GetSpacing(double spacing[3]) const;
+  void GetOrigin(double origin[3]) const;
+  /** Row-major 3x3 index-to-physical direction, as vtkImageData::GetDirectionMatrix. */
+  void GetDirection(double direction[9]) const;
+  vtkIdType GetNumberOfVoxels() const;
+  ///@}
+
+  ///@{
+  /** Label table: original values sorted ascending, their voxel counts and inclusive bounds. */
+  /** VTK scalar type of the original labels (VTK_UNSIGNED_CHAR, VTK_LONG_LONG, ...). */
+  int GetLabelScalarType() const;
+  vtkIdType GetNumberOfLabels() const;
+  /** A new array of the original scalar type holding the label values in table order. */
+  vtkDataArray* NewLabelValues() const;
+  vtkIdType GetLabelVoxelCount(vtkIdType index) const;
+  void GetLabelBounds(vtkIdType index, int bounds[6]) const;
+  /** Background label (not stored) as a one-value array of the original scalar type. */
+  vtkDataArray* NewBackgroundValue() const;
+  /** Index of the label stored at voxel (i, j, k), or -1 for background. */
+  vtkIdType GetLabelIndexAt(int i, int j, int k) const;
+  ///@}
+
+  ///@{
+  /** Sizes of the parts. Counts of nodes are unique (deduplicated) nodes. */
+  vtkIdType GetNumberOfBlocks() const;
+  vtkIdType GetNumberOfRootNodes() const;
+  vtkIdType GetNumberOfMidNodes() const;
+  vtkIdType GetNumberOfLeaves() const;
+  vtkIdType GetNumberOfDAGNodes() const;
+  vtkTypeInt64 GetBlocksMemorySize() const;
+  vtkTypeInt64 GetDAGMemorySize() const;
+  vtkTypeInt64 GetLabelTableMemorySize() const;
+  /** Bytes a renderer holds besides its BVH: blocks + DAG + label table. */
+  vtkTypeInt64 GetCompressedSize() const;
+  ///@}
+
+  /** Decodes losslessly into an image of the original scalar type ("Labels" point scalars). */
+  bool DecodeTo(vtkImageData* image) const;
+
+#ifndef __VTK_WRAP__
+  /** The compressed volume (shared, immutable). */
+  const std::shared_ptr<const svdag::Volume>& GetVolume() const { return this->Volume; }
+  void SetVolume(std::shared_ptr<const svdag::Volume> volume);
+#endif
+
+  static vtkSegmentationSVDAG* GetData(vtkInformation* info);
+  static vtkSegmentationSVDAG* GetData(vtkInformationVector* v, int i = 0);
+
+  /** Maps between VTK scalar type ids and the core's label types; -1 when not an integer type. */
+  static int ToVTKScalarType(int coreType);
+  static int FromVTKScalarType(int vtkType);
+
+protected:
+  vtkSegmentationSVDAG();
+  ~vtkSegmentationSVDAG() override;
+
+private:
+  vtkSegmentationSVDAG(const vtkSegmentationSVDAG&) = delete;
+  void operator=(const vtkSegmentationSVDAG&) = delete;
+
+#ifndef __VTK_WRAP__
+  std::shared_ptr<const svdag::Volume> Volume;
+#endif
+};
+
+#endif

@@ -1,0 +1,88 @@
+#include "vtkSegmentationSVDAGAlgorithm.h"
+
+#include "vtkDemandDrivenPipeline.h"
+#include "vtkInformation.h"
+#include "vtkInformationVector.h"
+#include "vtkObjectFactory.h"
+#include "vtkSegmentationSVDAG.h"
+#include "vtkStreamingDemandDrivenPipeline.h"
+
+vtkStandardNewMacro(vtkSegmentationSVDAGAlgorithm);
+
+vtkSegmentationSVDAGAlgorithm::vtkSegmentationSVDAGAlgorithm()
+{
+  this->SetNumberOfInputPorts(0);
+  this->SetNumberOfOutputPorts(1);
+}
+
+vtkSegmentationSVDAGAlgorithm::~vtkSegmentationSVDAGAlgorithm() = default;
+
+vtkSegmentationSVDAG* vtkSegmentationSVDAGAlgorithm::GetOutput()
+{
+  return vtkSegmentationSVDAG::SafeDownCast(this->GetOutputDataObject(0));
+}
+
+vtkTypeBool vtkSegmentationSVDAGAlgorithm::ProcessRequest(
+  vtkInformation* request, vtkInformationVector** in, vtkInformationVector* out)
+{
+  if (request->Has(vtkDemandDrivenPipeline::REQUEST_DATA_OBJECT()))
+    return this->RequestDataObject(request, in, out);
+  if (request->Has(vtkDemandDrivenPipeline::REQUEST_INFORMATION()))
+    return this->RequestInformation(request, in, out);
+  if (request->Has(vtkStreamingDemandDrivenPipeline::REQUEST_UPDATE_EXTENT()))
+    return this->RequestUpdateExtent(request, in, out);
+  if (request->Has(vtkDemandDrivenPipeline::REQUEST_DATA()))
+    return this->RequestData(request, in, out);
+  return this->Superclass::ProcessRequest(request, in, out);
+}
+
+int vtkSegmentationSVDAGAlgorithm::RequestDataObject(
+  vtkInformation*, vtkInformationVector**, vtkInformationVector* out)
+{
+  for (int i = 0; i < this->GetNumberOfOutputPorts(); ++i)
+  {
+    vtkInformation* info = out->GetInformationObject(i);
+    if (!vtkSegmentationSVDAG::GetData(info))
+    {
+      vtkSegmentationSVDAG* output = vtkSegmentationSVDAG::New();
+      info->Set(vtkDataObject::DATA_OBJECT(), output);
+      output->Delete();
+    }
+  }
+  return 1;
+}
+
+int vtkSegmentationSVDAGAlgorithm::RequestInformation(
+  vtkInformation*, vtkInformationVector**, vtkInformationVector*)
+{
+  return 1;
+}
+
+int vtkSegmentationSVDAGAlgorithm::RequestUpdateExtent(
+  vtkInformation*, vtkInformationVector**, vtkInformationVector*)
+{
+  return 1;
+}
+
+int vtkSegmentationSVDAGAlgorithm::RequestData(
+  vtkInformation*, vtkInformationVector**, vtkInformationVector*)
+{
+  return 1;
+}
+
+int vtkSegmentationSVDAGAlgorithm::FillOutputPortInformation(int, vtkInformation* info)
+{
+  info->Set(vtkDataObject::DATA_TYPE_NAME(), "vtkSegmentationSVDAG");
+  return 1;
+}
+
+int vtkSegmentationSVDAGAlgorithm::FillInputPortInformation(int, vtkInformation* info)
+{
+  info->Set(vtkAlgorithm::INPUT_REQUIRED_DATA_TYPE(), "vtkDataObject");
+  return 1;
+}
+
+void vtkSegmentationSVDAGAlgorithm::PrintSelf(ostream& os, vtkIndent indent)
+{
+  this->Superclass::PrintSelf(os, indent);
+}
