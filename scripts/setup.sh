@@ -1,0 +1,25 @@
+#!/usr/bin/env bash
+# Sets up a fresh machine for vtkSVDAG: Debian packages, the .venv, the build. Idempotent.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+ROOT=$PWD
+
+bash scripts/install-deps.sh
+
+# Debian's VTK is built for Debian's Python; the venv sees it through system site packages.
+if [ ! -x .venv/bin/python ]; then
+  /usr/bin/python3 -m venv --system-site-packages .venv
+fi
+PIP=(.venv/bin/python -m pip install -q --disable-pip-version-check -c Python/constraints.txt)
+"${PIP[@]}" -r Python/requirements.txt
+"${PIP[@]}" --no-deps pyvista==0.46.5
+# The pure-Python package, editable, with its console script `vtksvdag`.
+"${PIP[@]}" --no-deps -e Python
+
+cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release -DPython3_EXECUTABLE=/usr/bin/python3 >/dev/null
+cmake --build build
+
+# The wrapped modules live in build/python/vtksvdag; the package merges both directories.
+SITE=$(.venv/bin/python -c 'import sysconfig; print(sysconfig.get_paths()["purelib"])')
+echo "$ROOT/build/python" > "$SITE/vtksvdag-build.pth"
+echo "vtkSVDAG is set up: .venv/bin/vtksvdag --help"
