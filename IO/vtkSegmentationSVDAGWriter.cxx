@@ -1,0 +1,3 @@
+#include "vtkSegmentationSVDAGWriter.h"
+#include "vtkObjectFactory.h"
+vtkStandardNewMacro(vtkSegmentationSVDAGWriter);

@@ -1,0 +1,3 @@
+#include "vtkSegmentationVolumeReader.h"
+#include "vtkObjectFactory.h"
+vtkStandardNewMacro(vtkSegmentationVolumeReader);

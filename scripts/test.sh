@@ -1,0 +1,11 @@
+#!/usr/bin/env bash
+# Runs every test: the C++ suites (ctest) and the Python suites (pytest), headless under Xvfb.
+# Sets the machine up first (idempotent), so it also works on a fresh clone.
+set -uo pipefail
+cd "$(dirname "$0")/.."
+bash scripts/setup.sh || { echo "setup failed"; exit 1; }
+
+status=0
+xvfb-run -a -s "-screen 0 1024x768x24" ctest --test-dir build --output-on-failure -j2 || status=1
+xvfb-run -a -s "-screen 0 1024x768x24" .venv/bin/python -m pytest -q Testing/Python || status=1
+exit $status
