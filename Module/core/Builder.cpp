@@ -316,9 +316,7 @@ std::string checkGeometry(const Geometry& g)
     if (!std::isfinite(d))
       return "direction matrix must be finite";
   }
-  const auto n = g.cellCounts();
-  const uint64_t cells = uint64_t(n[0]) * uint64_t(n[1]) * uint64_t(n[2]);
-  if (cells > (uint64_t(1) << 32))
+  if (g.cellCount() > (uint64_t(1) << 32))
     return "volume too large: more than 2^32 cells of 16^3 voxels";
   return "";
 }
@@ -573,8 +571,7 @@ Volume Builder::finish()
     v.labels[i] = m.labels[order[i]];
   }
   w.labelBits = bitWidth(v.labels.empty() ? 0 : v.labels.size() - 1);
-  const auto n = m.geometry.cellCounts();
-  w.cellBits = bitWidth(uint64_t(n[0]) * uint64_t(n[1]) * uint64_t(n[2]) - 1);
+  w.cellBits = bitWidth(m.geometry.cellCount() - 1);
 
   v.blockCount = m.blocks.size();
   const uint32_t recordBits = w.blockBits();

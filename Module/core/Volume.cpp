@@ -99,6 +99,18 @@ std::array<int32_t, 3> Geometry::cellCounts() const
   return n;
 }
 
+uint64_t Geometry::cellCount() const
+{
+  const auto n = cellCounts();
+  uint64_t cells = 0;
+  if (__builtin_mul_overflow(uint64_t(n[0]), uint64_t(n[1]), &cells) ||
+    __builtin_mul_overflow(cells, uint64_t(n[2]), &cells))
+  {
+    return UINT64_MAX;
+  }
+  return cells;
+}
+
 bool Geometry::operator==(const Geometry& o) const
 {
   return dims == o.dims && spacing == o.spacing && origin == o.origin && direction == o.direction;
@@ -300,8 +312,9 @@ void Volume::validate() const
     if (geometry.dims[a] < 0)
       fail("negative dimension");
   }
-  const auto n = geometry.cellCounts();
-  const uint64_t cells = uint64_t(n[0]) * uint64_t(n[1]) * uint64_t(n[2]);
+  const uint64_t cells = geometry.cellCount();
+  if (cells > (uint64_t(1) << 32))
+    fail("more than 2^32 cells");
   const FieldWidths& w = widths;
   if (w.cellBits > 32 || w.labelBits > 32 || w.rootRefBits > 32 || w.midRefBits > 32 ||
     w.leafRefBits > 32)

@@ -1,33 +1,318 @@
-// Lossless round trips and structural invariants of the builder, on synthetic volumes.
+// Lossless round trips and structural invariants of the builder: every scalar type, odd shapes,
+// label values at the type's limits, thread-count independence and exact deduplication.
 #include "svdag/Builder.h"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <map>
+#include <atomic>
 #include <random>
+#include <set>
+#include <thread>
+#include <tuple>
 
 namespace
 {
-template <class T>
-std::vector<T> randomLabels(const svdag::Geometry& g, int labels, uint32_t seed)
-{
-  std::mt19937 rng(seed);
-  std::vector<T> v(g.voxelCount());
-  std::uniform_int_distribution<int> d(0, labels - 1);
-  for (auto& x : v)
-    x = T(d(rng));
-  return v;
-}
-} // namespace
+using svdag::ScalarType;
 
-TEST(Builder, RandomRoundTrip)
+// A parallel-for on std::threads that splits the range into uneven chunks, run in any order:
+// the builder's output must not depend on it.
+svdag::ParallelFor threadedFor(unsigned threads)
+{
+  return [threads](uint64_t begin, uint64_t end, uint64_t, const svdag::RangeFunction& f) {
+    std::atomic<uint64_t> next(begin);
+    std::vector<std::thread> pool;
+    for (unsigned t = 0; t < threads; ++t)
+    {
+      pool.emplace_back([&, t] {
+        for (;;)
+        {
+          const uint64_t chunk = 1 + (t % 3);
+          const uint64_t b = next.fetch_add(chunk);
+          if (b >= end)
+            return;
+          f(b, std::min(end, b + chunk));
+        }
+      });
+    }
+    for (auto& th : pool)
+      th.join();
+  };
+}
+
+// Patterns of the values a volume of type t holds (sign-extended for signed types).
+std::vector<uint64_t> typedPatterns(ScalarType t, const std::vector<int64_t>& values)
+{
+  std::vector<uint64_t> out;
+  for (int64_t v : values)
+  {
+    uint64_t tmp = 0;
+    svdag::scalarStore(t, &tmp, 0, uint64_t(v));
+    out.push_back(svdag::scalarLoad(t, &tmp, 0));
+  }
+  return out;
+}
+
+struct Case
+{
+  std::string name;
+  svdag::Geometry geometry;
+  std::vector<uint64_t> labels; // patterns, x fastest
+};
+
+svdag::Geometry dims(int x, int y, int z)
 {
   svdag::Geometry g;
-  g.dims = { { 37, 21, 19 } };
-  auto labels = randomLabels<uint16_t>(g, 5, 1);
-  const svdag::Volume v = svdag::Builder::build(g, svdag::ScalarType::UInt16, labels.data());
-  v.validate();
-  std::vector<uint16_t> out(labels.size());
-  svdag::decode(v, out.data());
-  EXPECT_EQ(out, labels);
-  EXPECT_EQ(v.labels.size(), 4u);
+  g.dims = { { x, y, z } };
+  return g;
 }
+
+// Volumes exercising shapes and label patterns; values are patterns of type t.
+std::vector<Case> cases(ScalarType t)
+{
+  std::vector<Case> out;
+  std::mt19937_64 rng(7);
+  const std::vector<uint64_t> extremes = typedPatterns(t,
+    { 0, 1, -1, int64_t(svdag::scalarMin(t)), int64_t(svdag::scalarMax(t)),
+      int64_t(svdag::scalarMax(t)) - 1, int64_t(svdag::scalarMin(t)) + 1 });
+  auto add = [&](const std::string& name, svdag::Geometry g, auto value) {
+    Case c{ name, g, {} };
+    c.labels.resize(g.voxelCount());
+    for (int z = 0, i = 0; z < g.dims[2]; ++z)
+      for (int y = 0; y < g.dims[1]; ++y)
+        for (int x = 0; x < g.dims[0]; ++x, ++i)
+          c.labels[size_t(i)] = value(x, y, z);
+    out.push_back(std::move(c));
+  };
+  add("1x1x1 background", dims(1, 1, 1), [](int, int, int) { return uint64_t(0); });
+  add("1x1x1 label", dims(1, 1, 1), [&](int, int, int) { return extremes[4]; });
+  add("1x1x40", dims(1, 1, 40), [&](int, int, int z) { return extremes[size_t(z) % extremes.size()]; });
+  add("40x1x1", dims(40, 1, 1), [&](int x, int, int) { return extremes[size_t(x / 3) % extremes.size()]; });
+  add("all background 37x21x19", dims(37, 21, 19), [](int, int, int) { return uint64_t(0); });
+  add("full 32x32x32", dims(32, 32, 32), [&](int, int, int) { return extremes[1]; });
+  add("full 17x33x40", dims(17, 33, 40), [&](int, int, int) { return extremes[2]; });
+  add("checkerboard 19x18x17", dims(19, 18, 17),
+    [&](int x, int y, int z) { return extremes[size_t((x + y + z) & 1) + 3]; });
+  add("random extremes 37x21x19", dims(37, 21, 19),
+    [&](int, int, int) { return extremes[rng() % extremes.size()]; });
+  add("random 50 labels 33x17x49", dims(33, 17, 49), [&](int, int, int) {
+    return typedPatterns(t, { int64_t(rng() % 50) - (svdag::scalarSigned(t) ? 25 : 0) })[0];
+  });
+  add("spheres 48x40x36", dims(48, 40, 36), [&](int x, int y, int z) {
+    const int d2 = (x - 20) * (x - 20) + (y - 18) * (y - 18) + (z - 16) * (z - 16);
+    return d2 < 100 ? extremes[3] : (d2 < 250 ? extremes[5] : uint64_t(0));
+  });
+  return out;
+}
+
+std::vector<uint8_t> toTyped(ScalarType t, const std::vector<uint64_t>& patterns)
+{
+  std::vector<uint8_t> out(patterns.size() * size_t(svdag::scalarSize(t)));
+  for (size_t i = 0; i < patterns.size(); ++i)
+    svdag::scalarStore(t, out.data(), i, patterns[i]);
+  return out;
+}
+
+class EveryType : public ::testing::TestWithParam<ScalarType>
+{
+};
+
+TEST_P(EveryType, RoundTripIsBitExact)
+{
+  const ScalarType t = GetParam();
+  for (const Case& c : cases(t))
+  {
+    SCOPED_TRACE(c.name);
+    const std::vector<uint8_t> input = toTyped(t, c.labels);
+    const svdag::Volume v = svdag::Builder::build(c.geometry, t, input.data());
+    EXPECT_NO_THROW(v.validate());
+    std::vector<uint8_t> decoded(input.size(), 0xAB);
+    svdag::decode(v, decoded.data());
+    EXPECT_EQ(decoded, input);
+
+    // Label table: sorted, exact counts and bounds, background not stored.
+    std::map<uint64_t, uint64_t> counts;
+    for (uint64_t l : c.labels)
+      if (l != 0)
+        ++counts[l];
+    ASSERT_EQ(v.labels.size(), counts.size());
+    uint64_t total = 0;
+    for (const auto& info : v.labels)
+    {
+      EXPECT_EQ(info.voxels, counts[info.value]);
+      total += info.voxels;
+    }
+    EXPECT_EQ(total, c.labels.size() - std::count(c.labels.begin(), c.labels.end(), 0u));
+    for (size_t i = 1; i < v.labels.size(); ++i)
+      EXPECT_TRUE(svdag::scalarLess(t, v.labels[i - 1].value, v.labels[i].value));
+
+    // Random access agrees with the dense volume.
+    const auto& d = c.geometry.dims;
+    for (int k = 0; k < d[2]; k += 3)
+      for (int j = 0; j < d[1]; j += 2)
+        for (int i = 0; i < d[0]; i += 5)
+          ASSERT_EQ(v.labelAt(i, j, k), c.labels[size_t(i + d[0] * (j + d[1] * k))]);
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Builder, EveryType,
+  ::testing::Values(ScalarType::Int8, ScalarType::UInt8, ScalarType::Int16, ScalarType::UInt16,
+    ScalarType::Int32, ScalarType::UInt32, ScalarType::Int64, ScalarType::UInt64),
+  [](const ::testing::TestParamInfo<ScalarType>& info) { return svdag::scalarName(info.param); });
+
+TEST(Builder, LabelBoundsAreTight)
+{
+  svdag::Geometry g = dims(40, 30, 20);
+  std::vector<uint16_t> data(g.voxelCount(), 0);
+  // Label 7 occupies exactly x 3..35, y 5..6, z 17..19 (spans cells on x and z).
+  for (int z = 17; z < 20; ++z)
+    for (int y = 5; y < 7; ++y)
+      for (int x = 3; x < 36; ++x)
+        data[size_t(x + 40 * (y + 30 * z))] = 7;
+  const svdag::Volume v = svdag::Builder::build(g, ScalarType::UInt16, data.data());
+  ASSERT_EQ(v.labels.size(), 1u);
+  const std::array<int32_t, 6> expected{ { 3, 35, 5, 6, 17, 19 } };
+  EXPECT_EQ(v.labels[0].bounds, expected);
+  EXPECT_EQ(v.labels[0].voxels, 33u * 2u * 3u);
+  for (uint64_t b = 0; b < v.blockCount; ++b)
+  {
+    const svdag::Block blk = v.block(b);
+    EXPECT_EQ(blk.lo[1], 5);
+    EXPECT_EQ(blk.hi[1], 6);
+  }
+}
+
+TEST(Builder, BackgroundAndExcludedLabels)
+{
+  svdag::Geometry g = dims(20, 18, 17);
+  std::vector<int32_t> data(g.voxelCount());
+  std::mt19937 rng(3);
+  for (auto& x : data)
+    x = int32_t(rng() % 6) - 2; // -2 .. 3
+  svdag::BuildOptions options;
+  options.background = uint64_t(int64_t(-2));
+  options.excluded = { 3, uint64_t(int64_t(-1)) };
+  const svdag::Volume v = svdag::Builder::build(g, ScalarType::Int32, data.data(), options);
+  EXPECT_EQ(v.labels.size(), 3u); // 0, 1, 2
+  std::vector<int32_t> decoded(data.size());
+  svdag::decode(v, decoded.data());
+  for (size_t i = 0; i < data.size(); ++i)
+  {
+    const int32_t expected = (data[i] == 3 || data[i] == -1) ? -2 : data[i];
+    ASSERT_EQ(decoded[i], expected);
+  }
+}
+
+TEST(Builder, OutputDoesNotDependOnThreads)
+{
+  svdag::Geometry g = dims(70, 50, 45);
+  std::vector<uint32_t> data(g.voxelCount());
+  std::mt19937 rng(11);
+  // Blobs of labels so that nodes repeat within and across cells.
+  for (int z = 0; z < 45; ++z)
+    for (int y = 0; y < 50; ++y)
+      for (int x = 0; x < 70; ++x)
+        data[size_t(x + 70 * (y + 50 * z))] = uint32_t((x / 7 + 3 * (y / 5) + 11 * (z / 9)) % 13);
+  const svdag::Volume one = svdag::Builder::build(g, ScalarType::UInt32, data.data());
+  for (unsigned threads : { 2u, 3u, 8u })
+  {
+    const svdag::Volume many = svdag::Builder::build(
+      g, ScalarType::UInt32, data.data(), {}, threadedFor(threads));
+    EXPECT_TRUE(many == one) << threads << " threads changed the output";
+  }
+}
+
+// Decodes every stored node and leaf; no two may be equal or complements of each other, and all
+// must be canonical (voxel (0,0,0) empty).
+TEST(Builder, NodesAreUniqueAndCanonical)
+{
+  svdag::Geometry g = dims(64, 64, 48);
+  std::vector<uint16_t> data(g.voxelCount());
+  std::mt19937 rng(5);
+  std::vector<std::array<int, 4>> seeds(40);
+  for (auto& s : seeds)
+    s = { int(rng() % 64), int(rng() % 64), int(rng() % 48), int(rng() % 9) };
+  for (int z = 0; z < 48; ++z)
+    for (int y = 0; y < 64; ++y)
+      for (int x = 0; x < 64; ++x)
+      {
+        int best = 0, bestD = 1 << 30;
+        for (const auto& s : seeds)
+        {
+          const int d = (x - s[0]) * (x - s[0]) + (y - s[1]) * (y - s[1]) + (z - s[2]) * (z - s[2]);
+          if (d < bestD)
+            bestD = d, best = s[3];
+        }
+        data[size_t(x + 64 * (y + 64 * z))] = uint16_t(best);
+      }
+  const svdag::Volume v = svdag::Builder::build(g, ScalarType::UInt16, data.data());
+  v.validate();
+  std::set<uint64_t> leaves;
+  for (uint64_t m : v.leaves)
+  {
+    EXPECT_EQ(m & 1u, 0u) << "leaf not canonical";
+    EXPECT_NE(m, 0u) << "empty leaf stored";
+    EXPECT_TRUE(leaves.insert(m).second) << "duplicate leaf";
+    EXPECT_EQ(leaves.count(~m), 0u) << "leaf stored with its complement";
+  }
+  auto nodes = [](const std::vector<uint32_t>& stream, uint64_t count, uint32_t refBits) {
+    std::set<std::vector<uint32_t>> seen;
+    uint64_t offset = 0;
+    for (uint64_t n = 0; n < count; ++n)
+    {
+      const uint32_t header = svdag::Volume::nodeHeader(stream, offset);
+      std::vector<uint32_t> key{ header };
+      const uint32_t mixed = svdag::layout::nodeMixedMask(header);
+      for (uint32_t r = 0; r < svdag::layout::bitCount(mixed); ++r)
+        key.push_back(svdag::Volume::nodeChildRef(stream, offset, r, refBits));
+      // Canonical: child 0 empty, or mixed through a plain (non-complemented) reference.
+      EXPECT_FALSE(svdag::layout::nodeFullMask(header) & 1u);
+      if (mixed & 1u)
+        EXPECT_FALSE(svdag::layout::refComplement(key[1]));
+      EXPECT_TRUE(seen.insert(key).second) << "duplicate node at bit " << offset;
+      offset += svdag::Volume::nodeBits(stream, offset, refBits);
+    }
+    return offset;
+  };
+  EXPECT_EQ((nodes(v.mids, v.midCount, v.widths.leafRefBits) + 31) / 32 + 1, v.mids.size());
+  EXPECT_EQ((nodes(v.roots, v.rootCount, v.widths.midRefBits) + 31) / 32 + 1, v.roots.size());
+  // Sharing must actually happen on such a volume.
+  EXPECT_LT(v.midCount, v.blockCount * 8);
+}
+
+TEST(Builder, RejectsBadGeometryAndSlabOrder)
+{
+  svdag::Geometry g = dims(0, 4, 4);
+  EXPECT_THROW(svdag::Builder(g, ScalarType::UInt8), std::invalid_argument);
+  g = dims(2147483647, 2147483647, 2147483647);
+  EXPECT_THROW(svdag::Builder(g, ScalarType::UInt8), std::invalid_argument);
+  g = dims(4, 4, 4);
+  g.spacing[1] = -1;
+  EXPECT_THROW(svdag::Builder(g, ScalarType::UInt8), std::invalid_argument);
+  g = dims(4, 4, 40);
+  svdag::Builder b(g, ScalarType::UInt8);
+  std::vector<uint8_t> slab(4 * 4 * 16, 1);
+  EXPECT_THROW(b.addSlab(16, 16, slab.data()), std::logic_error);
+  b.addSlab(0, 16, slab.data());
+  EXPECT_THROW(b.finish(), std::logic_error);
+  EXPECT_THROW(b.addSlab(16, 8, slab.data()), std::logic_error);
+}
+
+TEST(Builder, DecodeSlabMatchesWholeDecode)
+{
+  svdag::Geometry g = dims(23, 19, 41);
+  std::vector<uint8_t> data(g.voxelCount());
+  std::mt19937 rng(2);
+  for (auto& x : data)
+    x = uint8_t(rng() % 4);
+  const svdag::Volume v = svdag::Builder::build(g, ScalarType::UInt8, data.data());
+  for (int z0 : { 0, 5, 16, 30 })
+  {
+    const int nz = std::min(13, 41 - z0);
+    std::vector<uint8_t> part(size_t(23 * 19 * nz));
+    svdag::decodeSlab(v, z0, nz, part.data(), threadedFor(2));
+    EXPECT_TRUE(std::equal(part.begin(), part.end(), data.begin() + 23 * 19 * z0));
+  }
+}
+} // namespace

@@ -46,6 +46,8 @@ struct Geometry
   std::array<double, 9> direction{ { 1, 0, 0, 0, 1, 0, 0, 0, 1 } }; // row-major, like vtkImageData
   uint64_t voxelCount() const { return uint64_t(dims[0]) * uint64_t(dims[1]) * uint64_t(dims[2]); }
   std::array<int32_t, 3> cellCounts() const;
+  // Number of 16^3 cells, saturated at UINT64_MAX (absurd dimensions cannot overflow).
+  uint64_t cellCount() const;
   bool operator==(const Geometry& o) const;
 };
 
