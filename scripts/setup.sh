@@ -20,6 +20,9 @@ cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release -DPython3_EXECUTABLE=/us
 cmake --build build
 
 # The wrapped modules live in build/python/vtksvdag; the package merges both directories.
+# Python/ goes on sys.path too (before build/python): setuptools' editable finder runs after the
+# path finder, which would otherwise take build/python/vtksvdag alone as a namespace package and
+# never import Python/vtksvdag/__init__.py.
 SITE=$(.venv/bin/python -c 'import sysconfig; print(sysconfig.get_paths()["purelib"])')
-echo "$ROOT/build/python" > "$SITE/vtksvdag-build.pth"
+printf '%s\n' "$ROOT/Python" "$ROOT/build/python" > "$SITE/vtksvdag-build.pth"
 echo "vtkSVDAG is set up: .venv/bin/vtksvdag --help"
