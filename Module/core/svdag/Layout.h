@@ -72,9 +72,9 @@ SVDAG_FN uint blockRecordBits(uint cellBits, uint labelBits, uint rootRefBits)
 }
 
 /* Octant of a cell-local (root) or node-local coordinate at a level of edge `size`. */
-SVDAG_FN uint octant(uint x, uint y, uint z, uint half)
+SVDAG_FN uint octant(uint x, uint y, uint z, uint halfSize)
 {
-  return (x >= half ? 1u : 0u) + (y >= half ? 2u : 0u) + (z >= half ? 4u : 0u);
+  return (x >= halfSize ? 1u : 0u) + (y >= halfSize ? 2u : 0u) + (z >= halfSize ? 4u : 0u);
 }
 /* Bit of voxel (x, y, z) in a 4^3 leaf mask, 0 <= x, y, z < 4. */
 SVDAG_FN uint leafBit(uint x, uint y, uint z) { return x + 4u * y + 16u * z; }

@@ -1,0 +1,368 @@
+/* Ray traversal of ONE block of the SVDAG, written once for C++ (with GLM) and GLSL 4.60.
+ *
+ * Like Layout.h (which must be included first) this file uses only the common subset of both
+ * languages: 32-bit float and integer math, GLSL vector types, no recursion, no pointers, no
+ * dynamic arrays and loops with a fixed bound.
+ *
+ * Storage access (defined by the including file; C++ gets defaults below):
+ *   SVDAG_WORD(stream, i)   32-bit word i of a word stream (used by SVDAG_READ_BITS)
+ *   SVDAG_ROOT_STREAM       the root node stream, as an argument for SVDAG_WORD
+ *   SVDAG_MID_STREAM        the mid node stream
+ *   SVDAG_LEAF(i)           leaf mask i as a uvec2 (x = bits 0..31, y = bits 32..63), so that GLSL
+ *                           needs no 64-bit integers
+ *   SVDAG_STREAMS_PARAM     optional leading parameter declaration that carries the streams (C++:
+ *                           "const svdag::traversal::Streams& svdagStreams,"; GLSL: empty, the
+ *                           buffers are globals), and SVDAG_STREAMS_ARG the matching argument.
+ *
+ * Conventions
+ *   - Index space: voxel (i, j, k) occupies the box [i, i+1) x [j, j+1) x [k, k+1). The VTK point
+ *     at index i is the voxel's CENTER: index-space position p is VTK continuous index p - 0.5.
+ *   - Cell c = (cx, cy, cz) has its integer corner at 16 * c. The traversal works in CELL-LOCAL
+ *     coordinates (index space minus the corner), so its float precision does not depend on where
+ *     the cell lies in a huge volume. A block's voxels are the cell-local voxels 0..15.
+ *   - The ray is origin + t * dir for t in [tmin, tmax]; t is in units of |dir| (pass a unit
+ *     vector to get distances). Components with |dir| < SVDAG_PARALLEL_EPS count as zero: along
+ *     such an axis the ray is inside a slab [a, b) iff a <= origin < b (half-open, like voxels).
+ *     A direction with all components below that is no ray and never hits.
+ *   - Boxes are otherwise closed: a ray that only touches a box at a face, edge or corner may or
+ *     may not hit it (a zero-length contact); everything with a positive length inside is found.
+ *   - Result: hit flag; t = where the ray enters the hit box (block box, leaf box or voxel),
+ *     clamped to tmin when the ray starts inside; normal = the entry face as an integer axis and
+ *     sign (e.g. (-1, 0, 0) when entering through the face x = min), zero when the ray starts
+ *     inside (entry t < tmin); voxel = the cell-local voxel where the ray is when it enters the
+ *     hit box (for SVDAG_LOD_VOXEL the solid voxel hit).
+ *   - LOD: SVDAG_LOD_BLOCK hits the block's tight bounds box; SVDAG_LOD_LEAF hits the first
+ *     non-empty 4^3 region, as the box (leaf cube intersected with the block bounds); SVDAG_LOD_VOXEL
+ *     hits the first solid voxel (lossless).
+ *
+ * Method: a slab test against the block bounds, then a 3D DDA that, at each step, classifies the
+ * largest aligned region (8^3 octant, 4^3 leaf or voxel) around the current voxel by descending
+ * the DAG from the root (complement bits accumulate down the path; full children are solid at any
+ * level; the last mid node and leaf read are cached), and either reports the hit or jumps to the
+ * exit of that empty region, clipped to the block bounds.
+ *
+ * Loop bound: the current voxel stays inside the block bounds, each coordinate moves monotonically
+ * in the ray's direction, and every non-final step moves the exit axis by at least one voxel. So
+ * there are at most 3 * 15 non-final steps plus the final one: SVDAG_MAX_STEPS = 64 is never
+ * reached by a valid block (reaching it reports a miss).
+ */
+#ifndef SVDAG_TRAVERSAL_H
+#define SVDAG_TRAVERSAL_H
+
+#ifdef __cplusplus
+#include <cstdint>
+#include <glm/glm.hpp>
+namespace svdag
+{
+namespace traversal
+{
+using namespace ::svdag::layout;
+using glm::ivec3;
+using glm::max;
+using glm::min;
+using glm::uvec2;
+using glm::uvec3;
+using glm::vec3;
+
+// The streams of a Volume, as the C++ traversal reads them.
+struct Streams
+{
+  const uint32_t* roots;
+  const uint32_t* mids;
+  const uint64_t* leaves;
+};
+
+#ifndef SVDAG_WORD
+#define SVDAG_WORD(stream, i) (stream)[(i)]
+#endif
+#ifndef SVDAG_STREAMS_PARAM
+#define SVDAG_STREAMS_PARAM const ::svdag::traversal::Streams &svdagStreams,
+#define SVDAG_STREAMS_ARG svdagStreams,
+#define SVDAG_ROOT_STREAM svdagStreams.roots
+#define SVDAG_MID_STREAM svdagStreams.mids
+#define SVDAG_LEAF(i)                                                                              \
+  uvec2(uint32_t(svdagStreams.leaves[(i)]), uint32_t(svdagStreams.leaves[(i)] >> 32u))
+#endif
+#define SVDAG_INOUT(T) T&
+#define SVDAG_FLOOR(x) glm::floor(x)
+#define SVDAG_CEIL(x) glm::ceil(x)
+
+#else // GLSL
+
+#ifndef SVDAG_STREAMS_PARAM
+#define SVDAG_STREAMS_PARAM
+#define SVDAG_STREAMS_ARG
+#endif
+#define SVDAG_INOUT(T) inout T
+#define SVDAG_FLOOR(x) floor(x)
+#define SVDAG_CEIL(x) ceil(x)
+#endif
+
+SVDAG_CONST SVDAG_LOD_BLOCK = 0u;
+SVDAG_CONST SVDAG_LOD_LEAF = 1u;
+SVDAG_CONST SVDAG_LOD_VOXEL = 2u;
+SVDAG_CONST SVDAG_MAX_STEPS = 64u;
+
+/* Direction components below this magnitude are treated as zero (their reciprocal, at most 1e30,
+ * keeps every t finite: no inf, and never 0 * inf = NaN). Beyond every finite t below. */
+#define SVDAG_PARALLEL_EPS 1.0e-30f
+#define SVDAG_T_FAR 1.0e36f
+
+struct SvdagBlockHit
+{
+  bool hit;
+  float t;
+  ivec3 normal;
+  ivec3 voxel; // cell-local
+};
+
+/* Per-axis stepping of a ray: step is -1, 0 (parallel) or +1; invDir is 0 for parallel axes. */
+struct SvdagRay
+{
+  vec3 origin;
+  vec3 invDir;
+  vec3 dir;
+  ivec3 step;
+};
+
+SVDAG_FN SvdagRay svdagMakeRay(vec3 origin, vec3 dir)
+{
+  SvdagRay r;
+  r.origin = origin;
+  r.dir = dir;
+  r.invDir = vec3(0.0f);
+  r.step = ivec3(0);
+  for (int a = 0; a < 3; ++a)
+  {
+    if (dir[a] > SVDAG_PARALLEL_EPS)
+      r.step[a] = 1;
+    else if (dir[a] < -SVDAG_PARALLEL_EPS)
+      r.step[a] = -1;
+    if (r.step[a] != 0)
+      r.invDir[a] = 1.0f / dir[a];
+  }
+  return r;
+}
+
+/* Slab test of the ray against the box [bmin, bmax] (half-open along parallel axes). On return,
+ * [tEnter, tExit] is the ray's parameter interval in the box (not clipped to [tmin, tmax]) and
+ * enterAxis the axis whose face it enters through (-1 if only parallel axes). */
+SVDAG_FN bool svdagSlab(SvdagRay r, vec3 bmin, vec3 bmax, SVDAG_INOUT(float) tEnter,
+  SVDAG_INOUT(float) tExit, SVDAG_INOUT(int) enterAxis)
+{
+  tEnter = -SVDAG_T_FAR;
+  tExit = SVDAG_T_FAR;
+  enterAxis = -1;
+  for (int a = 0; a < 3; ++a)
+  {
+    if (r.step[a] == 0)
+    {
+      if (r.origin[a] < bmin[a] || r.origin[a] >= bmax[a])
+        return false;
+      continue;
+    }
+    float tLo = (bmin[a] - r.origin[a]) * r.invDir[a];
+    float tHi = (bmax[a] - r.origin[a]) * r.invDir[a];
+    float tNear = r.step[a] > 0 ? tLo : tHi;
+    float tFar = r.step[a] > 0 ? tHi : tLo;
+    if (tNear > tEnter)
+    {
+      tEnter = tNear;
+      enterAxis = a;
+    }
+    tExit = tFar < tExit ? tFar : tExit;
+  }
+  return enterAxis >= 0 && tEnter <= tExit;
+}
+
+/* The voxel coordinate the ray is in (or about to enter) at position p along one axis: a point
+ * on a voxel face belongs to the voxel the ray moves into; clamped to [lo, hi] so that rounding
+ * at the block's faces cannot leave the bounds (and no huge float is ever converted to int). */
+SVDAG_FN int svdagVoxelCoord(float p, int step, int lo, int hi)
+{
+  float c = p < -1.0f ? -1.0f : (p > 17.0f ? 17.0f : p);
+  int v = step < 0 ? int(SVDAG_CEIL(c)) - 1 : int(SVDAG_FLOOR(c));
+  return v < lo ? lo : (v > hi ? hi : v);
+}
+
+SVDAG_FN bool svdagLeafBit(uvec2 mask, uint bit)
+{
+  uint word = bit < 32u ? mask.x : mask.y;
+  return ((word >> (bit & 31u)) & 1u) != 0u;
+}
+
+/* Intersects one block with a ray in cell-local coordinates.
+ *   lo, hi       inclusive cell-local voxel bounds of the block (Layout.h block record)
+ *   rootRef      the block's root reference (offset << 1 | complement)
+ *   midRefBits, leafRefBits   the volume's reference widths (root -> mid, mid -> leaf)
+ *   origin, dir  the ray, origin relative to the cell's corner
+ *   tmin, tmax   the parameter interval searched
+ *   lod          SVDAG_LOD_BLOCK, SVDAG_LOD_LEAF or SVDAG_LOD_VOXEL */
+SVDAG_FN SvdagBlockHit svdagIntersectBlock(SVDAG_STREAMS_PARAM uvec3 lo, uvec3 hi, uint rootRef,
+  uint midRefBits, uint leafRefBits, vec3 origin, vec3 dir, float tmin, float tmax, uint lod)
+{
+  SvdagBlockHit result;
+  result.hit = false;
+  result.t = tmax;
+  result.normal = ivec3(0);
+  result.voxel = ivec3(0);
+
+  SvdagRay ray = svdagMakeRay(origin, dir);
+  ivec3 boxLo = ivec3(lo);
+  ivec3 boxHi = ivec3(hi);
+  float tEnter;
+  float tExit;
+  int enterAxis;
+  if (!svdagSlab(ray, vec3(boxLo), vec3(boxHi + ivec3(1)), tEnter, tExit, enterAxis))
+    return result;
+  if (tExit < tmin || tEnter > tmax)
+    return result;
+
+  // Entry point and its voxel; the entry face unless the ray starts inside the box.
+  float t = tEnter > tmin ? tEnter : tmin;
+  ivec3 normal = ivec3(0);
+  if (tEnter >= tmin)
+    normal[enterAxis] = -ray.step[enterAxis];
+  ivec3 voxel;
+  for (int a = 0; a < 3; ++a)
+    voxel[a] = svdagVoxelCoord(origin[a] + t * dir[a], ray.step[a], boxLo[a], boxHi[a]);
+
+  if (lod == SVDAG_LOD_BLOCK)
+  {
+    result.hit = true;
+    result.t = t;
+    result.normal = normal;
+    result.voxel = voxel;
+    return result;
+  }
+
+  bool rootInverted = refComplement(rootRef);
+  SVDAG_OFFSET_T rootOffset = SVDAG_OFFSET_T(refTarget(rootRef));
+  uint rootHeader;
+  SVDAG_READ_BITS(rootHeader, SVDAG_ROOT_STREAM, rootOffset, NODE_HEADER_BITS);
+
+  // Cache of the last mid node (by root octant) and leaf (by octant * 8 + mid child) read.
+  uint cachedOctant = 8u;
+  SVDAG_OFFSET_T midOffset = SVDAG_OFFSET_T(0u);
+  uint midHeader = 0u;
+  bool midInverted = false;
+  uint cachedLeaf = 64u;
+  uvec2 leafMask = uvec2(0u);
+
+  for (uint iteration = 0u; iteration < SVDAG_MAX_STEPS; ++iteration)
+  {
+    // Classify the largest uniform aligned region around the voxel: size 8, 4 or 1.
+    uvec3 local = uvec3(voxel);
+    uint octant8 = octant(local.x, local.y, local.z, MID_SIZE);
+    int size = int(MID_SIZE);
+    bool solid;
+    uint rootMixed = nodeMixedMask(rootHeader);
+    if ((rootMixed & (1u << octant8)) == 0u)
+    {
+      solid = ((nodeFullMask(rootHeader) >> octant8) & 1u) != (rootInverted ? 1u : 0u);
+    }
+    else
+    {
+      if (cachedOctant != octant8)
+      {
+        uint midRef;
+        SVDAG_READ_BITS(midRef, SVDAG_ROOT_STREAM,
+          rootOffset + SVDAG_OFFSET_T(NODE_HEADER_BITS) +
+            SVDAG_OFFSET_T(childRank(rootMixed, octant8)) * SVDAG_OFFSET_T(midRefBits),
+          midRefBits);
+        midInverted = rootInverted != refComplement(midRef);
+        midOffset = SVDAG_OFFSET_T(refTarget(midRef));
+        SVDAG_READ_BITS(midHeader, SVDAG_MID_STREAM, midOffset, NODE_HEADER_BITS);
+        cachedOctant = octant8;
+      }
+      uvec3 inMid = local % uvec3(MID_SIZE);
+      uint octant4 = octant(inMid.x, inMid.y, inMid.z, LEAF_SIZE);
+      size = int(LEAF_SIZE);
+      uint midMixed = nodeMixedMask(midHeader);
+      if ((midMixed & (1u << octant4)) == 0u)
+      {
+        solid = ((nodeFullMask(midHeader) >> octant4) & 1u) != (midInverted ? 1u : 0u);
+      }
+      else
+      {
+        uint leafKey = octant8 * 8u + octant4;
+        if (cachedLeaf != leafKey)
+        {
+          uint leafRef;
+          SVDAG_READ_BITS(leafRef, SVDAG_MID_STREAM,
+            midOffset + SVDAG_OFFSET_T(NODE_HEADER_BITS) +
+              SVDAG_OFFSET_T(childRank(midMixed, octant4)) * SVDAG_OFFSET_T(leafRefBits),
+            leafRefBits);
+          leafMask = SVDAG_LEAF(refTarget(leafRef));
+          if (midInverted != refComplement(leafRef))
+            leafMask = ~leafMask;
+          cachedLeaf = leafKey;
+        }
+        if (lod == SVDAG_LOD_LEAF)
+        {
+          solid = leafMask.x != 0u || leafMask.y != 0u;
+        }
+        else
+        {
+          uvec3 inLeaf = local % uvec3(LEAF_SIZE);
+          size = 1;
+          solid = svdagLeafBit(leafMask, leafBit(inLeaf.x, inLeaf.y, inLeaf.z));
+        }
+      }
+    }
+
+    if (solid)
+    {
+      result.hit = true;
+      result.t = t;
+      result.normal = normal;
+      result.voxel = voxel;
+      return result;
+    }
+
+    // Leave the empty region (clipped to the block bounds) through its nearest exit face.
+    ivec3 regionLo = voxel - (voxel % ivec3(size));
+    ivec3 clipLo = max(regionLo, boxLo);
+    ivec3 clipHi = min(regionLo + ivec3(size - 1), boxHi);
+    int exitAxis = -1;
+    float tNext = SVDAG_T_FAR;
+    for (int a = 0; a < 3; ++a)
+    {
+      if (ray.step[a] == 0)
+        continue;
+      float face = float(ray.step[a] > 0 ? clipHi[a] + 1 : clipLo[a]);
+      float tFace = (face - origin[a]) * ray.invDir[a];
+      if (tFace < tNext)
+      {
+        tNext = tFace;
+        exitAxis = a;
+      }
+    }
+    if (exitAxis < 0 || tNext > tmax)
+      return result;
+    int next = ray.step[exitAxis] > 0 ? clipHi[exitAxis] + 1 : clipLo[exitAxis] - 1;
+    if (next < boxLo[exitAxis] || next > boxHi[exitAxis])
+      return result; // left the block
+    // The other axes stay inside the region and never move backwards (this bounds the loop).
+    for (int a = 0; a < 3; ++a)
+    {
+      if (a == exitAxis || ray.step[a] == 0)
+        continue;
+      int lowest = ray.step[a] > 0 ? voxel[a] : clipLo[a];
+      int highest = ray.step[a] > 0 ? clipHi[a] : voxel[a];
+      voxel[a] = svdagVoxelCoord(origin[a] + tNext * dir[a], ray.step[a], lowest, highest);
+    }
+    voxel[exitAxis] = next;
+    t = tNext > t ? tNext : t;
+    normal = ivec3(0);
+    normal[exitAxis] = -ray.step[exitAxis];
+  }
+  return result;
+}
+
+#ifdef __cplusplus
+} // namespace traversal
+} // namespace svdag
+#endif
+
+#endif
