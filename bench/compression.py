@@ -1,0 +1,525 @@
+#!/usr/bin/env python3
+"""Compression benchmark: our SVDAG against compressed_segmentation, zstd and gzip, in one run.
+
+Run from the repository root (see bench/README.md for the columns and the targets):
+
+    .venv/bin/python bench/compression.py [--quick] [--out bench/out]
+
+For every volume (the real ones in ../shared/data and generated ones) it compresses with
+vtkImageDataToSegmentationSVDAG, decodes and compares (a mismatch stops the run with exit
+status 1), measures the reference codecs on the same array, measures the peak memory of
+compressing from a file in a subprocess, prints plain-text tables, and writes compression.csv and
+compression.png to the output folder. Figures reported elsewhere (../shared/notes/anchors.md) are
+printed in a separate table and never mixed with measured ones.
+"""
+from __future__ import annotations
+
+import argparse
+import csv
+import gzip
+import json
+import os
+import pathlib
+import platform
+import resource
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+
+# The modules that compressing from a file needs. The memory baseline subprocess imports exactly
+# these (by importing this file) and nothing else, so that their footprint cancels out.
+import nrrd
+import numpy as np
+from vtkmodules.util.numpy_support import numpy_to_vtk, vtk_to_numpy
+from vtkmodules.vtkCommonCore import vtkSMPTools
+from vtkmodules.vtkCommonDataModel import vtkImageData
+
+from vtksvdag import synthetic
+from vtksvdag.vtkSVDAGCore import vtkImageDataToSegmentationSVDAG, vtkSegmentationSVDAGToImageData
+
+REPO = pathlib.Path(__file__).resolve().parents[1]
+SHARED = REPO.parent / "shared"
+DATA = SHARED / "data"
+ANCHORS = SHARED / "notes" / "anchors.md"
+MB = 1e6
+SLAB_DEPTH = 16  # z-slices per slab of the streaming builder (svdag::Builder::SlabDepth)
+# Volumes up to this many voxels are built several times and the median time is reported.
+MEDIAN_MAX_VOXELS = 256**3
+
+REAL_VOLUMES = [
+    "voronoi256",
+    "voronoi256_sphere",
+    "fib_ts2_groundtruth250",
+    "gala_train_gt",
+    "plantseg_1135_mini",
+    "totalseg_ct",
+    "fib25_64",
+    "dvid_fib19_64",
+]
+QUICK_REAL_VOLUMES = ["totalseg_ct", "fib25_64", "dvid_fib19_64"]
+
+# name -> generator of a (z, y, x) array. Seeds are fixed so every run measures the same data.
+GENERATED_VOLUMES = {
+    "voronoi256_1000": lambda: synthetic.voronoi((256, 256, 256), 1000, seed=2024),
+    "tubes256": lambda: synthetic.tubes((256, 256, 256), 60, 3.0, seed=2024),
+    "checkerboard64_p1": lambda: synthetic.checkerboard((64, 64, 64), 2, 1),
+    "checkerboard64_p2": lambda: synthetic.checkerboard((64, 64, 64), 2, 2),
+}
+QUICK_GENERATED_VOLUMES = {
+    "voronoi64_100": lambda: synthetic.voronoi((64, 64, 64), 100, seed=2024),
+    "tubes64": lambda: synthetic.tubes((64, 64, 64), 8, 2.0, seed=2024),
+    "checkerboard64_p1": GENERATED_VOLUMES["checkerboard64_p1"],
+    "checkerboard64_p2": GENERATED_VOLUMES["checkerboard64_p2"],
+}
+
+COLUMNS = [
+    "volume", "source", "dims_xyz", "dtype", "voxels", "labels",
+    "blocks", "root_nodes", "mid_nodes", "leaf_nodes",
+    "bytes_blocks", "bytes_dag", "bytes_labels", "bytes_total",
+    "pct_raw32", "min_width_bytes", "pct_raw_min", "bits_per_voxel",
+    "build_s", "build_runs", "voxels_per_s", "roundtrip",
+    "mem_path", "peak_rss_mb", "baseline_rss_mb", "peak_extra_mb", "model_mb",
+    "cseg_dtype", "cseg_bytes", "cseg_s", "ours_over_cseg",
+    "raw_dtype", "zstd19_bytes", "zstd19_s", "gzip9_bytes", "gzip9_s", "ours_over_zstd19",
+]
+
+
+class BenchError(RuntimeError):
+    """A check inside the benchmark failed (lossless round trip, reference codec, subprocess)."""
+
+
+# ----------------------------------------------------------------------------------- machine
+def machine_description() -> str:
+    model = platform.processor() or "unknown CPU"
+    try:
+        for line in pathlib.Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                model = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    usable = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+    return (
+        f"{model}; {os.cpu_count()} logical CPUs ({usable} usable); "
+        f"vtkSMPTools backend {vtkSMPTools.GetBackend()} with "
+        f"{vtkSMPTools.GetEstimatedNumberOfThreads()} threads; {platform.platform()}; "
+        f"Python {platform.python_version()}, numpy {np.__version__}"
+    )
+
+
+# ------------------------------------------------------------------------------ our codec
+def to_image(labels: np.ndarray) -> vtkImageData:
+    """A vtkImageData viewing a (z, y, x) label array (x fastest), without copying."""
+    labels = np.ascontiguousarray(labels)
+    image = vtkImageData()
+    image.SetDimensions(labels.shape[2], labels.shape[1], labels.shape[0])
+    scalars = numpy_to_vtk(labels.ravel(), deep=False)
+    scalars.SetName("Labels")
+    image.GetPointData().SetScalars(scalars)  # numpy_to_vtk keeps a reference to `labels`
+    return image
+
+
+def build_svdag(image: vtkImageData):
+    """Compresses an image; returns the output and the seconds the filter took."""
+    build = vtkImageDataToSegmentationSVDAG()
+    build.SetInputData(image)
+    start = time.perf_counter()
+    build.Update()
+    seconds = time.perf_counter() - start
+    if build.GetErrorCode() != 0:
+        raise BenchError(f"vtkImageDataToSegmentationSVDAG failed with error code {build.GetErrorCode()}")
+    svdag = build.GetOutput()
+    if not svdag.HasVolume():
+        raise BenchError("vtkImageDataToSegmentationSVDAG produced no volume")
+    return svdag, seconds
+
+
+def decode_svdag(svdag, shape) -> np.ndarray:
+    decode = vtkSegmentationSVDAGToImageData()
+    decode.SetInputData(svdag)
+    decode.Update()
+    scalars = decode.GetOutput().GetPointData().GetScalars()
+    if scalars is None:
+        raise BenchError("vtkSegmentationSVDAGToImageData produced no scalars")
+    return vtk_to_numpy(scalars).reshape(shape)
+
+
+def check_round_trip(name: str, labels: np.ndarray, svdag) -> None:
+    decoded = decode_svdag(svdag, labels.shape)
+    if decoded.dtype.kind != labels.dtype.kind or decoded.dtype.itemsize != labels.dtype.itemsize:
+        raise BenchError(f"{name}: decoded dtype {decoded.dtype} differs from the input's {labels.dtype}")
+    if not np.array_equal(decoded, labels):
+        bad = np.argwhere(decoded != labels)
+        z, y, x = bad[0]
+        raise BenchError(
+            f"{name}: LOSSY ROUND TRIP, {len(bad)} voxels differ; first at (x={x}, y={y}, z={z}): "
+            f"expected {labels[z, y, x]}, decoded {decoded[z, y, x]}"
+        )
+
+
+def reader_class():
+    """vtkSegmentationVolumeReader once it is a real reader (it was a placeholder at first)."""
+    try:
+        from vtksvdag.vtkSVDAGIO import vtkSegmentationVolumeReader
+    except ImportError:
+        return None
+    return vtkSegmentationVolumeReader if hasattr(vtkSegmentationVolumeReader, "SetFileName") else None
+
+
+def compress_file(path: str):
+    """Reads and compresses a label volume file the way a user would; returns (svdag, how)."""
+    reader = reader_class()
+    if reader is not None:
+        r = reader()
+        r.SetFileName(path)
+        r.Update()
+        if r.GetErrorCode() != 0:
+            raise BenchError(f"vtkSegmentationVolumeReader failed on {path}: error code {r.GetErrorCode()}")
+        return r.GetOutput(), "reader"
+    labels, _ = nrrd.read(path, index_order="C")
+    svdag, _ = build_svdag(to_image(labels))
+    return svdag, "pynrrd+filter"
+
+
+# ---------------------------------------------------------------------------- memory probe
+def memory_probe(path: str) -> None:
+    """Subprocess entry: compress `path` (or nothing for "-") and print the peak RSS as JSON."""
+    result = {"how": "baseline", "bytes_total": 0}
+    if path != "-":
+        svdag, how = compress_file(path)
+        result = {"how": how, "bytes_total": int(svdag.GetCompressedSize())}
+    result["maxrss_kb"] = peak_rss_kb()
+    print(json.dumps(result))
+
+
+def peak_rss_kb() -> int:
+    """Peak resident memory of this process in KiB.
+
+    On Linux, getrusage's ru_maxrss survives execve: a subprocess started from this big benchmark
+    process would report the parent's peak. VmHWM in /proc/self/status is the peak of the
+    current address space only, so it is used where it exists.
+    """
+    try:
+        for line in pathlib.Path("/proc/self/status").read_text().splitlines():
+            if line.startswith("VmHWM:"):
+                return int(line.split()[1])
+    except OSError:
+        pass
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss  # KiB on Linux
+
+
+def measure_peak_rss(path: str) -> dict:
+    completed = subprocess.run(
+        [sys.executable, str(pathlib.Path(__file__).resolve()), "--memory-probe", path],
+        capture_output=True, text=True, env=os.environ.copy(),
+    )
+    if completed.returncode != 0:
+        raise BenchError(f"memory probe on {path} failed:\n{completed.stderr.strip()}")
+    return json.loads(completed.stdout.strip().splitlines()[-1])
+
+
+# ------------------------------------------------------------------------ reference codecs
+def smallest_dtype(labels: np.ndarray) -> np.dtype:
+    """The narrowest integer type holding every value (unsigned when none is negative)."""
+    lo, hi = int(labels.min()), int(labels.max())
+    kinds = (np.uint8, np.uint16, np.uint32, np.uint64) if lo >= 0 else (np.int8, np.int16, np.int32, np.int64)
+    for t in kinds:
+        if np.iinfo(t).min <= lo and hi <= np.iinfo(t).max:
+            return np.dtype(t)
+    raise BenchError(f"labels from {lo} to {hi} fit no integer type")
+
+
+def cseg_input(labels: np.ndarray) -> np.ndarray:
+    """compressed_segmentation takes uint32 or uint64: uint32 when every value fits, else the
+    64-bit pattern (negative values keep their two's complement bits)."""
+    lo, hi = int(labels.min()), int(labels.max())
+    if lo >= 0 and hi <= np.iinfo(np.uint32).max:
+        return labels.astype(np.uint32, copy=False)
+    return labels.astype(np.int64, copy=False).view(np.uint64) if lo < 0 else labels.astype(np.uint64, copy=False)
+
+
+def measure_cseg(name: str, labels: np.ndarray) -> dict:
+    import compressed_segmentation as cseg
+
+    data = cseg_input(labels)
+    # Neuroglancer's format is x fastest: hand it the (x, y, z) view of our (z, y, x) array,
+    # which is Fortran-ordered, with order='F'.
+    xyz = data.T
+    start = time.perf_counter()
+    encoded = cseg.compress(xyz, block_size=(8, 8, 8), order="F")
+    seconds = time.perf_counter() - start
+    decoded = cseg.decompress(encoded, xyz.shape, data.dtype, block_size=(8, 8, 8), order="F")
+    if not np.array_equal(np.asarray(decoded).reshape(xyz.shape), xyz):
+        raise BenchError(f"{name}: compressed_segmentation round trip is not lossless")
+    return {"cseg_dtype": str(data.dtype), "cseg_bytes": len(encoded), "cseg_s": seconds}
+
+
+def measure_stream_codecs(name: str, labels: np.ndarray) -> dict:
+    import zstandard
+
+    dtype = smallest_dtype(labels)
+    raw = labels.astype(dtype, copy=False).tobytes(order="C")
+    start = time.perf_counter()
+    z = zstandard.ZstdCompressor(level=19).compress(raw)
+    zstd_s = time.perf_counter() - start
+    start = time.perf_counter()
+    g = gzip.compress(raw, compresslevel=9, mtime=0)
+    gzip_s = time.perf_counter() - start
+    if zstandard.ZstdDecompressor().decompress(z) != raw or gzip.decompress(g) != raw:
+        raise BenchError(f"{name}: zstd or gzip round trip is not lossless")
+    return {"raw_dtype": str(dtype), "zstd19_bytes": len(z), "zstd19_s": zstd_s,
+            "gzip9_bytes": len(g), "gzip9_s": gzip_s}
+
+
+# ------------------------------------------------------------------------------ one volume
+def min_width_bytes(distinct_values: int) -> int:
+    """Bytes per voxel of a raw array of dense label indices: 1, 2, 4 or 8."""
+    for width in (1, 2, 4):
+        if distinct_values <= 1 << (8 * width):
+            return width
+    return 8
+
+
+def measure_volume(name, source, labels, file_path, repeats, baseline_kb) -> dict:
+    labels = np.ascontiguousarray(labels)
+    image = to_image(labels)
+    voxels = labels.size
+    runs = repeats if voxels <= MEDIAN_MAX_VOXELS else 1
+    times = []
+    for _ in range(runs):
+        svdag, seconds = build_svdag(image)
+        times.append(seconds)
+    build_s = statistics.median(times)
+    check_round_trip(name, labels, svdag)
+
+    n_labels = svdag.GetNumberOfLabels()
+    labelled = sum(svdag.GetLabelVoxelCount(i) for i in range(n_labels))
+    distinct = n_labels + (1 if labelled < voxels else 0)  # the background, when present
+    width = min_width_bytes(distinct)
+    total = svdag.GetCompressedSize()
+    row = {
+        "volume": name, "source": source,
+        "dims_xyz": "x".join(str(d) for d in labels.shape[::-1]), "dtype": str(labels.dtype),
+        "voxels": voxels, "labels": n_labels,
+        "blocks": svdag.GetNumberOfBlocks(), "root_nodes": svdag.GetNumberOfRootNodes(),
+        "mid_nodes": svdag.GetNumberOfMidNodes(), "leaf_nodes": svdag.GetNumberOfLeaves(),
+        "bytes_blocks": svdag.GetBlocksMemorySize(), "bytes_dag": svdag.GetDAGMemorySize(),
+        "bytes_labels": svdag.GetLabelTableMemorySize(), "bytes_total": total,
+        "pct_raw32": 100.0 * total / (4 * voxels), "min_width_bytes": width,
+        "pct_raw_min": 100.0 * total / (width * voxels), "bits_per_voxel": 8.0 * total / voxels,
+        "build_s": build_s, "build_runs": runs, "voxels_per_s": voxels / build_s,
+        "roundtrip": "ok",
+    }
+    if file_path is not None:
+        probe = measure_peak_rss(str(file_path))
+        if probe["bytes_total"] != total:
+            raise BenchError(f"{name}: compressing the file gave {probe['bytes_total']} bytes, "
+                             f"the in-memory array {total}")
+        slab = labels.shape[2] * labels.shape[1] * min(SLAB_DEPTH, labels.shape[0]) * labels.itemsize
+        row.update({
+            "mem_path": probe["how"], "peak_rss_mb": probe["maxrss_kb"] * 1024 / MB,
+            "baseline_rss_mb": baseline_kb * 1024 / MB,
+            "peak_extra_mb": (probe["maxrss_kb"] - baseline_kb) * 1024 / MB,
+            "model_mb": (slab + 1.5 * total) / MB,
+        })
+    row.update(measure_cseg(name, labels))
+    row["ours_over_cseg"] = total / row["cseg_bytes"]
+    row.update(measure_stream_codecs(name, labels))
+    row["ours_over_zstd19"] = total / row["zstd19_bytes"]
+    return row
+
+
+# ------------------------------------------------------------------------------- anchors
+def read_anchors(path: pathlib.Path) -> dict:
+    """The first markdown table of anchors.md whose header starts with "volume", by volume."""
+    if not path.is_file():
+        return {}
+    rows, header = {}, None
+    for line in path.read_text().splitlines():
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if header is None:
+            if line.startswith("|") and cells[0] == "volume" and "paper SVDAG MB" in cells:
+                header = cells
+            continue
+        if not line.startswith("|"):
+            break
+        if set("".join(cells)) <= set("-: "):
+            continue  # the separator row
+        rows[cells[0]] = dict(zip(header, cells))
+    return rows
+
+
+def anchor_value(anchor: dict, key: str):
+    try:
+        return float(anchor[key])
+    except (KeyError, ValueError):
+        return None
+
+
+# ------------------------------------------------------------------------------ printing
+def fmt(value, digits=3) -> str:
+    if value is None or value == "":
+        return "-"
+    if isinstance(value, float):
+        if value != 0 and (abs(value) >= 1e5 or abs(value) < 10 ** -digits):
+            return f"{value:.{digits}g}"
+        return f"{value:.{digits}f}"
+    return str(value)
+
+
+def print_table(title, headers, rows):
+    text = [[fmt(v) for v in row] for row in rows]
+    widths = [max(len(h), *(len(r[i]) for r in text)) if text else len(h) for i, h in enumerate(headers)]
+    print(f"\n{title}")
+    print("  ".join(h.rjust(w) for h, w in zip(headers, widths)))
+    print("  ".join("-" * w for w in widths))
+    for r in text:
+        print("  ".join(c.rjust(w) for c, w in zip(r, widths)))
+
+
+def print_report(rows, anchors):
+    mb = lambda b: None if b in (None, "") else b / MB  # noqa: E731
+    print_table(
+        "Structure (measured)",
+        ["volume", "dims x*y*z", "dtype", "voxels", "labels", "blocks", "roots", "mids", "leaves"],
+        [[r["volume"], r["dims_xyz"], r["dtype"], r["voxels"], r["labels"], r["blocks"],
+          r["root_nodes"], r["mid_nodes"], r["leaf_nodes"]] for r in rows],
+    )
+    print_table(
+        "Bytes (measured; MB = 10^6 bytes; zstd/gzip on the raw array in raw_dtype)",
+        ["volume", "blocks MB", "DAG MB", "labels MB", "total MB", "%raw32", "%rawmin(B)",
+         "bits/vox", "cseg MB", "zstd19 MB", "gzip9 MB", "raw_dtype", "ours/cseg", "ours/zstd"],
+        [[r["volume"], mb(r["bytes_blocks"]), mb(r["bytes_dag"]), mb(r["bytes_labels"]),
+          mb(r["bytes_total"]), r["pct_raw32"], f"{r['pct_raw_min']:.2f}({r['min_width_bytes']})",
+          r["bits_per_voxel"], mb(r["cseg_bytes"]), mb(r["zstd19_bytes"]), mb(r["gzip9_bytes"]),
+          r["raw_dtype"], r["ours_over_cseg"], r["ours_over_zstd19"]] for r in rows],
+    )
+    print_table(
+        "Time and memory (measured; build = compress an in-memory array, median of build_runs; "
+        "peak = a subprocess reading + compressing the file; model = one slab + 1.5 x output)",
+        ["volume", "build s", "runs", "Mvox/s", "cseg s", "zstd19 s", "gzip9 s",
+         "peak MB", "baseline MB", "peak-base MB", "model MB", "via"],
+        [[r["volume"], r["build_s"], r["build_runs"], r["voxels_per_s"] / 1e6, r["cseg_s"],
+          r["zstd19_s"], r["gzip9_s"], r.get("peak_rss_mb"), r.get("baseline_rss_mb"),
+          r.get("peak_extra_mb"), r.get("model_mb"), r.get("mem_path")] for r in rows],
+    )
+    reported = [r for r in rows if r["volume"] in anchors]
+    if not anchors:
+        print(f"\n(no anchors table: {ANCHORS} not found)")
+        return
+    table = []
+    for r in reported:
+        a = anchors[r["volume"]]
+        paper_mb, paper_s = anchor_value(a, "paper SVDAG MB"), anchor_value(a, "paper build s")
+        csgv_mb, cseg_mb = anchor_value(a, "CSGV file MB"), anchor_value(a, "cseg MB")
+        ours = r["bytes_total"] / MB
+        table.append([
+            r["volume"], paper_mb, paper_s, csgv_mb, anchor_value(a, "CSGV GPU MB"), cseg_mb,
+            ours, ours / paper_mb if paper_mb else None, r["build_s"] / paper_s if paper_s else None,
+            ours / csgv_mb if csgv_mb else None,
+            (r["cseg_bytes"] / MB) / cseg_mb if cseg_mb else None,
+        ])
+    print_table(
+        f"REPORTED, NOT MEASURED HERE (from {ANCHORS.relative_to(REPO.parent)}; other runs, other "
+        "days) beside our measured bytes and build time",
+        ["volume", "paper MB", "paper build s", "CSGV file MB", "CSGV GPU MB", "cseg MB (rep.)",
+         "ours MB", "ours/paper", "build/paper", "ours/CSGV file", "cseg here/rep."],
+        table,
+    )
+
+
+def write_plot(rows, path: pathlib.Path):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    names = [r["volume"] for r in rows]
+    series = [("ours (SVDAG)", "bytes_total"), ("compressed_segmentation", "cseg_bytes"),
+              ("zstd -19 (raw)", "zstd19_bytes")]
+    x = np.arange(len(rows))
+    width = 0.8 / len(series)
+    fig, ax = plt.subplots(figsize=(max(6.0, 1.1 * len(rows) + 2), 4.5))
+    for i, (label, key) in enumerate(series):
+        ax.bar(x + (i - (len(series) - 1) / 2) * width, [r[key] for r in rows], width, label=label)
+    ax.set_yscale("log")
+    ax.set_ylabel("bytes (log scale)")
+    ax.set_xticks(x)
+    ax.set_xticklabels(names, rotation=30, ha="right")
+    ax.set_title("Compressed size per volume, measured in one run")
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+# ---------------------------------------------------------------------------------- main
+def run(args) -> int:
+    out = pathlib.Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    real = QUICK_REAL_VOLUMES if args.quick else REAL_VOLUMES
+    generated = QUICK_GENERATED_VOLUMES if args.quick else GENERATED_VOLUMES
+    print(f"machine: {machine_description()}")
+    print(f"mode: {'quick' if args.quick else 'full'}; data: {DATA}")
+    reader = reader_class()
+    print("file path for peak memory: "
+          + ("vtkSegmentationVolumeReader" if reader else
+             "pynrrd + vtkImageDataToSegmentationSVDAG (vtkSegmentationVolumeReader not available yet)"))
+
+    baseline_kb = 0 if args.no_memory else measure_peak_rss("-")["maxrss_kb"]
+    rows = []
+    with tempfile.TemporaryDirectory(prefix="svdag-bench-") as tmp:
+        for name in real:
+            path = DATA / f"{name}.nrrd"
+            if not path.is_file():
+                raise BenchError(f"missing volume {path}")
+            labels, _ = nrrd.read(str(path), index_order="C")
+            rows.append(measure_volume(name, "file", labels, None if args.no_memory else path,
+                                       args.repeats, baseline_kb))
+            print(f"  {name}: {rows[-1]['bytes_total'] / MB:.3f} MB, round trip ok", flush=True)
+        for name, make in generated.items():
+            labels = make()
+            path = None
+            if not args.no_memory:
+                # Written to a file so that its peak memory is measured the same way.
+                path = pathlib.Path(tmp) / f"{name}.nrrd"
+                nrrd.write(str(path), labels, index_order="C", compression_level=1)
+            rows.append(measure_volume(name, "generated", labels, path, args.repeats, baseline_kb))
+            print(f"  {name}: {rows[-1]['bytes_total'] / MB:.3f} MB, round trip ok", flush=True)
+
+    print_report(rows, read_anchors(ANCHORS))
+    csv_path, png_path = out / "compression.csv", out / "compression.png"
+    with open(csv_path, "w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=COLUMNS, restval="")
+        writer.writeheader()
+        for r in rows:
+            writer.writerow({k: (f"{v:.6g}" if isinstance(v, float) else v) for k, v in r.items()})
+    write_plot(rows, png_path)
+    print(f"\nwrote {csv_path} and {png_path}")
+    return 0
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--quick", action="store_true", help="small volumes only (a few seconds)")
+    parser.add_argument("--out", default=str(REPO / "bench" / "out"), help="folder for the CSV and plot")
+    parser.add_argument("--repeats", type=int, default=3, help="builds per volume up to 256^3 voxels (median)")
+    parser.add_argument("--no-memory", action="store_true", help="skip the peak memory subprocesses")
+    parser.add_argument("--memory-probe", metavar="PATH", help=argparse.SUPPRESS)
+    args = parser.parse_args(argv)
+    if args.memory_probe is not None:
+        memory_probe(args.memory_probe)
+        return 0
+    if args.repeats < 1:
+        parser.error("--repeats must be at least 1")
+    try:
+        return run(args)
+    except BenchError as error:
+        print(f"\nBENCHMARK FAILED: {error}", file=sys.stderr)
+        return 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
