@@ -1,10 +1,28 @@
 """vtksvdag: lossless SVDAG compression of segmentation volumes for VTK and pyvista.
 
-The compiled VTK modules (``vtksvdag.vtkSVDAGCore``, ...) are built by CMake into another
-directory; ``extend_path`` merges it into this package.
+The compiled VTK modules (``vtksvdag.vtkSVDAGCore``, ``vtksvdag.vtkSVDAGIO``, ...) are built by
+CMake into another directory; ``extend_path`` merges it into this package.
+
+Examples
+--------
+>>> import numpy as np
+>>> import vtksvdag
+>>> labels = np.zeros((64, 64, 64), dtype=np.uint32)
+>>> labels[10:50, 20:40, 5:60] = 3
+>>> volume = vtksvdag.from_numpy(labels)
+>>> volume.stats()["labels"]
+1
+>>> np.array_equal(volume.to_numpy(), labels)
+True
 """
 from pkgutil import extend_path
 
 __path__ = extend_path(__path__, __name__)
 
 __version__ = "0.1.0"
+
+from .build import from_image, from_numpy  # noqa: E402 (needs the extended __path__)
+from .fileio import read  # noqa: E402
+from .volume import SegmentationVolume  # noqa: E402
+
+__all__ = ["SegmentationVolume", "from_image", "from_numpy", "read", "__version__"]

@@ -1,0 +1,110 @@
+"""Files: read label volumes and ``.svdag`` files, write ``.svdag`` files."""
+import os
+import time
+
+import numpy as np
+
+from ._labels import label_pattern, label_patterns
+from ._vtkrun import run_algorithm
+from .volume import SegmentationVolume
+
+SVDAG_SUFFIX = ".svdag"
+
+
+def _check_input_file(path):
+    path = os.fspath(path)
+    if not os.path.exists(path):
+        raise FileNotFoundError(2, "No such file or directory", path)
+    if os.path.isdir(path):
+        raise IsADirectoryError(21, "Is a directory", path)
+    return path
+
+
+def read(path, background=0, exclude=(), dataset=None, progress=None):
+    """Read a label volume file, or a compressed ``.svdag`` file, as a SegmentationVolume.
+
+    Label volume files (NRRD ``.nrrd``/``.nhdr`` including gzip encoding, MetaImage
+    ``.mha``/``.mhd``, VTK ``.vti``, NIfTI ``.nii``/``.nii.gz``, TIFF ``.tif``, HDF5 ``.h5``)
+    are read and compressed in one streaming pass by ``vtkSegmentationVolumeReader``. A
+    ``.npy`` file is taken as an integer array indexed ``[x, y, z]`` (as ``vtksvdag
+    decompress`` writes it), with unit spacing.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file.
+    background : int, default: 0
+        Label value that is not stored (ignored for ``.svdag`` files, which carry their own).
+    exclude : sequence of int, default: ()
+        Labels left out; they decode as background (ignored for ``.svdag`` files).
+    dataset : str, optional
+        Name of the dataset inside an HDF5 file.
+    progress : callable, optional
+        Called with the reading progress in [0, 1].
+
+    Returns
+    -------
+    SegmentationVolume
+        ``load_seconds`` is set for ``.svdag`` files; otherwise ``build_seconds`` holds the time
+        of reading and compressing (one streaming pass, they cannot be timed apart).
+
+    Raises
+    ------
+    FileNotFoundError
+        The file does not exist.
+    OSError
+        The file cannot be read (unknown format, truncated, corrupt).
+    ValueError
+        The file holds no integer label volume.
+
+    Examples
+    --------
+    >>> import vtksvdag
+    >>> volume = vtksvdag.read("fib25_64.nrrd")  # doctest: +SKIP
+    >>> volume.dims  # doctest: +SKIP
+    (64, 64, 64)
+    """
+    path = _check_input_file(path)
+    if path.lower().endswith(".npy"):
+        from .build import from_numpy
+
+        try:
+            array = np.load(path, mmap_mode="r", allow_pickle=False)
+        except ValueError as e:
+            raise OSError(f"{path}: not a readable .npy array ({e})") from None
+        return from_numpy(array, background=background, exclude=exclude, progress=progress)
+
+    from .vtkSVDAGIO import vtkSegmentationVolumeReader
+
+    reader = vtkSegmentationVolumeReader()
+    reader.SetFileName(path)
+    reader.SetBackgroundLabel(label_pattern(background, None, "background"))
+    for value in label_patterns(exclude, None):
+        reader.AddExcludedLabel(value)
+    if dataset is not None:
+        reader.SetDatasetName(str(dataset))
+    start = time.perf_counter()
+    run_algorithm(reader, progress=progress, error=ValueError, what=path)
+    seconds = time.perf_counter() - start
+    output = reader.GetOutput()
+    if output is None or not output.HasVolume():
+        raise OSError(f"{path}: the reader produced no volume")
+    if path.lower().endswith(SVDAG_SUFFIX):
+        return SegmentationVolume(output, load_seconds=seconds)
+    return SegmentationVolume(output, build_seconds=seconds)
+
+
+def write_svdag(volume, path, compression_level=3, progress=None):
+    """Write ``volume`` (a SegmentationVolume) to the ``.svdag`` file ``path``.
+
+    See :meth:`SegmentationVolume.save`.
+    """
+    from .vtkSVDAGIO import vtkSegmentationSVDAGWriter
+
+    if not isinstance(compression_level, (int, np.integer)) or isinstance(compression_level, bool):
+        raise TypeError(f"compression_level must be an integer, not {compression_level!r}")
+    writer = vtkSegmentationSVDAGWriter()
+    writer.SetInputData(volume.dataobject)
+    writer.SetFileName(os.fspath(path))
+    writer.SetCompressionLevel(int(compression_level))
+    run_algorithm(writer, action="Write", progress=progress, error=OSError, what=os.fspath(path))
