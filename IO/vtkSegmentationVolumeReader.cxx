@@ -1,3 +1,207 @@
 #include "vtkSegmentationVolumeReader.h"
+
+#include "vtkErrorCode.h"
+#include "vtkInformation.h"
+#include "vtkInformationVector.h"
 #include "vtkObjectFactory.h"
+#include "vtkSVDAGParallel.h"
+#include "vtkSegmentationSVDAG.h"
+
+#include "svdagSlabSourceFactory.h"
+
+#include "svdag/Builder.h"
+
+#include <algorithm>
+#include <exception>
+#include <memory>
+#include <new>
+
 vtkStandardNewMacro(vtkSegmentationVolumeReader);
+
+vtkSegmentationVolumeReader::vtkSegmentationVolumeReader() = default;
+
+vtkSegmentationVolumeReader::~vtkSegmentationVolumeReader()
+{
+  this->SetFileName(nullptr);
+  this->SetDatasetName(nullptr);
+}
+
+int vtkSegmentationVolumeReader::CanReadFile(const char* fileName)
+{
+  return fileName && !svdagDetectFileFormat(fileName).empty() ? 1 : 0;
+}
+
+const char* vtkSegmentationVolumeReader::GetFileExtensions()
+{
+  return ".nrrd .nhdr .seg.nrrd .mha .mhd .vti .nii .nii.gz .hdr .img .tif .tiff .h5 .hdf5 "
+         ".hdf .svdag";
+}
+
+const char* vtkSegmentationVolumeReader::GetDescriptiveName()
+{
+  return "Segmentation label volume";
+}
+
+void vtkSegmentationVolumeReader::AddExcludedLabel(vtkTypeInt64 label)
+{
+  this->ExcludedLabels.push_back(label);
+  this->Modified();
+}
+
+void vtkSegmentationVolumeReader::RemoveAllExcludedLabels()
+{
+  if (!this->ExcludedLabels.empty())
+  {
+    this->ExcludedLabels.clear();
+    this->Modified();
+  }
+}
+
+vtkIdType vtkSegmentationVolumeReader::GetNumberOfExcludedLabels() const
+{
+  return static_cast<vtkIdType>(this->ExcludedLabels.size());
+}
+
+vtkTypeInt64 vtkSegmentationVolumeReader::GetExcludedLabel(vtkIdType i) const
+{
+  return (i >= 0 && i < this->GetNumberOfExcludedLabels()) ? this->ExcludedLabels[size_t(i)] : 0;
+}
+
+namespace
+{
+svdagSlabSourceOptions sourceOptions(const char* datasetName)
+{
+  svdagSlabSourceOptions options;
+  if (datasetName)
+    options.datasetName = datasetName;
+  return options;
+}
+}
+
+int vtkSegmentationVolumeReader::RequestInformation(
+  vtkInformation*, vtkInformationVector**, vtkInformationVector*)
+{
+  this->SetErrorCode(vtkErrorCode::NoError);
+  this->FileFormat.clear();
+  if (!this->FileName || !*this->FileName)
+  {
+    vtkErrorMacro("No FileName set.");
+    this->SetErrorCode(vtkErrorCode::NoFileNameError);
+    return 0;
+  }
+  try
+  {
+    // Opening a source reads and checks the whole header.
+    const auto source = svdagOpenSlabSource(this->FileName, sourceOptions(this->DatasetName));
+    this->FileFormat = source->formatName();
+  }
+  catch (const svdagReadError& e)
+  {
+    vtkErrorMacro("Cannot read " << this->FileName << ": " << e.what());
+    this->SetErrorCode(e.code());
+    return 0;
+  }
+  catch (const std::exception& e)
+  {
+    vtkErrorMacro("Cannot read " << this->FileName << ": " << e.what());
+    this->SetErrorCode(vtkErrorCode::UnknownError);
+    return 0;
+  }
+  return 1;
+}
+
+int vtkSegmentationVolumeReader::RequestData(
+  vtkInformation*, vtkInformationVector**, vtkInformationVector* out)
+{
+  vtkSegmentationSVDAG* output = vtkSegmentationSVDAG::GetData(out);
+  if (!output)
+  {
+    vtkErrorMacro("Missing output.");
+    return 0;
+  }
+  output->Initialize();
+  this->SetErrorCode(vtkErrorCode::NoError);
+  if (!this->FileName || !*this->FileName)
+  {
+    vtkErrorMacro("No FileName set.");
+    this->SetErrorCode(vtkErrorCode::NoFileNameError);
+    return 0;
+  }
+
+  svdag::BuildOptions options;
+  options.background = static_cast<uint64_t>(this->BackgroundLabel);
+  for (vtkTypeInt64 label : this->ExcludedLabels)
+    options.excluded.push_back(static_cast<uint64_t>(label));
+
+  try
+  {
+    // A fresh source: streams that decompress cannot rewind.
+    const auto source = svdagOpenSlabSource(this->FileName, sourceOptions(this->DatasetName));
+    this->FileFormat = source->formatName();
+    const svdag::Geometry& geometry = source->geometry();
+    const svdag::ScalarType type = source->scalarType();
+
+    // A compressed file whose labels need no change is passed through as it is.
+    if (const svdag::Volume* volume = source->compressedVolume())
+    {
+      uint64_t background = 0;
+      svdag::scalarStore(type, &background, 0, options.background);
+      if (options.excluded.empty() && svdag::scalarLoad(type, &background, 0) == volume->background)
+      {
+        output->SetVolume(std::make_shared<const svdag::Volume>(*volume));
+        this->UpdateProgress(1.0);
+        return 1;
+      }
+    }
+
+    svdag::Builder builder(geometry, type, options, vtkSVDAGParallelFor());
+    std::vector<uint8_t> slab(size_t(geometry.dims[0]) * size_t(geometry.dims[1]) *
+      size_t(std::min(svdag::Builder::SlabDepth, geometry.dims[2])) *
+      size_t(svdag::scalarSize(type)));
+    for (int32_t z0 = 0; z0 < geometry.dims[2]; z0 += svdag::Builder::SlabDepth)
+    {
+      if (this->GetAbortExecute())
+      {
+        vtkWarningMacro("Reading " << this->FileName << " was aborted.");
+        return 0;
+      }
+      const int32_t nz = std::min(svdag::Builder::SlabDepth, geometry.dims[2] - z0);
+      source->readSlab(z0, nz, slab.data());
+      builder.addSlab(z0, nz, slab.data());
+      this->UpdateProgress(double(z0 + nz) / geometry.dims[2]);
+    }
+    output->SetVolume(std::make_shared<const svdag::Volume>(builder.finish()));
+  }
+  catch (const svdagReadError& e)
+  {
+    vtkErrorMacro("Cannot read " << this->FileName << ": " << e.what());
+    this->SetErrorCode(e.code());
+    return 0;
+  }
+  catch (const std::bad_alloc&)
+  {
+    vtkErrorMacro("Out of memory reading " << this->FileName << ".");
+    this->SetErrorCode(vtkErrorCode::OutOfDiskSpaceError);
+    return 0;
+  }
+  catch (const std::exception& e)
+  {
+    vtkErrorMacro("Cannot compress " << this->FileName << ": " << e.what());
+    this->SetErrorCode(vtkErrorCode::UnknownError);
+    return 0;
+  }
+  return 1;
+}
+
+void vtkSegmentationVolumeReader::PrintSelf(ostream& os, vtkIndent indent)
+{
+  this->Superclass::PrintSelf(os, indent);
+  os << indent << "FileName: " << (this->FileName ? this->FileName : "(none)") << "\n";
+  os << indent << "DatasetName: " << (this->DatasetName ? this->DatasetName : "(none)") << "\n";
+  os << indent << "FileFormat: " << this->FileFormat << "\n";
+  os << indent << "BackgroundLabel: " << this->BackgroundLabel << "\n";
+  os << indent << "ExcludedLabels:";
+  for (vtkTypeInt64 label : this->ExcludedLabels)
+    os << " " << label;
+  os << "\n";
+}

@@ -1,15 +1,108 @@
-// Placeholder: replaced by the real class (work in progress).
+/**
+ * @class   vtkSegmentationVolumeReader
+ * @brief   reads a label volume file straight into a vtkSegmentationSVDAG
+ *
+ * The file is never held in memory as a whole: it is read in slabs of 16 z-slices that are fed
+ * to the SVDAG builder one after the other, so peak memory stays near one slab plus the
+ * compressed output (exception: MetaImage, see below). Cells of a slab are scanned in parallel
+ * with vtkSMPTools; the output does not depend on the thread count.
+ *
+ * The format is detected from the file's content, not its name:
+ * - NRRD (.nrrd, detached .nhdr; raw or gzip; 3D Slicer .seg.nrrd with one labelmap layer),
+ *   geometry from space directions/space origin or spacings, in the file's own space;
+ * - MetaImage (.mha, .mhd) through vtkMetaImageReader. Read whole: VTK 9.1's reader writes the
+ *   whole image whatever extent is requested, so it cannot stream slabs;
+ * - VTK XML image data (.vti) through vtkXMLImageDataReader, slab by slab;
+ * - NIfTI-1/2 (.nii, .nii.gz, .hdr/.img) through vtkNIFTIImageReader, slab by slab, in the
+ *   file's voxel order (nibabel's array order, x fastest); origin, spacing and direction come
+ *   from the sform (if its code is set) or the qform, as nibabel's affine does;
+ * - multi-page TIFF (one page per z-slice, one integer sample per pixel) through libtiff;
+ * - HDF5 (a 3D integer dataset stored (z, y, x) in C order, the way h5py writes a numpy array);
+ * - .svdag files (the project's own format).
+ *
+ * Label volumes need one integer component (8 to 64 bits, signed or unsigned); other files are
+ * rejected with an error naming their type. Errors set the error code (FileNotFoundError,
+ * UnrecognizedFileTypeError, FileFormatError, PrematureEndOfFileError, ...) and are reported with
+ * vtkErrorMacro; RequestInformation already checks the header.
+ */
 #ifndef vtkSegmentationVolumeReader_h
 #define vtkSegmentationVolumeReader_h
-#include "vtkObject.h"
-#include "vtkSVDAGIOModule.h"
-class VTKSVDAGIO_EXPORT vtkSegmentationVolumeReader : public vtkObject
+
+#include "vtkSVDAGIOModule.h" // for export macro
+#include "vtkSegmentationSVDAGAlgorithm.h"
+
+#include <string> // for std::string
+#include <vector> // for std::vector
+
+class VTKSVDAGIO_EXPORT vtkSegmentationVolumeReader : public vtkSegmentationSVDAGAlgorithm
 {
 public:
   static vtkSegmentationVolumeReader* New();
-  vtkTypeMacro(vtkSegmentationVolumeReader, vtkObject);
+  vtkTypeMacro(vtkSegmentationVolumeReader, vtkSegmentationSVDAGAlgorithm);
+  void PrintSelf(ostream& os, vtkIndent indent) override;
+
+  ///@{
+  /** The label volume file to read. */
+  vtkSetStringMacro(FileName);
+  vtkGetStringMacro(FileName);
+  ///@}
+
+  /**
+   * 1 if the file's content is in a format this reader knows (magic numbers and header keys
+   * are checked; the extension is not), else 0.
+   */
+  virtual int CanReadFile(const char* fileName);
+
+  /** Extensions of the formats read, space-separated (".nrrd .nhdr .mha ..."). */
+  virtual const char* GetFileExtensions();
+  /** "Segmentation label volume". */
+  virtual const char* GetDescriptiveName();
+
+  ///@{
+  /** Label value not stored (default 0), in the file's scalar type (-1 is 255 for uint8). */
+  vtkSetMacro(BackgroundLabel, vtkTypeInt64);
+  vtkGetMacro(BackgroundLabel, vtkTypeInt64);
+  ///@}
+
+  ///@{
+  /** Labels left out of the compressed volume (they decode as background). */
+  void AddExcludedLabel(vtkTypeInt64 label);
+  void RemoveAllExcludedLabels();
+  vtkIdType GetNumberOfExcludedLabels() const;
+  vtkTypeInt64 GetExcludedLabel(vtkIdType i) const;
+  ///@}
+
+  ///@{
+  /**
+   * HDF5 only: path of the dataset to read ("/volumes/labels"). If unset, the file must hold
+   * exactly one 3D integer dataset.
+   */
+  vtkSetStringMacro(DatasetName);
+  vtkGetStringMacro(DatasetName);
+  ///@}
+
+  /**
+   * Format detected by the last RequestInformation ("NRRD", "MetaImage", "VTKImageData",
+   * "NIfTI", "TIFF", "HDF5", "SVDAG"), or "" before an update or when the file was not read.
+   */
+  const char* GetFileFormat() const { return this->FileFormat.c_str(); }
+
 protected:
-  vtkSegmentationVolumeReader() = default;
-  ~vtkSegmentationVolumeReader() override = default;
+  vtkSegmentationVolumeReader();
+  ~vtkSegmentationVolumeReader() override;
+
+  int RequestInformation(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
+  int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
+
+  char* FileName = nullptr;
+  char* DatasetName = nullptr;
+  vtkTypeInt64 BackgroundLabel = 0;
+  std::vector<vtkTypeInt64> ExcludedLabels;
+  std::string FileFormat;
+
+private:
+  vtkSegmentationVolumeReader(const vtkSegmentationVolumeReader&) = delete;
+  void operator=(const vtkSegmentationVolumeReader&) = delete;
 };
+
 #endif

@@ -1,0 +1,68 @@
+#include "svdagSlabSource.h"
+
+#include "vtkErrorCode.h"
+
+#include "svdag/Builder.h"
+
+#include <algorithm>
+#include <cstring>
+
+void svdagSlabSource::checkGeometry(const std::string& fileName) const
+{
+  const std::string problem = svdag::checkGeometry(this->Geometry);
+  if (!problem.empty())
+  {
+    throw svdagReadError(vtkErrorCode::FileFormatError, fileName + ": " + problem);
+  }
+}
+
+void svdagSlabSource::checkSlab(int32_t z0, int32_t nz) const
+{
+  if (z0 < 0 || nz < 1 || nz > this->Geometry.dims[2] - z0)
+  {
+    throw svdagReadError(vtkErrorCode::FileFormatError,
+      "slab [" + std::to_string(z0) + ", +" + std::to_string(nz) + ") outside the volume");
+  }
+}
+
+svdag::ScalarType svdagIntegerScalarType(bool isSigned, int bytes, const std::string& what)
+{
+  switch (bytes)
+  {
+    case 1:
+      return isSigned ? svdag::ScalarType::Int8 : svdag::ScalarType::UInt8;
+    case 2:
+      return isSigned ? svdag::ScalarType::Int16 : svdag::ScalarType::UInt16;
+    case 4:
+      return isSigned ? svdag::ScalarType::Int32 : svdag::ScalarType::UInt32;
+    case 8:
+      return isSigned ? svdag::ScalarType::Int64 : svdag::ScalarType::UInt64;
+    default:
+      break;
+  }
+  throw svdagReadError(vtkErrorCode::FileFormatError,
+    "label volumes need 8, 16, 32 or 64-bit integer scalars; " + what);
+}
+
+void svdagThrowNotIntegerLabels(const std::string& fileName, const std::string& type)
+{
+  throw svdagReadError(vtkErrorCode::FileFormatError,
+    "label volumes need integer scalars; " + fileName + " has " + type);
+}
+
+void svdagSwapBytes(void* data, size_t count, int size)
+{
+  auto* bytes = static_cast<uint8_t*>(data);
+  for (size_t i = 0; i < count; ++i, bytes += size)
+  {
+    std::reverse(bytes, bytes + size);
+  }
+}
+
+bool svdagHostIsLittleEndian()
+{
+  const uint16_t one = 1;
+  uint8_t first = 0;
+  std::memcpy(&first, &one, 1);
+  return first == 1;
+}
