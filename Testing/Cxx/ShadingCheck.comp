@@ -1,5 +1,5 @@
 #version 460
-// Compiles the shared shading header as GLSL (ctest runs glslangValidator on this file).
+// Compiles the shared shading and integrator headers as GLSL (ctest runs glslangValidator on it).
 #extension GL_GOOGLE_include_directive : require
 layout(local_size_x = 64) in;
 layout(std430, binding = 0) readonly buffer Marginal { float marginal[]; };
@@ -12,6 +12,28 @@ layout(std430, binding = 3) writeonly buffer Out { vec4 results[]; };
 #include "svdag_render/Shading.h"
 layout(std430, binding = 4) readonly buffer Materials { Material materials[]; };
 
+// The integrator too, with a stand-in for the ray tracing calls (a plane z = 0).
+PathHit traceStandIn(vec3 o, vec3 d)
+{
+  PathHit h;
+  h.hit = d.z < 0.0 && o.z > 0.0;
+  h.inside = false;
+  h.t = h.hit ? -o.z / d.z : 1e30;
+  h.label = 0u;
+  h.normal = vec3(0.0, 0.0, 1.0);
+  return h;
+}
+#define SVDAG_FEATURE_NEE true
+#define SVDAG_FEATURE_ENV_MAP true
+#define SVDAG_FEATURE_SUN true
+#define SVDAG_FEATURE_EMISSION true
+#define SVDAG_FEATURE_TRANSMISSION true
+#define SVDAG_TRACE_CLOSEST(hit, origin, direction, tmax) hit = traceStandIn(origin, direction)
+#define SVDAG_TRACE_OCCLUDED(result, origin, direction, tmax) result = traceStandIn(origin, direction).hit
+#define SVDAG_MATERIAL(label) materials[(label)]
+#include "svdag_render/PathTracer.h"
+layout(std430, binding = 5) readonly buffer Params { PathTracerParams params; };
+
 void main()
 {
   uint rng = pcgHash(gl_GlobalInvocationID.x);
@@ -22,6 +44,8 @@ void main()
   float pdf;
   vec3 d = envSample(vec2(random01(rng), random01(rng)), 16u, 8u, pdf);
   float w = powerHeuristic(pdf, bsdfPdf(m, n, wo, d));
+  vec3 path = tracePath(params, vec3(0.0, 0.0, 2.0), normalize(vec3(0.1, 0.2, -1.0)), rng);
+  results[gl_GlobalInvocationID.x + 1u] = vec4(path, 1.0);
   results[gl_GlobalInvocationID.x] =
     vec4(finiteOrZero(s.weight + w * bsdfEval(m, n, wo, d) * envRadiance(d, 16u, 8u) / pdf), envPdf(d, 16u, 8u));
 }

@@ -385,6 +385,29 @@ SHADING_FN vec3 envRadiance(vec3 d, uint width, uint height)
   return SVDAG_ENV_TEXEL(row * width + col);
 }
 
+/* ---- interface of the path-tracing integrator (PathTracer.h) ----------------------------------- */
+SHADING_CONST uint MAX_BOUNCES_LIMIT = 64u; // hard bound of the path loop
+SHADING_CONST uint FLAG_NEE = 1u;
+
+/* Lighting and integrator settings, std430/std140-compatible (64 bytes). */
+struct PathTracerParams
+{
+  vec4 sunDirection;   // xyz: unit direction towards the light (world), w: cos(angular radius)
+  vec4 sunRadiance;    // rgb: irradiance at normal incidence (radiance * solid angle), a: 1 = on
+  vec4 environment;    // rgb: constant environment radiance, or the map's scale; a: ray epsilon
+  uvec4 config;        // x, y: environment map size (1 x 1 = constant), z: max bounces, w: flags
+};
+
+/* What a closest-hit query returns. */
+struct PathHit
+{
+  bool hit;
+  bool inside; // the ray started inside the solid: t and normal describe where it leaves it
+  float t;     // distance along the (unit) direction
+  uint label;  // label index
+  vec3 normal; // unit geometric normal of the face crossed, world space, pointing out of the solid
+};
+
 #ifdef __cplusplus
 } // namespace shading
 } // namespace svdag

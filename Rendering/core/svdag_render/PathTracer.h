@@ -1,0 +1,186 @@
+/* The path-tracing integrator, shared by the ray generation shader and a CPU reference (common
+ * subset of GLSL 4.60 and C++17 with GLM, like Shading.h).
+ *
+ * Unidirectional path tracing with next-event estimation: at every non-delta scattering event the
+ * environment (importance-sampled) and the directional light are sampled with a shadow ray; BSDF
+ * sampling continues the path, and an escaping path adds the environment and the sun weighted by
+ * the power heuristic against the light-sampling densities. The sun is a disk of a given angular
+ * radius (radius 0: a delta light that only light sampling can find). Emissive voxels add their emission where a path hits them. Russian roulette from
+ * the third bounce. With NEE disabled the estimator is the plain "light only where a path escapes"
+ * one (the paper authors' estimator), kept for the error-versus-time comparison.
+ *
+ * Its interface types (PathTracerParams, PathHit) are in Shading.h, so that the includer can
+ * define its trace functions before including this file. The includer defines:
+ *   SVDAG_TRACE_CLOSEST(hit, origin, direction, tmax)  fills a PathHit for the nearest surface
+ *   SVDAG_TRACE_OCCLUDED(result, origin, direction, tmax)  sets result = true if anything is hit
+ *   SVDAG_MATERIAL(labelIndex)  the Material of a label
+ *   and the environment macros of Shading.h.
+ * Feature switches (specialization constants on the GPU, so a scene that does not use a feature
+ * does not pay for it): SVDAG_FEATURE_NEE, SVDAG_FEATURE_ENV_MAP, SVDAG_FEATURE_SUN,
+ * SVDAG_FEATURE_EMISSION, SVDAG_FEATURE_TRANSMISSION (booleans).
+ */
+#ifndef SVDAG_RENDER_PATHTRACER_H
+#define SVDAG_RENDER_PATHTRACER_H
+
+#include "svdag_render/Shading.h"
+
+#ifdef __cplusplus
+namespace svdag
+{
+namespace shading
+{
+#endif
+
+SHADING_FN vec3 environmentRadiance(PathTracerParams p, vec3 d)
+{
+  if (SVDAG_FEATURE_ENV_MAP)
+    return vec3(p.environment) * envRadiance(d, p.config.x, p.config.y);
+  return vec3(p.environment);
+}
+
+SHADING_FN float environmentPdf(PathTracerParams p, vec3 d)
+{
+  if (SVDAG_FEATURE_ENV_MAP)
+    return envPdf(d, p.config.x, p.config.y);
+  return 0.25f * INV_PI;
+}
+
+SHADING_FN vec3 environmentSample(PathTracerParams p, vec2 u, SHADING_OUT(float) pdf)
+{
+  if (SVDAG_FEATURE_ENV_MAP)
+    return envSample(u, p.config.x, p.config.y, pdf);
+  return envSample(u, 1u, 1u, pdf);
+}
+
+/* Solid angle of the sun disk; 0 for a delta light. */
+SHADING_FN float sunSolidAngle(PathTracerParams p)
+{
+  float cosMax = clamp(p.sunDirection.w, -1.0f, 1.0f);
+  return cosMax >= 0.9999999f ? 0.0f : 2.0f * PI * (1.0f - cosMax);
+}
+
+/* Radiance of the sun seen along d (zero outside the disk or for a delta sun). */
+SHADING_FN vec3 sunRadianceAlong(PathTracerParams p, vec3 d)
+{
+  float omega = sunSolidAngle(p);
+  if (!(SVDAG_FEATURE_SUN) || p.sunRadiance.a <= 0.0f || omega <= 0.0f ||
+    dot(d, vec3(p.sunDirection)) < p.sunDirection.w)
+    return vec3(0.0f);
+  return vec3(p.sunRadiance) / omega;
+}
+
+/* Uniform direction in the sun's cone; pdf = 1 / solid angle (0 for a delta sun). */
+SHADING_FN vec3 sunSample(PathTracerParams p, vec2 u, SHADING_OUT(float) pdf)
+{
+  float omega = sunSolidAngle(p);
+  vec3 axis = normalize(vec3(p.sunDirection));
+  if (omega <= 0.0f)
+  {
+    pdf = 0.0f;
+    return axis;
+  }
+  float z = 1.0f - u.x * (1.0f - p.sunDirection.w);
+  float r = sqrt(max(0.0f, 1.0f - z * z));
+  float phi = 2.0f * PI * u.y;
+  pdf = 1.0f / omega;
+  return normalize(toWorld(vec3(r * cos(phi), r * sin(phi), z), axis));
+}
+
+/* Radiance arriving along a camera ray; `rng` advances. Never NaN or Inf. */
+SHADING_FN vec3 tracePath(PathTracerParams p, vec3 origin, vec3 direction, SHADING_INOUT(uint) rng)
+{
+  vec3 radiance = vec3(0.0f);
+  vec3 throughput = vec3(1.0f);
+  float previousPdf = 0.0f;
+  bool previousDelta = true; // the camera "samples" its ray with a delta distribution
+  bool nee = SVDAG_FEATURE_NEE && (p.config.w & FLAG_NEE) != 0u;
+  uint maxBounces = min(p.config.z, MAX_BOUNCES_LIMIT);
+  float epsilon = p.environment.w;
+  vec3 o = origin;
+  vec3 d = direction;
+  for (uint bounce = 0u; bounce <= maxBounces; ++bounce)
+  {
+    PathHit h;
+    SVDAG_TRACE_CLOSEST(h, o, d, 1e30f);
+    if (!h.hit)
+    {
+      bool weighted = nee && !previousDelta;
+      float wEnv = weighted ? powerHeuristic(previousPdf, environmentPdf(p, d)) : 1.0f;
+      float omega = sunSolidAngle(p);
+      float wSun = (weighted && omega > 0.0f) ? powerHeuristic(previousPdf, 1.0f / omega) : 1.0f;
+      radiance += throughput * (wEnv * environmentRadiance(p, d) + wSun * sunRadianceAlong(p, d));
+      break;
+    }
+    Material m = SVDAG_MATERIAL(h.label);
+    if (SVDAG_FEATURE_EMISSION && !h.inside)
+      radiance += throughput * vec3(m.emission);
+    if (bounce == maxBounces)
+      break;
+    // Shade on the side the ray comes from.
+    vec3 n = h.inside ? -h.normal : h.normal;
+    if (dot(n, d) > 0.0f)
+      n = -n;
+    vec3 wo = -d;
+    vec3 position = o + h.t * d;
+    vec3 above = position + epsilon * n;
+
+    if (nee)
+    {
+      float lightPdf;
+      vec3 wl = environmentSample(p, vec2(random01(rng), random01(rng)), lightPdf);
+      vec3 f = bsdfEval(m, n, wo, wl);
+      if (lightPdf > 0.0f && max(f.x, max(f.y, f.z)) > 0.0f)
+      {
+        bool blocked;
+        SVDAG_TRACE_OCCLUDED(blocked, above, wl, 1e30f);
+        if (!blocked)
+          radiance += throughput * f * environmentRadiance(p, wl) *
+            (powerHeuristic(lightPdf, bsdfPdf(m, n, wo, wl)) / lightPdf);
+      }
+      if (SVDAG_FEATURE_SUN && p.sunRadiance.a > 0.0f)
+      {
+        float sunPdf;
+        vec3 ws = sunSample(p, vec2(random01(rng), random01(rng)), sunPdf);
+        vec3 fs = bsdfEval(m, n, wo, ws);
+        if (max(fs.x, max(fs.y, fs.z)) > 0.0f)
+        {
+          bool blocked;
+          SVDAG_TRACE_OCCLUDED(blocked, above, ws, 1e30f);
+          // Radiance E / omega over pdf 1 / omega is the irradiance E; a disk sun is MIS-weighted
+          // against BSDF sampling, a delta sun (pdf 0) only reachable here.
+          float w = sunPdf > 0.0f ? powerHeuristic(sunPdf, bsdfPdf(m, n, wo, ws)) : 1.0f;
+          vec3 contribution = w * fs * vec3(p.sunRadiance);
+          if (!blocked)
+            radiance += throughput * contribution;
+        }
+      }
+    }
+
+    Material sm = m;
+    if (!SVDAG_FEATURE_TRANSMISSION)
+      sm.params.z = 0.0f;
+    BsdfSample s = bsdfSample(sm, n, wo, !h.inside, vec3(random01(rng), random01(rng), random01(rng)));
+    if (max(s.weight.x, max(s.weight.y, s.weight.z)) <= 0.0f)
+      break;
+    throughput *= s.weight;
+    previousPdf = s.pdf;
+    previousDelta = s.delta;
+    o = s.transmitted ? position - epsilon * n : above;
+    d = s.direction;
+    if (bounce >= 2u)
+    {
+      float q = min(max(throughput.x, max(throughput.y, throughput.z)), 0.95f);
+      if (random01(rng) >= q)
+        break;
+      throughput /= q;
+    }
+  }
+  return finiteOrZero(radiance);
+}
+
+#ifdef __cplusplus
+} // namespace shading
+} // namespace svdag
+#endif
+
+#endif
