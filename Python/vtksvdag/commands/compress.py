@@ -1,0 +1,36 @@
+"""``vtksvdag compress INPUT -o OUT.svdag``: compress a label volume file into a .svdag file."""
+from ._common import (
+    add_input_options, add_output_options, file_bytes, load, print_json, print_table,
+    run_with_progress, stats_rows,
+)
+
+NAME = "compress"
+HELP = "compress a label volume file (NRRD, MetaImage, VTI, NIfTI, TIFF, HDF5, .npy) to .svdag"
+
+
+def add_arguments(parser):
+    parser.add_argument("input", metavar="INPUT", help="label volume file")
+    parser.add_argument("-o", "--output", required=True, metavar="OUT.svdag", help="output file")
+    add_input_options(parser)
+    parser.add_argument(
+        "--level", type=int, default=3, metavar="L", help="zstd compression level of the file (default: 3)"
+    )
+    add_output_options(parser)
+
+
+def run(args):
+    volume = load(args, args.input)
+    run_with_progress(
+        args, "write", lambda progress: volume.save(args.output, compression_level=args.level, progress=progress)
+    )
+    stats = volume.stats()
+    stats.update(input=args.input, output=args.output, file_bytes=file_bytes(args.output))
+    if args.json:
+        print_json(stats)
+    else:
+        print_table(
+            [("input", args.input)]
+            + stats_rows(stats)
+            + [("output", f"{args.output}  ({stats['file_bytes']:,} bytes)")]
+        )
+    return 0
