@@ -334,25 +334,46 @@ void Volume::validate() const
   }
   const uint64_t rootBitsTotal = uint64_t(roots.size() - 1) * 32;
   const uint64_t midBitsTotal = uint64_t(mids.size() - 1) * 32;
-  auto checkNode = [&](const std::vector<uint32_t>& stream, uint64_t offset, uint64_t total,
-                     uint32_t refBits, uint64_t childLimit, const char* what) {
-    if (offset + layout::NODE_HEADER_BITS > total)
-      fail(std::string(what) + " reference past the end of its stream");
-    const uint32_t header = nodeHeader(stream, offset);
-    const uint32_t mixed = layout::nodeMixedMask(header);
-    if (mixed & layout::nodeFullMask(header))
-      fail(std::string(what) + " child both mixed and full");
-    const uint64_t end = offset + nodeBits(stream, offset, refBits);
-    if (end > total)
-      fail(std::string(what) + " node runs past the end of its stream");
-    for (uint32_t r = 0; r < layout::bitCount(mixed); ++r)
-    {
-      if (layout::refTarget(nodeChildRef(stream, offset, r, refBits)) >= childLimit)
-        fail(std::string(what) + " child reference out of range");
-    }
+  // A reference must point at the start of a node, not just inside the stream: a reference into
+  // the middle of a node would read its references as a header and run past the checked nodes.
+  // The node start offsets come from a sequential walk (nodes are contiguous and in offset order).
+  auto isStart = [](const std::vector<uint64_t>& starts, uint64_t offset) {
+    return std::binary_search(starts.begin(), starts.end(), offset);
   };
-  // Every node reachable from a block is checked once per reference; validation is linear in
-  // the number of references, which is what loading costs anyway.
+  auto walk = [&](const std::vector<uint32_t>& stream, uint64_t count, uint64_t total,
+                uint32_t refBits, const char* what, const auto& childValid) {
+    std::vector<uint64_t> starts;
+    starts.reserve(size_t(std::min<uint64_t>(count, total / layout::NODE_HEADER_BITS + 1)));
+    uint64_t offset = 0;
+    for (uint64_t n = 0; n < count; ++n)
+    {
+      if (offset + layout::NODE_HEADER_BITS > total)
+        fail(std::string(what) + " stream shorter than its node count");
+      const uint32_t header = nodeHeader(stream, offset);
+      const uint32_t mixed = layout::nodeMixedMask(header);
+      if (mixed & layout::nodeFullMask(header))
+        fail(std::string(what) + " child both mixed and full");
+      const uint64_t end = offset + nodeBits(stream, offset, refBits);
+      if (end > total)
+        fail(std::string(what) + " node runs past the end of its stream");
+      for (uint32_t r = 0; r < layout::bitCount(mixed); ++r)
+      {
+        if (!childValid(layout::refTarget(nodeChildRef(stream, offset, r, refBits))))
+          fail(std::string(what) + " child reference does not point at a node");
+      }
+      starts.push_back(offset);
+      offset = end;
+    }
+    if (total - offset >= 32)
+      fail(std::string(what) + " stream longer than its nodes");
+    return starts;
+  };
+  const std::vector<uint64_t> midStarts = walk(mids, midCount, midBitsTotal, w.leafRefBits, "mid",
+    [this](uint64_t leaf) { return leaf < leaves.size(); });
+  const std::vector<uint64_t> rootStarts = walk(roots, rootCount, rootBitsTotal, w.midRefBits,
+    "root", [&](uint64_t mid) { return isStart(midStarts, mid); });
+
+  const auto n = geometry.cellCounts();
   uint32_t previousCell = 0;
   for (uint64_t i = 0; i < blockCount; ++i)
   {
@@ -364,23 +385,20 @@ void Volume::validate() const
     previousCell = b.cell;
     if (b.label >= labels.size())
       fail("block label index out of range");
+    // Cell origin in voxels; the bounds must stay inside the volume (cells on the far edges are
+    // partial), since decoders write voxels inside the bounds without further checks.
+    const uint64_t cellOrigin[3] = { uint64_t(b.cell % uint32_t(n[0])) * layout::CELL_SIZE,
+      uint64_t(b.cell / uint32_t(n[0]) % uint32_t(n[1])) * layout::CELL_SIZE,
+      uint64_t(b.cell / (uint64_t(n[0]) * uint64_t(n[1]))) * layout::CELL_SIZE };
     for (int a = 0; a < 3; ++a)
     {
       if (b.lo[a] > b.hi[a])
         fail("block bounds inverted");
+      if (cellOrigin[a] + b.hi[a] >= uint64_t(geometry.dims[a]))
+        fail("block bounds outside the volume");
     }
-    checkNode(roots, layout::refTarget(b.root), rootBitsTotal, w.midRefBits, midBitsTotal, "root");
-  }
-  // Mid nodes: walk the stream sequentially (nodes are contiguous).
-  for (uint64_t off = 0, count = 0; count < midCount; ++count)
-  {
-    checkNode(mids, off, midBitsTotal, w.leafRefBits, leaves.size(), "mid");
-    off += nodeBits(mids, off, w.leafRefBits);
-  }
-  for (uint64_t off = 0, count = 0; count < rootCount; ++count)
-  {
-    checkNode(roots, off, rootBitsTotal, w.midRefBits, midBitsTotal, "root");
-    off += nodeBits(roots, off, w.midRefBits);
+    if (!isStart(rootStarts, layout::refTarget(b.root)))
+      fail("block root reference does not point at a root node");
   }
 }
 

@@ -1,0 +1,99 @@
+// The .svdag file format: a Volume on disk, checked on load so that a truncated or corrupt file
+// gives a FileError, never a crash, an out-of-bounds read or a huge allocation.
+//
+// Format version 1.0. Every integer is little-endian, every real an IEEE-754 binary64 stored as
+// its 64-bit pattern, little-endian; fields are written one by one, never as memory images.
+//
+//   offset size  field
+//   0      8     magic  89 53 56 44 41 47 0D 0A  ("\x89SVDAG\r\n": the high byte catches 7-bit
+//                       transfers, CR LF catches line-ending conversion, a short file fails here)
+//   8      2     major version (1): a reader rejects any other major version
+//   10     2     minor version (0): additions a 1.0 reader can ignore (more sections)
+//   12     12    dims: 3 x int32, each >= 1
+//   24     24    spacing[3] (float64), finite and > 0
+//   48     24    origin[3] (float64), finite
+//   72     72    direction[9] (float64, row-major index-to-physical), finite
+//   144    4     scalar type (uint32, svdag::ScalarType: 0 int8 .. 7 uint64)
+//   148    8     background label (uint64 pattern, sign-extended for signed types)
+//   156    20    field widths (5 x uint32, each <= 32): cell, label, root ref, mid ref, leaf ref
+//   176    40    counts (5 x uint64): labels, blocks, root nodes, mid nodes, leaves
+//   216    4     number of sections S (uint32, at most 64)
+//   220    36*S  section table, one entry per section:
+//                  id (uint32), codec (uint32: 0 none, 1 zstd), offset (uint64, from the start of
+//                  the file), stored size (uint64, bytes in the file), raw size (uint64, bytes
+//                  after decompression), crc32 of the raw bytes (uint32, zlib's crc32)
+//   220+36*S 4   crc32 of every byte before it (magic, header and section table)
+//
+// Sections follow the header in any order, without overlap. Raw contents:
+//   1 labels  per label: value (uint64 pattern), voxels (uint64), bounds (6 x int32:
+//             xmin, xmax, ymin, ymax, zmin, zmax, inclusive)            -> 40 bytes per label
+//   2 blocks  the bit-packed block records as uint32 words (Layout.h), without the padding word
+//   3 roots   the root node stream as uint32 words, without the padding word
+//   4 mids    the mid node stream as uint32 words, without the padding word
+//   5 leaves  the 4^3 leaf masks, uint64 each
+// Sections 1-5 are required, once each; sections with other ids are skipped (minor additions).
+// The raw size of sections 1, 2 and 5 must be what the counts imply; the node streams must hold
+// between 16 and 16 + 8 * refBits bits per node. The reader re-adds the padding words.
+//
+// Loading is one pass over the file: header, table, then each section is decompressed (a zstd
+// frame must decode to exactly its declared raw size; the output buffer grows with the bytes
+// actually produced, so a false size cannot reserve memory), checked against its crc32, decoded,
+// and finally the whole Volume is checked with Volume::validate().
+#pragma once
+
+#include "svdag/Volume.h"
+
+#include <cstddef>
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace svdag
+{
+
+// Any failure to read or write a .svdag file; what() names the file part that is wrong.
+struct FileError : std::runtime_error
+{
+  using std::runtime_error::runtime_error;
+};
+// writeFile could not create or open the file (the VTK writer maps it to CannotOpenFileError).
+struct FileOpenError : FileError
+{
+  using FileError::FileError;
+};
+// writeFile could not write every byte (disk full, I/O error; OutOfDiskSpaceError in VTK).
+struct FileWriteError : FileError
+{
+  using FileError::FileError;
+};
+
+constexpr uint16_t FileMajorVersion = 1;
+constexpr uint16_t FileMinorVersion = 0;
+constexpr size_t FileMagicSize = 8;
+extern const uint8_t FileMagic[FileMagicSize];
+
+struct WriteOptions
+{
+  int zstdLevel = 3; // 1..22; 0 stores the sections uncompressed
+};
+
+// The whole file in memory. Throws FileError if the volume does not validate or the level is
+// outside 0..22.
+std::vector<uint8_t> serialize(const Volume& volume, const WriteOptions& options = {});
+// Parses and validates a whole file held in memory. Throws FileError.
+Volume deserialize(const uint8_t* data, size_t size);
+inline Volume deserialize(const std::vector<uint8_t>& bytes)
+{
+  return deserialize(bytes.data(), bytes.size());
+}
+
+// Writes through a temporary file next to `path`, renamed at the end, so a failed write never
+// leaves a partial file under the final name. Throws FileOpenError, FileWriteError or FileError.
+void writeFile(const Volume& volume, const std::string& path, const WriteOptions& options = {});
+// Reads and validates a file. Throws FileError (also when the file cannot be opened).
+Volume readFile(const std::string& path);
+// True if the file starts with the .svdag magic (nothing else is checked).
+bool isSVDAGFile(const std::string& path);
+
+} // namespace svdag

@@ -1,0 +1,477 @@
+// The .svdag file format: exact round trips, and hostile input (every truncation, thousands of
+// random corruptions, absurd header values) that must give FileError, never a crash, an
+// out-of-bounds read or a huge allocation.
+#include "svdag/Builder.h"
+#include "svdag/File.h"
+
+#include <gtest/gtest.h>
+#include <zlib.h>
+
+#include <atomic>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <new>
+#include <random>
+#include <unistd.h>
+
+// The largest single allocation since the last reset, for the tests proving that absurd header
+// values do not make the reader reserve memory. Replacing the global operator new covers the
+// core library's vectors too (the program's definition is the one every library uses).
+namespace
+{
+std::atomic<size_t> largestAllocation{ 0 };
+void* allocate(size_t n)
+{
+  size_t seen = largestAllocation.load(std::memory_order_relaxed);
+  while (n > seen && !largestAllocation.compare_exchange_weak(seen, n))
+  {
+  }
+  if (void* p = std::malloc(n ? n : 1))
+    return p;
+  throw std::bad_alloc();
+}
+} // namespace
+void* operator new(size_t n)
+{
+  return allocate(n);
+}
+void* operator new[](size_t n)
+{
+  return allocate(n);
+}
+void operator delete(void* p) noexcept
+{
+  std::free(p);
+}
+void operator delete[](void* p) noexcept
+{
+  std::free(p);
+}
+void operator delete(void* p, size_t) noexcept
+{
+  std::free(p);
+}
+void operator delete[](void* p, size_t) noexcept
+{
+  std::free(p);
+}
+
+namespace
+{
+using svdag::FileError;
+using svdag::ScalarType;
+using Bytes = std::vector<uint8_t>;
+
+// Offsets of header fields (File.h documents the layout).
+constexpr size_t DimsAt = 12, TypeAt = 144, WidthsAt = 156, CountsAt = 176, SectionCountAt = 216,
+                 TableAt = 220, EntrySize = 36;
+enum Count
+{
+  Labels = 0,
+  Blocks,
+  Roots,
+  Mids,
+  Leaves
+};
+enum Section
+{
+  LabelsSection = 1,
+  BlocksSection,
+  RootsSection,
+  MidsSection,
+  LeavesSection
+};
+enum EntryField
+{
+  Id = 0,
+  Codec = 4,
+  Offset = 8,
+  Stored = 16,
+  Raw = 24,
+  Crc = 32
+};
+
+uint64_t getLE(const Bytes& b, size_t at, int n)
+{
+  uint64_t v = 0;
+  for (int i = 0; i < n; ++i)
+    v |= uint64_t(b.at(at + size_t(i))) << (8 * i);
+  return v;
+}
+void putLE(Bytes& b, size_t at, uint64_t v, int n)
+{
+  for (int i = 0; i < n; ++i)
+    b.at(at + size_t(i)) = uint8_t(v >> (8 * i));
+}
+size_t sectionCount(const Bytes& b)
+{
+  return size_t(getLE(b, SectionCountAt, 4));
+}
+size_t headerCrcAt(const Bytes& b)
+{
+  return TableAt + EntrySize * sectionCount(b);
+}
+// Re-seals the header after a test edits it, so the edit reaches the checks behind the checksum.
+void resealHeader(Bytes& b)
+{
+  const size_t at = headerCrcAt(b);
+  putLE(b, at, crc32(0, b.data(), uInt(at)), 4);
+}
+size_t entryOf(const Bytes& b, uint32_t id)
+{
+  for (size_t i = 0; i < sectionCount(b); ++i)
+  {
+    if (getLE(b, TableAt + EntrySize * i, 4) == id)
+      return TableAt + EntrySize * i;
+  }
+  ADD_FAILURE() << "section " << id << " not in the table";
+  return 0;
+}
+
+svdag::Geometry geometry(int x, int y, int z)
+{
+  svdag::Geometry g;
+  g.dims = { { x, y, z } };
+  g.spacing = { { 0.5, 1.25, 3.0 } };
+  g.origin = { { -10.5, 7.0, 1e6 } };
+  g.direction = { { 0, 1, 0, -1, 0, 0, 0, 0, 1 } };
+  return g;
+}
+
+template <typename F>
+svdag::Volume build(ScalarType t, const svdag::Geometry& g, F valueAt, uint64_t background = 0)
+{
+  std::vector<uint8_t> data(size_t(g.voxelCount()) * size_t(svdag::scalarSize(t)));
+  size_t i = 0;
+  for (int z = 0; z < g.dims[2]; ++z)
+    for (int y = 0; y < g.dims[1]; ++y)
+      for (int x = 0; x < g.dims[0]; ++x)
+        svdag::scalarStore(t, data.data(), i++, valueAt(x, y, z));
+  svdag::BuildOptions options;
+  options.background = background;
+  return svdag::Builder::build(g, t, data.data(), options);
+}
+
+// Nested spheres with labels at the type's extremes, plus noise: every part of the format used.
+svdag::Volume spheres(ScalarType t, int size = 37)
+{
+  std::mt19937 rng(11);
+  return build(t, geometry(size, size - 5, size - 11), [&](int x, int y, int z) -> uint64_t {
+    const int d2 = (x - 15) * (x - 15) + (y - 13) * (y - 13) + (z - 9) * (z - 9);
+    if (rng() % 23 == 0)
+      return 1 + rng() % 5;
+    return d2 < 40 ? svdag::scalarMax(t) : d2 < 120 ? svdag::scalarMin(t) : d2 < 200 ? 7 : 0;
+  });
+}
+
+struct Named
+{
+  std::string name;
+  svdag::Volume volume;
+};
+
+std::vector<Named> volumes()
+{
+  std::vector<Named> out;
+  for (int t = 0; t < svdag::ScalarTypeCount; ++t)
+  {
+    const ScalarType type = ScalarType(t);
+    out.push_back({ std::string("spheres ") + svdag::scalarName(type), spheres(type) });
+  }
+  out.push_back({ "1x1x1 label", build(ScalarType::UInt8, geometry(1, 1, 1), [](int, int, int) {
+                   return uint64_t(200);
+                 }) });
+  out.push_back({ "1x1x1 background", build(ScalarType::Int16, geometry(1, 1, 1), [](int, int, int) {
+                   return uint64_t(0);
+                 }) });
+  out.push_back({ "all background 33x17x20",
+    build(ScalarType::UInt32, geometry(33, 17, 20), [](int, int, int) { return uint64_t(0); }) });
+  out.push_back({ "full, background -1", build(ScalarType::Int64, geometry(20, 20, 20),
+                                           [](int, int, int) { return uint64_t(3); },
+                                           ~uint64_t(0)) });
+  std::mt19937 rng(3);
+  out.push_back({ "random 300 labels 40x24x33",
+    build(ScalarType::UInt16, geometry(40, 24, 33), [&](int, int, int) { return uint64_t(rng() % 300); }) });
+  return out;
+}
+
+TEST(File, RoundTripIsExactAndDeterministic)
+{
+  for (const Named& n : volumes())
+  {
+    SCOPED_TRACE(n.name);
+    ASSERT_NO_THROW(n.volume.validate());
+    for (int level : { 0, 1, 3, 19 })
+    {
+      SCOPED_TRACE("zstd level " + std::to_string(level));
+      const Bytes bytes = svdag::serialize(n.volume, { level });
+      const svdag::Volume back = svdag::deserialize(bytes);
+      EXPECT_TRUE(back == n.volume);
+      EXPECT_EQ(svdag::serialize(back, { level }), bytes); // same volume, same bytes
+    }
+  }
+}
+
+TEST(File, CompressionShrinksAndUncompressedIsExactlyTheData)
+{
+  const svdag::Volume v = spheres(ScalarType::UInt32, 70);
+  const Bytes plain = svdag::serialize(v, { 0 });
+  const Bytes packed = svdag::serialize(v, { 3 });
+  EXPECT_LT(packed.size(), plain.size());
+  const svdag::MemoryUsage m = v.memory();
+  // Uncompressed: header + table + crc, then the data words (no padding words) and labels at
+  // 40 bytes each.
+  const uint64_t data = ((v.blockCount * v.widths.blockBits() + 31) / 32) * 4 + m.roots + m.mids +
+    m.leaves + v.labels.size() * 40;
+  EXPECT_EQ(plain.size(), TableAt + EntrySize * 5 + 4 + data);
+  for (uint32_t id = LabelsSection; id <= LeavesSection; ++id)
+    EXPECT_EQ(getLE(plain, entryOf(plain, id) + Codec, 4), 0u);
+}
+
+TEST(File, WritesAndReadsFiles)
+{
+  const std::string dir = ::testing::TempDir();
+  const std::string path = dir + "/svdag_file_test_" + std::to_string(::getpid()) + ".svdag";
+  const svdag::Volume v = spheres(ScalarType::Int32);
+  svdag::writeFile(v, path);
+  EXPECT_TRUE(svdag::isSVDAGFile(path));
+  EXPECT_TRUE(svdag::readFile(path) == v);
+  std::FILE* partial = std::fopen((path + ".partial").c_str(), "rb");
+  EXPECT_EQ(partial, nullptr) << "temporary file left behind";
+  if (partial)
+    std::fclose(partial);
+
+  // Overwriting keeps working; a text file and a missing file are not .svdag files.
+  svdag::writeFile(v, path, { 0 });
+  EXPECT_TRUE(svdag::readFile(path) == v);
+  const std::string text = dir + "/svdag_file_test_text_" + std::to_string(::getpid()) + ".txt";
+  std::ofstream(text) << "SVDAG but not really\n";
+  EXPECT_FALSE(svdag::isSVDAGFile(text));
+  EXPECT_THROW(svdag::readFile(text), FileError);
+  EXPECT_FALSE(svdag::isSVDAGFile(dir + "/does-not-exist.svdag"));
+  EXPECT_THROW(svdag::readFile(dir + "/does-not-exist.svdag"), FileError);
+  EXPECT_THROW(svdag::readFile(dir), FileError); // a directory
+  EXPECT_THROW(svdag::writeFile(v, dir + "/no-such-dir/x.svdag"), svdag::FileOpenError);
+  EXPECT_THROW(svdag::writeFile(v, path, { 23 }), FileError);
+  EXPECT_THROW(svdag::writeFile(v, path, { -1 }), FileError);
+  std::remove(path.c_str());
+  std::remove(text.c_str());
+}
+
+TEST(File, RefusesToWriteAnInconsistentVolume)
+{
+  svdag::Volume v = spheres(ScalarType::UInt8);
+  v.leaves.pop_back(); // a mid node now refers past the leaves
+  EXPECT_THROW(svdag::serialize(v), FileError);
+}
+
+TEST(File, EveryTruncationFails)
+{
+  const svdag::Volume v = spheres(ScalarType::UInt16, 20);
+  for (int level : { 0, 3 })
+  {
+    const Bytes bytes = svdag::serialize(v, { level });
+    for (size_t n = 0; n < bytes.size(); ++n)
+    {
+      EXPECT_THROW(svdag::deserialize(bytes.data(), n), FileError) << "prefix of " << n << " bytes";
+    }
+    Bytes longer = bytes; // trailing bytes after the last section are not the file's
+    longer.push_back(0);
+    EXPECT_NO_THROW(svdag::deserialize(longer));
+  }
+}
+
+// Corrupt files either fail with FileError or (a change the format does not depend on) still
+// give a volume that validates and decodes.
+void expectFailsOrValid(const Bytes& bytes, size_t& failed, size_t& loaded)
+{
+  try
+  {
+    const svdag::Volume v = svdag::deserialize(bytes);
+    v.validate();
+    std::vector<uint8_t> out(size_t(v.geometry.voxelCount()) * size_t(svdag::scalarSize(v.scalarType)));
+    svdag::decode(v, out.data());
+    ++loaded;
+  }
+  catch (const FileError&)
+  {
+    ++failed;
+  }
+}
+
+TEST(File, RandomCorruptionFailsCleanly)
+{
+  const svdag::Volume v = spheres(ScalarType::UInt64, 24);
+  std::mt19937_64 rng(2024);
+  for (int level : { 0, 3 })
+  {
+    const Bytes bytes = svdag::serialize(v, { level });
+    size_t failed = 0, loaded = 0;
+    for (int i = 0; i < 3000; ++i)
+    {
+      Bytes bad = bytes;
+      const size_t at = rng() % bad.size();
+      if (i % 2 == 0)
+        bad[at] ^= uint8_t(1u << (rng() % 8)); // bit flip
+      else
+        bad[at] = uint8_t(bad[at] + 1 + rng() % 255); // byte changed to another value
+      expectFailsOrValid(bad, failed, loaded);
+    }
+    // Every byte is covered by a checksum, so a change that loads can only sit where the zstd
+    // decoder ignores it; that must be rare.
+    EXPECT_EQ(failed + loaded, 3000u);
+    EXPECT_GT(failed, 2900u) << "level " << level;
+    if (level == 0)
+      EXPECT_EQ(loaded, 0u);
+  }
+}
+
+// Header corruption that a checksum cannot catch because the header was re-sealed (a buggy or
+// hostile writer): the checks behind the checksum must still reject every change to the field
+// widths, the counts and the section table, since each one disagrees with the data.
+TEST(File, ResealedCorruptionOfWidthsCountsAndTableFails)
+{
+  const svdag::Volume v = spheres(ScalarType::Int8, 24);
+  const Bytes bytes = svdag::serialize(v, { 3 });
+  std::mt19937_64 rng(99);
+  size_t failed = 0, loaded = 0;
+  for (int i = 0; i < 3000; ++i)
+  {
+    Bytes bad = bytes;
+    size_t at = WidthsAt + rng() % (headerCrcAt(bad) - WidthsAt);
+    if (at >= SectionCountAt && at < TableAt)
+      at += TableAt - SectionCountAt; // a new section count would move the checksum itself
+    bad[at] ^= uint8_t(1u << (rng() % 8));
+    resealHeader(bad);
+    const size_t loadedBefore = loaded;
+    expectFailsOrValid(bad, failed, loaded);
+    EXPECT_EQ(loaded, loadedBefore) << "change at byte " << at << " went unnoticed";
+  }
+  EXPECT_EQ(failed, 3000u);
+}
+
+TEST(File, RejectsWrongMagicAndUnknownMajorVersion)
+{
+  const Bytes good = svdag::serialize(spheres(ScalarType::UInt8, 20));
+  Bytes bad = good;
+  bad[0] = 'S';
+  EXPECT_THROW(svdag::deserialize(bad), FileError);
+  bad = good;
+  bad[6] = '\n'; // CR LF conversion
+  EXPECT_THROW(svdag::deserialize(bad), FileError);
+  bad = good;
+  putLE(bad, 8, 2, 2);
+  try
+  {
+    svdag::deserialize(bad);
+    ADD_FAILURE() << "version 2 accepted";
+  }
+  catch (const FileError& e)
+  {
+    EXPECT_NE(std::string(e.what()).find("version 2.0"), std::string::npos) << e.what();
+  }
+  bad = good;
+  putLE(bad, 10, 7, 2); // a newer minor version is readable (checksum re-sealed)
+  resealHeader(bad);
+  EXPECT_NO_THROW(svdag::deserialize(bad));
+}
+
+// Absurd values behind a valid header checksum: each one fails, and none makes the reader
+// allocate more than a few megabytes.
+TEST(File, AbsurdHeaderValuesFailWithoutHugeAllocations)
+{
+  const Bytes good = svdag::serialize(spheres(ScalarType::UInt32, 30), { 3 });
+  struct Edit
+  {
+    const char* name;
+    size_t at;
+    uint64_t value;
+    int bytes;
+  };
+  const size_t leaves = entryOf(good, LeavesSection), labels = entryOf(good, LabelsSection);
+  const size_t blocks = entryOf(good, BlocksSection);
+  largestAllocation = 0; // the tracker sees the library's allocations
+  svdag::deserialize(good);
+  ASSERT_GT(largestAllocation.load(), size_t(1000));
+  const std::vector<Edit> edits = {
+    { "dims x 2^31-1", DimsAt, 0x7FFFFFFF, 4 },
+    { "dims y 2^31-1", DimsAt + 4, 0x7FFFFFFF, 4 },
+    { "dims z 2^31-1", DimsAt + 8, 0x7FFFFFFF, 4 },
+    { "dims 0", DimsAt, 0, 4 },
+    { "dims negative", DimsAt + 4, uint64_t(-5), 4 },
+    { "scalar type 8", TypeAt, 8, 4 },
+    { "width 33", WidthsAt + 8, 33, 4 },
+    { "width 2^32-1", WidthsAt + 16, 0xFFFFFFFF, 4 },
+    { "label count 2^60", CountsAt + 8 * Labels, uint64_t(1) << 60, 8 },
+    { "block count 2^63", CountsAt + 8 * Blocks, uint64_t(1) << 63, 8 },
+    { "root count 2^40", CountsAt + 8 * Roots, uint64_t(1) << 40, 8 },
+    { "mid count max", CountsAt + 8 * Mids, ~uint64_t(0), 8 },
+    { "leaf count 2^61", CountsAt + 8 * Leaves, uint64_t(1) << 61, 8 },
+    { "section count 2^32-1", SectionCountAt, 0xFFFFFFFF, 4 },
+    { "leaves raw size 2^40", leaves + Raw, uint64_t(1) << 40, 8 },
+    { "leaves raw size 1 GiB", leaves + Raw, uint64_t(1) << 30, 8 },
+    { "labels stored size huge", labels + Stored, uint64_t(1) << 62, 8 },
+    { "labels offset past the end", labels + Offset, uint64_t(1) << 40, 8 },
+    { "labels offset into the header", labels + Offset, 16, 8 },
+    { "blocks overlap the labels", blocks + Offset, getLE(good, labels + Offset, 8), 8 },
+    { "unknown codec", blocks + Codec, 9, 4 },
+    { "duplicate section id", blocks + Id, LabelsSection, 4 },
+    { "missing section", leaves + Id, 77, 4 },
+    { "section crc", leaves + Crc, 12345, 4 },
+  };
+  for (const Edit& e : edits)
+  {
+    SCOPED_TRACE(e.name);
+    Bytes bad = good;
+    putLE(bad, e.at, e.value, e.bytes);
+    if (e.at != SectionCountAt)
+      resealHeader(bad);
+    largestAllocation = 0;
+    EXPECT_THROW(svdag::deserialize(bad), FileError);
+    EXPECT_LT(largestAllocation.load(), size_t(16) << 20);
+  }
+  // Counts and sizes that agree with each other but not with the data: a leaf count of 2^27
+  // (1 GiB of leaves) with the raw size to match must fail on the zstd frame, not allocate 1 GiB.
+  Bytes bad = good;
+  putLE(bad, CountsAt + 8 * Leaves, uint64_t(1) << 27, 8);
+  putLE(bad, leaves + Raw, uint64_t(1) << 30, 8);
+  resealHeader(bad);
+  largestAllocation = 0;
+  EXPECT_THROW(svdag::deserialize(bad), FileError);
+  EXPECT_LT(largestAllocation.load(), size_t(16) << 20);
+}
+
+// Each failure says what is wrong, so a user can tell a damaged file from a wrong one.
+TEST(File, ErrorMessagesNameTheProblem)
+{
+  const Bytes good = svdag::serialize(spheres(ScalarType::UInt32, 20), { 0 });
+  auto message = [](const Bytes& b) -> std::string {
+    try
+    {
+      svdag::deserialize(b);
+    }
+    catch (const FileError& e)
+    {
+      return e.what();
+    }
+    return "no error";
+  };
+  Bytes bad = good;
+  bad[headerCrcAt(bad) - 1] ^= 1;
+  EXPECT_NE(message(bad).find("header checksum"), std::string::npos) << message(bad);
+  bad = good;
+  bad.back() ^= 1;
+  EXPECT_NE(message(bad).find("checksum mismatch"), std::string::npos) << message(bad);
+  bad = good;
+  putLE(bad, DimsAt, 0x7FFFFFFF, 4);
+  putLE(bad, DimsAt + 4, 0x7FFFFFFF, 4);
+  putLE(bad, DimsAt + 8, 0x7FFFFFFF, 4);
+  resealHeader(bad);
+  EXPECT_NE(message(bad).find("too large"), std::string::npos) << message(bad);
+  bad = good;
+  bad.resize(bad.size() - 3);
+  EXPECT_NE(message(bad).find("outside the file"), std::string::npos) << message(bad);
+}
+
+} // namespace
