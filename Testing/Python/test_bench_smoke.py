@@ -1,0 +1,135 @@
+"""Smoke test of the compression benchmark: `bench/compression.py --quick` runs and writes a
+complete CSV and a plot. It asserts structure and consistency, never timings."""
+import csv
+import os
+import pathlib
+import subprocess
+import sys
+
+import pytest
+
+REPO = pathlib.Path(__file__).resolve().parents[2]
+SCRIPT = REPO / "bench" / "compression.py"
+
+EXPECTED_ROWS = [
+    "totalseg_ct",
+    "fib25_64",
+    "dvid_fib19_64",
+    "voronoi64_100",
+    "tubes64",
+    "checkerboard64_p1",
+    "checkerboard64_p2",
+]
+EXPECTED_COLUMNS = [
+    "volume", "source", "dims_xyz", "dtype", "voxels", "labels",
+    "blocks", "root_nodes", "mid_nodes", "leaf_nodes",
+    "bytes_blocks", "bytes_dag", "bytes_labels", "bytes_total",
+    "pct_raw32", "min_width_bytes", "pct_raw_min", "bits_per_voxel",
+    "build_s", "build_runs", "voxels_per_s", "roundtrip",
+    "mem_path", "peak_rss_mb", "baseline_rss_mb", "peak_extra_mb", "model_mb",
+    "cseg_dtype", "cseg_bytes", "cseg_s", "ours_over_cseg",
+    "stream_dtype", "zstd19_bytes", "zstd19_s", "gzip9_bytes", "gzip9_s", "ours_over_zstd19",
+]
+
+
+@pytest.fixture(scope="module")
+def quick_run(tmp_path_factory, shared_data):
+    out = tmp_path_factory.mktemp("bench")
+    completed = subprocess.run(
+        [sys.executable, str(SCRIPT), "--quick", "--repeats", "1", "--out", str(out)],
+        capture_output=True, text=True, cwd=REPO, env=os.environ.copy(), timeout=300,
+    )
+    assert completed.returncode == 0, completed.stdout[-3000:] + completed.stderr[-3000:]
+    return out, completed.stdout
+
+
+def read_rows(out):
+    with open(out / "compression.csv", newline="") as f:
+        reader = csv.DictReader(f)
+        return reader.fieldnames, list(reader)
+
+
+def test_csv_has_the_expected_columns_and_rows(quick_run):
+    out, _ = quick_run
+    columns, rows = read_rows(out)
+    assert columns == EXPECTED_COLUMNS
+    assert [r["volume"] for r in rows] == EXPECTED_ROWS
+    for r in rows:
+        missing = [c for c in EXPECTED_COLUMNS if r[c] == ""]
+        assert not missing, f"{r['volume']}: empty {missing}"
+        assert r["roundtrip"] == "ok"
+
+
+def test_csv_values_are_consistent(quick_run):
+    out, _ = quick_run
+    _, rows = read_rows(out)
+    for r in rows:
+        voxels = int(r["voxels"])
+        x, y, z = (int(v) for v in r["dims_xyz"].split("x"))
+        assert voxels == x * y * z
+        total = int(r["bytes_total"])
+        assert total == int(r["bytes_blocks"]) + int(r["bytes_dag"]) + int(r["bytes_labels"])
+        assert float(r["bits_per_voxel"]) == pytest.approx(8 * total / voxels, rel=1e-4)
+        assert float(r["pct_raw32"]) == pytest.approx(100 * total / (4 * voxels), rel=1e-4)
+        assert int(r["min_width_bytes"]) in (1, 2, 4, 8)
+        assert int(r["blocks"]) >= int(r["labels"]) >= 1
+        assert float(r["ours_over_cseg"]) == pytest.approx(total / int(r["cseg_bytes"]), rel=1e-4)
+        assert r["cseg_dtype"] in ("uint32", "uint64")
+        assert int(r["zstd19_bytes"]) > 0 and int(r["gzip9_bytes"]) > 0
+        assert float(r["peak_rss_mb"]) >= float(r["baseline_rss_mb"]) > 0
+    by_name = {r["volume"]: r for r in rows}
+    # Known facts about the inputs (shared/data/README.md and the generators' definitions).
+    assert by_name["fib25_64"]["labels"] == "52" and by_name["fib25_64"]["dtype"] == "uint64"
+    assert by_name["totalseg_ct"]["dims_xyz"] == "122x101x30"
+    assert by_name["dvid_fib19_64"]["cseg_dtype"] == "uint64"  # label IDs around 5e10
+    assert by_name["checkerboard64_p1"]["labels"] == "2"
+    assert by_name["checkerboard64_p1"]["source"] == "generated"
+
+
+def test_report_and_plot(quick_run):
+    out, stdout = quick_run
+    png = out / "compression.png"
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert "machine:" in stdout
+    assert "REPORTED, NOT MEASURED HERE" in stdout
+    for name in EXPECTED_ROWS:
+        assert f"{name}: " in stdout and "round trip ok" in stdout
+
+
+def load_bench_module():
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("bench_compression", SCRIPT)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_round_trip_check_fails_loudly_on_a_mismatch():
+    import numpy as np
+
+    bench = load_bench_module()
+    labels = np.arange(4 * 5 * 6, dtype=np.uint16).reshape(4, 5, 6)
+    svdag, _ = bench.build_svdag(bench.to_image(labels))
+    bench.check_round_trip("same", labels, svdag)  # passes
+    changed = labels.copy()
+    changed[3, 4, 5] += 1
+    with pytest.raises(bench.BenchError, match=r"LOSSY ROUND TRIP, 1 voxels differ; first at \(x=5, y=4, z=3\)"):
+        bench.check_round_trip("changed", changed, svdag)
+    with pytest.raises(bench.BenchError, match="dtype"):
+        bench.check_round_trip("wider", labels.astype(np.uint32), svdag)
+
+
+    import numpy as np
+
+    bench = load_bench_module()
+    values, indices = bench.dense_indices(np.array([[7, -3], [7, 10**12]]))
+    np.testing.assert_array_equal(values, [-3, 7, 10**12])
+    assert indices.dtype == np.uint8
+    np.testing.assert_array_equal(indices, [[1, 0], [1, 2]])
+    assert bench.dense_indices(np.arange(300)).__getitem__(1).dtype == np.uint16
+    assert bench.cseg_input(np.array([1, 2], dtype=np.int64)).dtype == np.uint32
+    assert bench.cseg_input(np.array([1, 2**32], dtype=np.int64)).dtype == np.uint64
+    negative = bench.cseg_input(np.array([-1, 2], dtype=np.int32))
+    assert negative.dtype == np.uint64 and negative[0] == 2**64 - 1
+    assert [bench.min_width_bytes(n) for n in (2, 256, 257, 65536, 65537, 2**33)] == [1, 1, 2, 2, 4, 8]
