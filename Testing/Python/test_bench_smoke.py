@@ -120,6 +120,7 @@ def test_round_trip_check_fails_loudly_on_a_mismatch():
         bench.check_round_trip("wider", labels.astype(np.uint32), svdag)
 
 
+def test_dense_indices_and_cseg_input():
     import numpy as np
 
     bench = load_bench_module()
@@ -127,7 +128,7 @@ def test_round_trip_check_fails_loudly_on_a_mismatch():
     np.testing.assert_array_equal(values, [-3, 7, 10**12])
     assert indices.dtype == np.uint8
     np.testing.assert_array_equal(indices, [[1, 0], [1, 2]])
-    assert bench.dense_indices(np.arange(300)).__getitem__(1).dtype == np.uint16
+    assert bench.dense_indices(np.arange(300))[1].dtype == np.uint16
     assert bench.cseg_input(np.array([1, 2], dtype=np.int64)).dtype == np.uint32
     assert bench.cseg_input(np.array([1, 2**32], dtype=np.int64)).dtype == np.uint64
     negative = bench.cseg_input(np.array([-1, 2], dtype=np.int32))
