@@ -1,3 +1,76 @@
 #include "vtkSegmentationSVDAGWriter.h"
+
+#include "vtkAlgorithm.h"
+#include "vtkErrorCode.h"
+#include "vtkInformation.h"
 #include "vtkObjectFactory.h"
+#include "vtkSegmentationSVDAG.h"
+
+#include "svdag/File.h"
+
 vtkStandardNewMacro(vtkSegmentationSVDAGWriter);
+
+vtkSegmentationSVDAGWriter::vtkSegmentationSVDAGWriter() = default;
+
+vtkSegmentationSVDAGWriter::~vtkSegmentationSVDAGWriter()
+{
+  this->SetFileName(nullptr);
+}
+
+int vtkSegmentationSVDAGWriter::FillInputPortInformation(int, vtkInformation* info)
+{
+  info->Set(vtkAlgorithm::INPUT_REQUIRED_DATA_TYPE(), "vtkSegmentationSVDAG");
+  return 1;
+}
+
+void vtkSegmentationSVDAGWriter::WriteData()
+{
+  if (!this->FileName || !*this->FileName)
+  {
+    vtkErrorMacro("No FileName set.");
+    this->SetErrorCode(vtkErrorCode::NoFileNameError);
+    return;
+  }
+  vtkSegmentationSVDAG* input = vtkSegmentationSVDAG::SafeDownCast(this->GetInput());
+  if (!input || !input->HasVolume())
+  {
+    vtkErrorMacro("The input holds no compressed volume; nothing written to " << this->FileName);
+    this->SetErrorCode(vtkErrorCode::UnknownError);
+    return;
+  }
+
+  this->UpdateProgress(0.0);
+  svdag::WriteOptions options;
+  options.zstdLevel = this->CompressionLevel;
+  // The core throws; VTK code reports. Each failure kind maps to the matching VTK error code.
+  try
+  {
+    svdag::writeFile(*input->GetVolume(), this->FileName, options);
+  }
+  catch (const svdag::FileOpenError& e)
+  {
+    vtkErrorMacro(<< e.what());
+    this->SetErrorCode(vtkErrorCode::CannotOpenFileError);
+    return;
+  }
+  catch (const svdag::FileWriteError& e)
+  {
+    vtkErrorMacro(<< e.what());
+    this->SetErrorCode(vtkErrorCode::OutOfDiskSpaceError);
+    return;
+  }
+  catch (const std::exception& e)
+  {
+    vtkErrorMacro("Cannot write " << this->FileName << ": " << e.what());
+    this->SetErrorCode(vtkErrorCode::UnknownError);
+    return;
+  }
+  this->UpdateProgress(1.0);
+}
+
+void vtkSegmentationSVDAGWriter::PrintSelf(ostream& os, vtkIndent indent)
+{
+  this->Superclass::PrintSelf(os, indent);
+  os << indent << "FileName: " << (this->FileName ? this->FileName : "(none)") << "\n";
+  os << indent << "CompressionLevel: " << this->CompressionLevel << "\n";
+}

@@ -1,15 +1,60 @@
-// Placeholder: replaced by the real class (work in progress).
+/**
+ * @class   vtkSegmentationSVDAGWriter
+ * @brief   writes a vtkSegmentationSVDAG to a .svdag file
+ *
+ * The .svdag format (documented in IO/README.md and svdag/File.h) stores the compressed volume
+ * as it is in memory: blocks, the shared DAG and the label table, each section compressed with
+ * zstd (or stored, with CompressionLevel 0) and protected by a crc32. Reading it back
+ * (vtkSegmentationVolumeReader) gives a bit-identical volume without recompressing.
+ *
+ * The file is written under a temporary name next to FileName and renamed when complete, so a
+ * failed write never leaves a partial file under FileName. Errors are reported with
+ * vtkErrorMacro and GetErrorCode(): NoFileNameError, CannotOpenFileError, OutOfDiskSpaceError
+ * (any failed write), UnknownError (an input without a volume, an inconsistent volume).
+ *
+ * Give the input with SetInputData(svdag) (inherited from vtkWriter) or SetInputConnection.
+ */
 #ifndef vtkSegmentationSVDAGWriter_h
 #define vtkSegmentationSVDAGWriter_h
-#include "vtkObject.h"
-#include "vtkSVDAGIOModule.h"
-class VTKSVDAGIO_EXPORT vtkSegmentationSVDAGWriter : public vtkObject
+
+#include "vtkSVDAGIOModule.h" // for export macro
+#include "vtkWriter.h"
+
+class VTKSVDAGIO_EXPORT vtkSegmentationSVDAGWriter : public vtkWriter
 {
 public:
   static vtkSegmentationSVDAGWriter* New();
-  vtkTypeMacro(vtkSegmentationSVDAGWriter, vtkObject);
+  vtkTypeMacro(vtkSegmentationSVDAGWriter, vtkWriter);
+  void PrintSelf(ostream& os, vtkIndent indent) override;
+
+  ///@{
+  /** Name of the file to write. */
+  vtkSetFilePathMacro(FileName);
+  vtkGetFilePathMacro(FileName);
+  ///@}
+
+  ///@{
+  /**
+   * zstd level of the sections, 1 (fastest) to 22 (smallest); 0 stores them uncompressed.
+   * Default 3. Sections that do not shrink are stored uncompressed whatever the level.
+   */
+  vtkSetClampMacro(CompressionLevel, int, 0, 22);
+  vtkGetMacro(CompressionLevel, int);
+  ///@}
+
 protected:
-  vtkSegmentationSVDAGWriter() = default;
-  ~vtkSegmentationSVDAGWriter() override = default;
+  vtkSegmentationSVDAGWriter();
+  ~vtkSegmentationSVDAGWriter() override;
+
+  int FillInputPortInformation(int port, vtkInformation* info) override;
+  void WriteData() override;
+
+  char* FileName = nullptr;
+  int CompressionLevel = 3;
+
+private:
+  vtkSegmentationSVDAGWriter(const vtkSegmentationSVDAGWriter&) = delete;
+  void operator=(const vtkSegmentationSVDAGWriter&) = delete;
 };
+
 #endif

@@ -1,0 +1,178 @@
+"""The .svdag writer from Python: a real volume through the VTK pipeline into a file, and the file
+checked against the format as IO/README.md documents it (parsed here independently with struct,
+zlib and zstandard), plus the writer's error codes."""
+import struct
+import zlib
+
+import nrrd
+import numpy as np
+import pytest
+import zstandard
+from vtkmodules.util.numpy_support import numpy_to_vtk, vtk_to_numpy
+from vtkmodules.vtkCommonMisc import vtkErrorCode
+from vtkmodules.vtkCommonDataModel import vtkImageData
+
+from vtksvdag.vtkSVDAGCore import vtkImageDataToSegmentationSVDAG, vtkSegmentationSVDAG
+from vtksvdag.vtkSVDAGIO import vtkSegmentationSVDAGWriter
+
+MAGIC = b"\x89SVDAG\r\n"
+SECTIONS = {1: "labels", 2: "blocks", 3: "roots", 4: "mids", 5: "leaves"}
+
+
+def compress_real_volume(path, spacing=(0.5, 0.75, 2.0), origin=(-4.0, 3.5, 10.0)):
+    labels, _ = nrrd.read(str(path), index_order="C")  # (z, y, x)
+    image = vtkImageData()
+    image.SetDimensions(labels.shape[2], labels.shape[1], labels.shape[0])
+    image.SetSpacing(*spacing)
+    image.SetOrigin(*origin)
+    image.GetPointData().SetScalars(numpy_to_vtk(np.ascontiguousarray(labels).ravel(), deep=True))
+    build = vtkImageDataToSegmentationSVDAG()
+    build.SetInputData(image)
+    build.Update()
+    return labels, build
+
+
+def parse(data):
+    """The header and raw section contents of a .svdag file, following IO/README.md."""
+    assert data[:8] == MAGIC
+    major, minor = struct.unpack_from("<HH", data, 8)
+    header = {
+        "version": (major, minor),
+        "dims": struct.unpack_from("<3i", data, 12),
+        "spacing": struct.unpack_from("<3d", data, 24),
+        "origin": struct.unpack_from("<3d", data, 48),
+        "direction": struct.unpack_from("<9d", data, 72),
+        "scalar_type": struct.unpack_from("<I", data, 144)[0],
+        "background": struct.unpack_from("<Q", data, 148)[0],
+        "widths": struct.unpack_from("<5I", data, 156),
+        "counts": dict(zip(("labels", "blocks", "roots", "mids", "leaves"),
+                           struct.unpack_from("<5Q", data, 176))),
+    }
+    (count,) = struct.unpack_from("<I", data, 216)
+    table_end = 220 + 36 * count
+    (header_crc,) = struct.unpack_from("<I", data, table_end)
+    assert header_crc == zlib.crc32(data[:table_end])
+    sections = {}
+    for i in range(count):
+        sid, codec, offset, stored, raw, crc = struct.unpack_from("<IIQQQI", data, 220 + 36 * i)
+        assert offset >= table_end + 4 and offset + stored <= len(data)
+        payload = data[offset:offset + stored]
+        if codec == 1:
+            payload = zstandard.ZstdDecompressor().decompress(payload)
+        else:
+            assert codec == 0 and stored == raw
+        assert len(payload) == raw
+        assert zlib.crc32(payload) == crc
+        sections[SECTIONS[sid]] = (codec, payload)
+    return header, sections
+
+
+@pytest.mark.parametrize("level", [0, 3, 19])
+def test_writer_on_a_real_volume_follows_the_documented_format(shared_data, tmp_path, level):
+    labels, build = compress_real_volume(shared_data / "dvid_fib19_64.nrrd")
+    svdag = build.GetOutput()
+    path = tmp_path / "fib19.svdag"
+    writer = vtkSegmentationSVDAGWriter()
+    writer.SetInputConnection(build.GetOutputPort())
+    writer.SetFileName(str(path))
+    writer.SetCompressionLevel(level)
+    assert writer.Write() == 1
+    assert writer.GetErrorCode() == vtkErrorCode.NoError
+    data = path.read_bytes()
+    assert not (tmp_path / "fib19.svdag.partial").exists()
+
+    header, sections = parse(data)
+    assert header["version"] == (1, 0)
+    assert header["dims"] == (64, 64, 64)
+    assert header["spacing"] == (0.5, 0.75, 2.0)
+    assert header["origin"] == (-4.0, 3.5, 10.0)
+    assert header["direction"] == (1, 0, 0, 0, 1, 0, 0, 0, 1)
+    assert header["scalar_type"] == 7  # uint64
+    assert header["background"] == 0
+    counts = header["counts"]
+    assert counts["blocks"] == svdag.GetNumberOfBlocks()
+    assert counts["roots"] == svdag.GetNumberOfRootNodes()
+    assert counts["mids"] == svdag.GetNumberOfMidNodes()
+    assert counts["leaves"] == svdag.GetNumberOfLeaves()
+
+    # The label table holds the volume's labels with their exact voxel counts and bounds.
+    table = np.frombuffer(sections["labels"][1], dtype=np.dtype(
+        [("value", "<u8"), ("voxels", "<u8"), ("bounds", "<i4", 6)]))
+    values, voxel_counts = np.unique(labels[labels != 0], return_counts=True)
+    np.testing.assert_array_equal(table["value"], values)
+    np.testing.assert_array_equal(table["value"], vtk_to_numpy(svdag.NewLabelValues()))
+    np.testing.assert_array_equal(table["voxels"], voxel_counts)
+    first = int(np.argmax(table["voxels"]))
+    z, y, x = np.nonzero(labels == table["value"][first])
+    assert list(table["bounds"][first]) == [x.min(), x.max(), y.min(), y.max(), z.min(), z.max()]
+
+    # Section sizes: the counts, the block records and the in-memory sizes without padding.
+    widths = header["widths"]
+    block_bits = widths[0] + 24 + widths[1] + widths[2]
+    assert len(sections["blocks"][1]) == 4 * -(-counts["blocks"] * block_bits // 32)
+    assert len(sections["leaves"][1]) == 8 * counts["leaves"]
+    assert len(sections["blocks"][1]) == 4 * -(-svdag.GetBlocksMemorySize() // 4)  # whole words
+    assert (len(sections["roots"][1]) + len(sections["mids"][1])
+            + len(sections["leaves"][1])) == svdag.GetDAGMemorySize()
+    leaves = np.frombuffer(sections["leaves"][1], dtype="<u8")
+    assert not np.any(leaves & 1)  # canonical leaves: voxel (0, 0, 0) empty
+
+    if level == 0:
+        assert all(codec == 0 for codec, _ in sections.values())
+        assert len(data) == 220 + 36 * 5 + 4 + sum(len(p) for _, p in sections.values())
+    else:
+        assert sections["leaves"][0] == 1  # zstd
+        assert len(data) < 220 + 36 * 5 + 4 + sum(len(p) for _, p in sections.values())
+
+
+def test_writer_output_is_deterministic(shared_data, tmp_path):
+    _, build = compress_real_volume(shared_data / "plantseg_1135_mini.nrrd")
+    outputs = []
+    for name in ("a.svdag", "b.svdag"):
+        writer = vtkSegmentationSVDAGWriter()
+        writer.SetInputData(build.GetOutput())
+        writer.SetFileName(str(tmp_path / name))
+        assert writer.Write() == 1
+        outputs.append((tmp_path / name).read_bytes())
+    assert outputs[0] == outputs[1]
+
+
+class ErrorCatcher:
+    def __init__(self, algorithm):
+        self.messages = []
+        algorithm.AddObserver("ErrorEvent", self)
+
+    def __call__(self, obj, event, data=None):
+        self.messages.append(event)
+
+
+def test_writer_errors(tmp_path, rng):
+    labels = rng.integers(0, 4, size=(6, 7, 8)).astype(np.uint8)
+    image = vtkImageData()
+    image.SetDimensions(8, 7, 6)
+    image.GetPointData().SetScalars(numpy_to_vtk(labels.ravel(), deep=True))
+    build = vtkImageDataToSegmentationSVDAG()
+    build.SetInputData(image)
+    build.Update()
+
+    writer = vtkSegmentationSVDAGWriter()
+    errors = ErrorCatcher(writer)
+    writer.SetInputData(build.GetOutput())
+    assert writer.Write() == 0  # no file name
+    assert writer.GetErrorCode() == vtkErrorCode.NoFileNameError
+
+    writer.SetFileName(str(tmp_path / "missing-folder" / "x.svdag"))
+    assert writer.Write() == 0
+    assert writer.GetErrorCode() == vtkErrorCode.CannotOpenFileError
+
+    writer.SetInputData(vtkSegmentationSVDAG())  # an empty data object
+    writer.SetFileName(str(tmp_path / "empty.svdag"))
+    assert writer.Write() == 0
+    assert writer.GetErrorCode() == vtkErrorCode.UnknownError
+    assert not (tmp_path / "empty.svdag").exists()
+    assert len(errors.messages) == 3
+
+    writer.SetCompressionLevel(99)
+    assert writer.GetCompressionLevel() == 22
+    writer.SetCompressionLevel(-4)
+    assert writer.GetCompressionLevel() == 0
