@@ -94,7 +94,7 @@ def run_algorithm(algorithm, *, action="Update", progress=None, error=ValueError
         return
     # The algorithm's own message explains; the executive's only says that the request failed.
     message = messages[0] if messages else vtkErrorCode.GetStringFromErrorCode(code)
-    if what:
+    if what and what not in message:
         message = f"{what}: {message}"
     if code == vtkErrorCode.FileNotFoundError:
         raise FileNotFoundError(message)

@@ -8,9 +8,6 @@ from ._labels import label_pattern, label_patterns
 from ._vtkrun import run_algorithm
 from .volume import SegmentationVolume
 
-SVDAG_SUFFIX = ".svdag"
-
-
 def _check_input_file(path):
     path = os.fspath(path)
     if not os.path.exists(path):
@@ -89,7 +86,8 @@ def read(path, background=0, exclude=(), dataset=None, progress=None):
     output = reader.GetOutput()
     if output is None or not output.HasVolume():
         raise OSError(f"{path}: the reader produced no volume")
-    if path.lower().endswith(SVDAG_SUFFIX):
+    # The reader detects formats by content, so ask it rather than trusting the suffix.
+    if reader.GetFileFormat() == "SVDAG":
         return SegmentationVolume(output, load_seconds=seconds)
     return SegmentationVolume(output, build_seconds=seconds)
 
