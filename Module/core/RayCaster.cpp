@@ -1,0 +1,216 @@
+#include "svdag/RayCaster.h"
+
+#include "svdag/Traversal.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+namespace svdag
+{
+namespace
+{
+// Same threshold as the float traversal, so that both agree on which axes are parallel.
+constexpr double ParallelEps = 1e-30;
+// Local float intervals are clamped to this (finite) magnitude.
+constexpr double LocalFar = 1e30;
+
+float toLocalFloat(double v)
+{
+  return float(std::max(-LocalFar, std::min(LocalFar, v)));
+}
+
+int stepOf(double d)
+{
+  return d > ParallelEps ? 1 : (d < -ParallelEps ? -1 : 0);
+}
+
+// Throws std::invalid_argument for a ray or level of detail the caster cannot trace.
+void checkRay(const Ray& r, Lod lod)
+{
+  for (int a = 0; a < 3; ++a)
+  {
+    if (!std::isfinite(r.origin[a]) || !std::isfinite(r.direction[a]))
+      throw std::invalid_argument("ray origin and direction must be finite");
+  }
+  if (r.direction[0] == 0 && r.direction[1] == 0 && r.direction[2] == 0)
+    throw std::invalid_argument("ray direction must not be zero");
+  if (std::isnan(r.tmin) || std::isnan(r.tmax))
+    throw std::invalid_argument("ray interval must not be NaN");
+  if (uint32_t(lod) > uint32_t(Lod::Voxel))
+    throw std::invalid_argument("unknown level of detail");
+}
+} // namespace
+
+// The ray with a unit direction; s is the distance along it (t = s / length).
+struct RayCaster::UnitRay
+{
+  std::array<double, 3> origin;
+  std::array<double, 3> dir;
+  std::array<int, 3> step;
+  double length;
+  double smin, smax;
+};
+
+RayCaster::RayCaster(const Volume& v)
+  : volume(v)
+{
+}
+
+RayHit RayCaster::castCell(
+  const UnitRay& ray, const std::array<int32_t, 3>& cell, double s, Lod lod) const
+{
+  RayHit best;
+  const auto n = volume.geometry.cellCounts();
+  const uint32_t cellIndex =
+    uint32_t(cell[0] + uint64_t(n[0]) * (cell[1] + uint64_t(n[1]) * uint64_t(cell[2])));
+  const auto range = volume.cellBlocks(cellIndex);
+  if (range.first == range.second)
+    return best;
+
+  // Re-anchor: origin at the point where the ray enters the cell, relative to the cell's corner.
+  glm::vec3 origin, dir;
+  for (int a = 0; a < 3; ++a)
+  {
+    const double corner = double(layout::CELL_SIZE) * cell[a];
+    origin[a] = float((ray.origin[a] - corner) + s * ray.dir[a]);
+    dir[a] = float(ray.dir[a]);
+  }
+  const float tmin = toLocalFloat(ray.smin - s);
+  const float tmax = toLocalFloat(ray.smax - s);
+  const traversal::Streams streams{ volume.roots.data(), volume.mids.data(),
+    volume.leaves.data() };
+
+  float bestT = 0;
+  for (uint64_t b = range.first; b < range.second; ++b)
+  {
+    const Block block = volume.block(b);
+    const traversal::SvdagBlockHit h = traversal::svdagIntersectBlock(streams,
+      glm::uvec3(block.lo[0], block.lo[1], block.lo[2]),
+      glm::uvec3(block.hi[0], block.hi[1], block.hi[2]), block.root, volume.widths.midRefBits,
+      volume.widths.leafRefBits, origin, dir, tmin, tmax, uint32_t(lod));
+    if (h.hit && (!best.hit || h.t < bestT))
+    {
+      bestT = h.t;
+      best.hit = true;
+      best.label = block.label;
+      best.block = b;
+      for (int a = 0; a < 3; ++a)
+      {
+        best.voxel[a] = int32_t(layout::CELL_SIZE) * cell[a] + h.voxel[a];
+        best.normal[a] = h.normal[a];
+      }
+    }
+  }
+  if (best.hit)
+    best.t = (s + double(bestT)) / ray.length;
+  return best;
+}
+
+RayHit RayCaster::cast(const Ray& input, Lod lod) const
+{
+  checkRay(input, lod);
+  const auto& d = input.direction;
+  // Scaled before squaring, so that huge or tiny directions neither overflow nor underflow.
+  const double scale = std::max({ std::fabs(d[0]), std::fabs(d[1]), std::fabs(d[2]) });
+  const double length = scale *
+    std::sqrt((d[0] / scale) * (d[0] / scale) + (d[1] / scale) * (d[1] / scale) +
+      (d[2] / scale) * (d[2] / scale));
+
+  UnitRay ray;
+  ray.length = length;
+  for (int a = 0; a < 3; ++a)
+  {
+    ray.origin[a] = input.origin[a];
+    ray.dir[a] = d[a] / length;
+    ray.step[a] = stepOf(ray.dir[a]);
+  }
+  // s = t * length; infinite bounds stay infinite (and are clamped per cell).
+  ray.smin = input.tmin * length;
+  ray.smax = input.tmax * length;
+
+  RayHit miss;
+  const auto& dims = volume.geometry.dims;
+  if (volume.blockCount == 0 || dims[0] <= 0 || dims[1] <= 0 || dims[2] <= 0 ||
+    !(ray.smin <= ray.smax))
+    return miss;
+
+  // Slab test against the volume box [0, dims] (half-open along parallel axes).
+  double sEnter = -std::numeric_limits<double>::infinity();
+  double sExit = std::numeric_limits<double>::infinity();
+  for (int a = 0; a < 3; ++a)
+  {
+    if (ray.step[a] == 0)
+    {
+      if (ray.origin[a] < 0 || ray.origin[a] >= dims[a])
+        return miss;
+      continue;
+    }
+    const double s0 = (0 - ray.origin[a]) / ray.dir[a];
+    const double s1 = (dims[a] - ray.origin[a]) / ray.dir[a];
+    sEnter = std::max(sEnter, std::min(s0, s1));
+    sExit = std::min(sExit, std::max(s0, s1));
+  }
+  const double sFirst = std::max(sEnter, ray.smin);
+  const double sLast = std::min(sExit, ray.smax);
+  if (!(sFirst <= sLast))
+    return miss;
+
+  // 3D DDA over the cells, starting in the cell the ray is in (or moves into) at sFirst.
+  const auto n = volume.geometry.cellCounts();
+  const double size = layout::CELL_SIZE;
+  std::array<int32_t, 3> cell;
+  for (int a = 0; a < 3; ++a)
+  {
+    const double p = (ray.origin[a] + sFirst * ray.dir[a]) / size;
+    const double c = ray.step[a] < 0 ? std::ceil(p) - 1 : std::floor(p);
+    cell[a] = int32_t(std::max(0.0, std::min(double(n[a] - 1), c)));
+  }
+  double s = sFirst;
+  // Every step moves one cell coordinate monotonically towards the exit: n[0] + n[1] + n[2]
+  // steps leave the grid.
+  const uint64_t maxSteps = uint64_t(n[0]) + uint64_t(n[1]) + uint64_t(n[2]) + 1;
+  for (uint64_t i = 0; i < maxSteps; ++i)
+  {
+    const RayHit hit = castCell(ray, cell, s, lod);
+    if (hit.hit)
+      return hit;
+    int axis = -1;
+    double sNext = std::numeric_limits<double>::infinity();
+    for (int a = 0; a < 3; ++a)
+    {
+      if (ray.step[a] == 0)
+        continue;
+      const double face = size * (cell[a] + (ray.step[a] > 0 ? 1 : 0));
+      const double sFace = (face - ray.origin[a]) / ray.dir[a];
+      if (sFace < sNext)
+      {
+        sNext = sFace;
+        axis = a;
+      }
+    }
+    if (axis < 0 || sNext > sLast)
+      return miss;
+    cell[axis] += ray.step[axis];
+    if (cell[axis] < 0 || cell[axis] >= n[axis])
+      return miss;
+    s = std::max(s, sNext);
+  }
+  return miss;
+}
+
+void RayCaster::castMany(const std::vector<Ray>& rays, Lod lod, std::vector<RayHit>& hits,
+  const ParallelFor& parallel) const
+{
+  hits.assign(rays.size(), RayHit());
+  // Invalid rays are found first, so that no worker thread has to carry an exception out.
+  for (const Ray& r : rays)
+    checkRay(r, lod);
+  parallel(0, rays.size(), 256, [&](uint64_t begin, uint64_t end) {
+    for (uint64_t i = begin; i < end; ++i)
+      hits[i] = cast(rays[i], lod);
+  });
+}
+
+} // namespace svdag
