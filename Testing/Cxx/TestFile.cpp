@@ -377,6 +377,43 @@ TEST(File, RejectsWrongMagicAndUnknownMajorVersion)
   EXPECT_NO_THROW(svdag::deserialize(bad));
 }
 
+// A 1.x reader skips sections it does not know (a later minor version may add some), but still
+// checks where they lie.
+TEST(File, UnknownSectionsAreSkippedButChecked)
+{
+  const svdag::Volume v = spheres(ScalarType::UInt16, 20);
+  const Bytes good = svdag::serialize(v);
+  const size_t oldEnd = headerCrcAt(good) + 4;
+  const Bytes extra = { 'n', 'e', 'w' };
+  auto withExtraSection = [&](uint64_t extraOffset) {
+    Bytes b(good.begin(), good.begin() + SectionCountAt);
+    b.resize(oldEnd + EntrySize);
+    putLE(b, SectionCountAt, 6, 4);
+    for (size_t i = 0; i < 5; ++i) // the known entries, their data moved by one entry
+    {
+      std::copy(good.begin() + TableAt + EntrySize * i, good.begin() + TableAt + EntrySize * (i + 1),
+        b.begin() + TableAt + EntrySize * i);
+      const size_t at = TableAt + EntrySize * i + Offset;
+      putLE(b, at, getLE(b, at, 8) + EntrySize, 8);
+    }
+    const size_t e = TableAt + EntrySize * 5;
+    putLE(b, e + Id, 100, 4);
+    putLE(b, e + Codec, 0, 4);
+    putLE(b, e + Offset, extraOffset, 8);
+    putLE(b, e + Stored, extra.size(), 8);
+    putLE(b, e + Raw, extra.size(), 8);
+    putLE(b, e + Crc, crc32(0, extra.data(), uInt(extra.size())), 4);
+    resealHeader(b);
+    b.insert(b.end(), good.begin() + long(oldEnd), good.end());
+    b.insert(b.end(), extra.begin(), extra.end());
+    return b;
+  };
+  const Bytes newer = withExtraSection(good.size() + EntrySize);
+  EXPECT_TRUE(svdag::deserialize(newer) == v);
+  EXPECT_THROW(svdag::deserialize(withExtraSection(newer.size() - 1)), FileError); // past the end
+  EXPECT_THROW(svdag::deserialize(withExtraSection(oldEnd + EntrySize)), FileError); // overlaps
+}
+
 // Absurd values behind a valid header checksum: each one fails, and none makes the reader
 // allocate more than a few megabytes.
 TEST(File, AbsurdHeaderValuesFailWithoutHugeAllocations)
