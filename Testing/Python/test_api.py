@@ -263,3 +263,17 @@ def test_progress_is_reported(rng):
     decoded = []
     volume.to_numpy(progress=decoded.append)
     assert all(0.0 <= f <= 1.0 for f in decoded)
+
+
+@pytest.mark.parametrize(
+    "module",
+    ["vtksvdag", "vtksvdag.volume", "vtksvdag.build", "vtksvdag.fileio", "vtksvdag.export",
+     "vtksvdag.progress", "vtksvdag.cli"],
+)
+def test_docstring_examples(module, tmp_path, monkeypatch):
+    import doctest
+    import importlib
+
+    monkeypatch.chdir(tmp_path)  # examples that write files write here
+    result = doctest.testmod(importlib.import_module(module), optionflags=doctest.NORMALIZE_WHITESPACE)
+    assert result.failed == 0

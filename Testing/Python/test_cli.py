@@ -198,3 +198,37 @@ def test_bad_svdag_files_exit_1(tmp_path, small_nrrd):
     bad = tmp_path / "corrupt.svdag"
     bad.write_bytes(bytes(corrupt))
     assert_one_line_error(run_cli("info", bad), 1, "corrupt.svdag")
+
+
+def test_progress_bar_only_on_a_terminal(small_nrrd):
+    """With stderr a terminal the bar is drawn; --no-progress and --json turn it off."""
+    import pty
+
+    path, _ = small_nrrd
+
+    def stderr_on_a_tty(*args):
+        leader, follower = pty.openpty()
+        try:
+            process = subprocess.run(
+                [sys.executable, "-m", "vtksvdag", *map(str, args)],
+                stdout=subprocess.PIPE, stderr=follower, timeout=120, check=False,
+            )
+            os.close(follower)
+            chunks = []
+            while True:
+                try:
+                    chunk = os.read(leader, 4096)
+                except OSError:  # EIO: the terminal's other end is closed and drained
+                    break
+                if not chunk:
+                    break
+                chunks.append(chunk)
+        finally:
+            os.close(leader)
+        assert process.returncode == 0
+        return b"".join(chunks).decode()
+
+    drawn = stderr_on_a_tty("info", path)
+    assert "read [" in drawn and "100%" in drawn
+    assert stderr_on_a_tty("info", path, "--no-progress") == ""
+    assert stderr_on_a_tty("info", path, "--json") == ""
