@@ -4,7 +4,7 @@
  *
  * The file is never held in memory as a whole: it is read in slabs of 16 z-slices that are fed
  * to the SVDAG builder one after the other, so peak memory stays near one slab plus the
- * compressed output (exception: MetaImage, see below). Cells of a slab are scanned in parallel
+ * compressed output (exceptions: MetaImage and NIfTI with qfac = -1, see below). Cells of a slab are scanned in parallel
  * with vtkSMPTools; the output does not depend on the thread count.
  *
  * The format is detected from the file's content, not its name:
@@ -15,7 +15,8 @@
  * - VTK XML image data (.vti) through vtkXMLImageDataReader, slab by slab;
  * - NIfTI-1/2 (.nii, .nii.gz, .hdr/.img) through vtkNIFTIImageReader, slab by slab, in the
  *   file's voxel order (nibabel's array order, x fastest); origin, spacing and direction come
- *   from the sform (if its code is set) or the qform, as nibabel's affine does;
+ *   from the sform (if its code is set) or the qform, as nibabel's affine does. Files with
+ *   qfac = -1 are read whole: VTK 9.1's reader reverses their slices correctly only then;
  * - multi-page TIFF (one page per z-slice, one integer sample per pixel) through libtiff;
  * - HDF5 (a 3D integer dataset stored (z, y, x) in C order, the way h5py writes a numpy array);
  * - .svdag files (the project's own format).

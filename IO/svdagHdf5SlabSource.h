@@ -1,0 +1,27 @@
+// HDF5 through the HDF5 C library: a 3D integer dataset stored (z, y, x) in C order, the way
+// h5py writes a numpy array (the last axis is x). Each slab is one hyperslab read. The dataset
+// is the one named with SetDatasetName, or the only 3D integer dataset in the file. Spacing is
+// 1 and origin 0.
+#ifndef svdagHdf5SlabSource_h
+#define svdagHdf5SlabSource_h
+
+#include "svdagSlabSource.h"
+
+#include <memory>
+
+class svdagHdf5SlabSource : public svdagSlabSource
+{
+public:
+  svdagHdf5SlabSource(const std::string& fileName, const std::string& datasetName);
+  ~svdagHdf5SlabSource() override;
+  const char* formatName() const override { return "HDF5"; }
+  void readSlab(int32_t z0, int32_t nz, void* dst) override;
+  // True if the file starts with the HDF5 signature (at offset 0, or after a user block).
+  static bool hasMagic(const std::string& fileName);
+
+private:
+  struct Impl;
+  std::unique_ptr<Impl> impl;
+};
+
+#endif

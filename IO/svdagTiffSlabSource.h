@@ -1,0 +1,27 @@
+// Multi-page TIFF through libtiff: page k is z-slice k. Every page must have the same size and
+// one integer sample per pixel (8, 16, 32 or 64 bits, signed or unsigned); stripped and tiled
+// pages, any compression libtiff decodes. Spacing is 1 and origin 0 (TIFF resolution tags are
+// not voxel sizes one can trust).
+#ifndef svdagTiffSlabSource_h
+#define svdagTiffSlabSource_h
+
+#include "svdagSlabSource.h"
+
+#include <memory>
+
+class svdagTiffSlabSource : public svdagSlabSource
+{
+public:
+  explicit svdagTiffSlabSource(const std::string& fileName);
+  ~svdagTiffSlabSource() override;
+  const char* formatName() const override { return "TIFF"; }
+  void readSlab(int32_t z0, int32_t nz, void* dst) override;
+  // True if the file starts with a TIFF or BigTIFF signature.
+  static bool hasMagic(const std::string& fileName);
+
+private:
+  struct Impl;
+  std::unique_ptr<Impl> impl;
+};
+
+#endif
