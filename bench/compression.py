@@ -411,10 +411,10 @@ def print_report(rows, anchors):
           r["zstd19_s"], r["gzip9_s"], r.get("peak_rss_mb"), r.get("baseline_rss_mb"),
           r.get("peak_extra_mb"), r.get("model_mb"), r.get("mem_path")] for r in rows],
     )
-    reported = [r for r in rows if r["volume"] in anchors]
     if not anchors:
-        print(f"\n(no anchors table: {ANCHORS} not found)")
+        print(f"\n(no reported anchors: no table with a 'paper SVDAG MB' column in {ANCHORS})")
         return
+    reported = [r for r in rows if r["volume"] in anchors]
     table = []
     for r in reported:
         a = anchors[r["volume"]]
