@@ -277,3 +277,62 @@ def test_docstring_examples(module, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)  # examples that write files write here
     result = doctest.testmod(importlib.import_module(module), optionflags=doctest.NORMALIZE_WHITESPACE)
     assert result.failed == 0
+
+
+def test_save_and_read_round_trip(rng, tmp_path):
+    labels = rng.integers(0, 6, size=(33, 20, 17)).astype(np.int64) * 1_000_000_007
+    volume = vtksvdag.from_numpy(labels, spacing=(1, 2, 3), origin=(4, 5, 6), background=0)
+    path = tmp_path / "v.svdag"
+    volume.save(path, compression_level=1)
+    loaded = vtksvdag.read(path)
+    assert loaded.load_seconds > 0 and loaded.build_seconds is None
+    assert loaded.dtype == np.int64 and loaded.spacing == (1, 2, 3) and loaded.origin == (4, 5, 6)
+    np.testing.assert_array_equal(loaded.to_numpy(), labels)
+    saved, again = volume.stats(), loaded.stats()
+    for key in ("blocks", "dag_nodes", "bytes_total", "labels"):
+        assert saved[key] == again[key], key
+    with pytest.raises(OSError, match="missing_dir"):
+        volume.save(tmp_path / "missing_dir" / "v.svdag")
+    with pytest.raises(TypeError, match="compression_level"):
+        volume.save(tmp_path / "w.svdag", compression_level="high")
+
+
+def test_read_label_files_with_options(rng, tmp_path):
+    import h5py
+    import nrrd
+
+    labels = rng.integers(0, 5, size=(12, 9, 20)).astype(np.uint16)  # [x, y, z]
+    nrrd_path = tmp_path / "l.nrrd"
+    nrrd.write(str(nrrd_path), labels, header={"encoding": "gzip"}, index_order="F")
+    volume = vtksvdag.read(nrrd_path, background=4, exclude=[2])
+    assert volume.build_seconds > 0 and volume.load_seconds is None
+    np.testing.assert_array_equal(volume.to_numpy(), np.where(labels == 2, 4, labels))
+    np.testing.assert_array_equal(volume.labels, [0, 1, 3])
+    with pytest.raises(ValueError, match="out of range"):
+        vtksvdag.read(nrrd_path, background=2**64)
+    with pytest.raises(TypeError, match="background"):
+        vtksvdag.read(nrrd_path, background=0.5)
+
+    h5_path = tmp_path / "l.h5"
+    with h5py.File(h5_path, "w") as f:
+        f["raw"] = labels.transpose(2, 1, 0).astype(np.uint8)  # (z, y, x) as h5py writes numpy
+        f["seg/labels"] = labels.transpose(2, 1, 0)
+    volume = vtksvdag.read(h5_path, dataset="seg/labels")
+    np.testing.assert_array_equal(volume.to_numpy(), labels)
+    assert volume.dtype == np.uint16
+
+    np.save(tmp_path / "l.npy", labels)
+    np.testing.assert_array_equal(vtksvdag.read(tmp_path / "l.npy").to_numpy(), labels)
+
+
+def test_read_errors(tmp_path):
+    with pytest.raises(FileNotFoundError):
+        vtksvdag.read(tmp_path / "missing.nrrd")
+    text = tmp_path / "notes.nrrd"
+    text.write_text("NRRD0004\nthis header is broken\n")
+    with pytest.raises(OSError, match="notes.nrrd"):
+        vtksvdag.read(text)
+    floats = tmp_path / "f.npy"
+    np.save(floats, np.zeros((3, 3, 3), np.float32))
+    with pytest.raises(TypeError, match="float32"):
+        vtksvdag.read(floats)
