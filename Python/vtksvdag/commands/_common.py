@@ -89,8 +89,8 @@ def stats_rows(stats):
         ("bits per voxel", f"{stats['bits_per_voxel']:.4f}"),
     ]
     if stats.get("compression_ratio_32"):
-        rows.append(("vs 32-bit raw", f"{stats['compression_ratio_32']:.1f}x smaller "
-                     f"({_number(stats['raw_bytes_32'])} bytes)"))
+        rows.append(("32-bit raw", f"{_number(stats['raw_bytes_32'])} bytes "
+                     f"({stats['compression_ratio_32']:.1f}x the compressed size)"))
     if stats.get("build_seconds") is not None:
         rows.append(("build time", f"{stats['build_seconds']:.3f} s"))
     if stats.get("load_seconds") is not None:
