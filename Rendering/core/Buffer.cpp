@@ -1,0 +1,118 @@
+#include "svdag_render/Buffer.h"
+
+#include <cstring>
+#include <stdexcept>
+#include <utility>
+
+namespace svdag
+{
+namespace render
+{
+
+Buffer::Buffer(Context& context, VkDeviceSize size, VkBufferUsageFlags usage, MemoryUse use)
+{
+  if (size == 0)
+    throw std::invalid_argument("a Vulkan buffer of 0 bytes was requested");
+  this->Device = context.device();
+  this->Size = size;
+  try
+  {
+    VkBufferCreateInfo info{ VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO };
+    info.size = size;
+    info.usage = usage | VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT |
+      VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
+    info.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
+    check(vkCreateBuffer(this->Device, &info, nullptr, &this->Handle), "vkCreateBuffer");
+
+    VkMemoryRequirements req;
+    vkGetBufferMemoryRequirements(this->Device, this->Handle, &req);
+    VkMemoryPropertyFlags required = 0, preferred = 0;
+    switch (use)
+    {
+      case MemoryUse::Device:
+        preferred = VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT;
+        break;
+      case MemoryUse::Readback:
+        required = VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
+        preferred = VK_MEMORY_PROPERTY_HOST_CACHED_BIT;
+        break;
+      case MemoryUse::Upload:
+        required = VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
+        break;
+    }
+    VkMemoryAllocateFlagsInfo flags{ VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_FLAGS_INFO };
+    flags.flags = VK_MEMORY_ALLOCATE_DEVICE_ADDRESS_BIT;
+    VkMemoryAllocateInfo alloc{ VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO };
+    alloc.pNext = &flags;
+    alloc.allocationSize = req.size;
+    alloc.memoryTypeIndex = context.memoryType(req.memoryTypeBits, required, preferred);
+    check(vkAllocateMemory(this->Device, &alloc, nullptr, &this->Memory), "vkAllocateMemory");
+    check(vkBindBufferMemory(this->Device, this->Handle, this->Memory, 0), "vkBindBufferMemory");
+    if (use != MemoryUse::Device)
+    {
+      check(vkMapMemory(this->Device, this->Memory, 0, VK_WHOLE_SIZE, 0, &this->Mapped),
+        "vkMapMemory");
+    }
+    VkBufferDeviceAddressInfo addressInfo{ VK_STRUCTURE_TYPE_BUFFER_DEVICE_ADDRESS_INFO };
+    addressInfo.buffer = this->Handle;
+    this->Address = vkGetBufferDeviceAddress(this->Device, &addressInfo);
+  }
+  catch (...)
+  {
+    this->reset();
+    throw;
+  }
+}
+
+Buffer::~Buffer()
+{
+  this->reset();
+}
+
+Buffer::Buffer(Buffer&& other) noexcept
+{
+  *this = std::move(other);
+}
+
+Buffer& Buffer::operator=(Buffer&& other) noexcept
+{
+  if (this != &other)
+  {
+    this->reset();
+    std::swap(this->Device, other.Device);
+    std::swap(this->Handle, other.Handle);
+    std::swap(this->Memory, other.Memory);
+    std::swap(this->Size, other.Size);
+    std::swap(this->Address, other.Address);
+    std::swap(this->Mapped, other.Mapped);
+  }
+  return *this;
+}
+
+void Buffer::reset()
+{
+  if (this->Handle)
+    vkDestroyBuffer(this->Device, this->Handle, nullptr);
+  if (this->Memory)
+    vkFreeMemory(this->Device, this->Memory, nullptr); // unmaps implicitly
+  this->Handle = VK_NULL_HANDLE;
+  this->Memory = VK_NULL_HANDLE;
+  this->Size = 0;
+  this->Address = 0;
+  this->Mapped = nullptr;
+}
+
+Buffer uploadBuffer(Context& context, const void* data, size_t bytes, VkBufferUsageFlags usage)
+{
+  Buffer staging(context, bytes, 0, MemoryUse::Upload);
+  std::memcpy(staging.mapped(), data, bytes);
+  Buffer target(context, bytes, usage, MemoryUse::Device);
+  context.submitAndWait([&](VkCommandBuffer cmd) {
+    VkBufferCopy region{ 0, 0, bytes };
+    vkCmdCopyBuffer(cmd, staging.handle(), target.handle(), 1, &region);
+  });
+  return target;
+}
+
+} // namespace render
+} // namespace svdag

@@ -1,0 +1,423 @@
+#include "svdag_render/Context.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cstdlib>
+#include <cstring>
+#include <stdexcept>
+
+namespace svdag
+{
+namespace render
+{
+namespace
+{
+const char* const RequiredExtensions[] = {
+  VK_KHR_ACCELERATION_STRUCTURE_EXTENSION_NAME,
+  VK_KHR_RAY_TRACING_PIPELINE_EXTENSION_NAME,
+  VK_KHR_BUFFER_DEVICE_ADDRESS_EXTENSION_NAME,
+  VK_KHR_DEFERRED_HOST_OPERATIONS_EXTENSION_NAME,
+};
+const char* const ValidationLayer = "VK_LAYER_KHRONOS_validation";
+
+std::string lower(std::string s)
+{
+  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return std::tolower(c); });
+  return s;
+}
+
+bool envFlag(const char* name)
+{
+  const char* v = std::getenv(name);
+  return v && *v && std::strcmp(v, "0") != 0;
+}
+
+// Lower is better: discrete, integrated, virtual, CPU, other.
+int typeRank(VkPhysicalDeviceType type)
+{
+  switch (type)
+  {
+    case VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU: return 0;
+    case VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU: return 1;
+    case VK_PHYSICAL_DEVICE_TYPE_VIRTUAL_GPU: return 2;
+    case VK_PHYSICAL_DEVICE_TYPE_CPU: return 3;
+    default: return 4;
+  }
+}
+
+// Feature structures the renderer enables, chained for vkGetPhysicalDeviceFeatures2 and
+// vkCreateDevice alike.
+struct FeatureChain
+{
+  VkPhysicalDeviceFeatures2 base{ VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2 };
+  VkPhysicalDeviceVulkan12Features v12{ VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES };
+  VkPhysicalDeviceAccelerationStructureFeaturesKHR as{
+    VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_ACCELERATION_STRUCTURE_FEATURES_KHR
+  };
+  VkPhysicalDeviceRayTracingPipelineFeaturesKHR rt{
+    VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_RAY_TRACING_PIPELINE_FEATURES_KHR
+  };
+  FeatureChain()
+  {
+    base.pNext = &v12;
+    v12.pNext = &as;
+    as.pNext = &rt;
+  }
+  FeatureChain(const FeatureChain&) = delete;
+};
+
+// What one physical device lacks (empty: it qualifies) and its compute queue family.
+struct Candidate
+{
+  VkPhysicalDevice device = VK_NULL_HANDLE;
+  std::string name;
+  VkPhysicalDeviceType type = VK_PHYSICAL_DEVICE_TYPE_OTHER;
+  std::vector<std::string> missing;
+  uint32_t queueFamily = 0;
+};
+
+Candidate inspect(VkPhysicalDevice device)
+{
+  Candidate c;
+  c.device = device;
+  VkPhysicalDeviceProperties props;
+  vkGetPhysicalDeviceProperties(device, &props);
+  c.name = props.deviceName;
+  c.type = props.deviceType;
+  if (props.apiVersion < VK_API_VERSION_1_2)
+  {
+    c.missing.push_back("Vulkan 1.2");
+    return c; // the 1.2 feature query below would be invalid
+  }
+  uint32_t count = 0;
+  vkEnumerateDeviceExtensionProperties(device, nullptr, &count, nullptr);
+  std::vector<VkExtensionProperties> extensions(count);
+  vkEnumerateDeviceExtensionProperties(device, nullptr, &count, extensions.data());
+  for (const char* required : RequiredExtensions)
+  {
+    const bool found = std::any_of(extensions.begin(), extensions.end(),
+      [required](const VkExtensionProperties& e) { return std::strcmp(e.extensionName, required) == 0; });
+    if (!found)
+      c.missing.push_back(required);
+  }
+  if (!c.missing.empty())
+    return c;
+  FeatureChain features;
+  vkGetPhysicalDeviceFeatures2(device, &features.base);
+  if (!features.v12.bufferDeviceAddress)
+    c.missing.push_back("bufferDeviceAddress feature");
+  if (!features.as.accelerationStructure)
+    c.missing.push_back("accelerationStructure feature");
+  if (!features.rt.rayTracingPipeline)
+    c.missing.push_back("rayTracingPipeline feature");
+  vkGetPhysicalDeviceQueueFamilyProperties(device, &count, nullptr);
+  std::vector<VkQueueFamilyProperties> families(count);
+  vkGetPhysicalDeviceQueueFamilyProperties(device, &count, families.data());
+  bool compute = false;
+  for (uint32_t i = 0; i < count && !compute; ++i)
+  {
+    if (families[i].queueFlags & VK_QUEUE_COMPUTE_BIT)
+    {
+      c.queueFamily = i;
+      compute = true;
+    }
+  }
+  if (!compute)
+    c.missing.push_back("a compute queue");
+  return c;
+}
+
+std::string describe(const std::vector<Candidate>& candidates)
+{
+  std::string s;
+  for (const Candidate& c : candidates)
+  {
+    s += "\n  '" + c.name + "': ";
+    if (c.missing.empty())
+    {
+      s += "has ray tracing";
+      continue;
+    }
+    s += "lacks ";
+    for (size_t i = 0; i < c.missing.size(); ++i)
+      s += (i ? ", " : "") + c.missing[i];
+  }
+  return s;
+}
+} // namespace
+
+const char* resultName(VkResult result)
+{
+  switch (result)
+  {
+    case VK_SUCCESS: return "VK_SUCCESS";
+    case VK_NOT_READY: return "VK_NOT_READY";
+    case VK_TIMEOUT: return "VK_TIMEOUT";
+    case VK_INCOMPLETE: return "VK_INCOMPLETE";
+    case VK_ERROR_OUT_OF_HOST_MEMORY: return "VK_ERROR_OUT_OF_HOST_MEMORY";
+    case VK_ERROR_OUT_OF_DEVICE_MEMORY: return "VK_ERROR_OUT_OF_DEVICE_MEMORY";
+    case VK_ERROR_INITIALIZATION_FAILED: return "VK_ERROR_INITIALIZATION_FAILED";
+    case VK_ERROR_DEVICE_LOST: return "VK_ERROR_DEVICE_LOST";
+    case VK_ERROR_MEMORY_MAP_FAILED: return "VK_ERROR_MEMORY_MAP_FAILED";
+    case VK_ERROR_LAYER_NOT_PRESENT: return "VK_ERROR_LAYER_NOT_PRESENT";
+    case VK_ERROR_EXTENSION_NOT_PRESENT: return "VK_ERROR_EXTENSION_NOT_PRESENT";
+    case VK_ERROR_FEATURE_NOT_PRESENT: return "VK_ERROR_FEATURE_NOT_PRESENT";
+    case VK_ERROR_INCOMPATIBLE_DRIVER: return "VK_ERROR_INCOMPATIBLE_DRIVER";
+    case VK_ERROR_TOO_MANY_OBJECTS: return "VK_ERROR_TOO_MANY_OBJECTS";
+    case VK_ERROR_FORMAT_NOT_SUPPORTED: return "VK_ERROR_FORMAT_NOT_SUPPORTED";
+    case VK_ERROR_OUT_OF_POOL_MEMORY: return "VK_ERROR_OUT_OF_POOL_MEMORY";
+    case VK_ERROR_INVALID_OPAQUE_CAPTURE_ADDRESS: return "VK_ERROR_INVALID_OPAQUE_CAPTURE_ADDRESS";
+    default: return "VkResult error";
+  }
+}
+
+void check(VkResult result, const char* what)
+{
+  if (result != VK_SUCCESS)
+  {
+    throw std::runtime_error(std::string(what) + " failed: " + resultName(result) + " (" +
+      std::to_string(int(result)) + ")");
+  }
+}
+
+Context::Context()
+{
+  try
+  {
+    this->createInstance();
+    this->pickPhysicalDevice();
+    this->createDevice();
+  }
+  catch (...)
+  {
+    this->destroy();
+    throw;
+  }
+}
+
+Context::~Context()
+{
+  this->destroy();
+}
+
+void Context::destroy()
+{
+  if (this->Device)
+  {
+    vkDeviceWaitIdle(this->Device);
+    if (this->Fence)
+      vkDestroyFence(this->Device, this->Fence, nullptr);
+    if (this->CommandPool)
+      vkDestroyCommandPool(this->Device, this->CommandPool, nullptr);
+    vkDestroyDevice(this->Device, nullptr);
+    this->Device = VK_NULL_HANDLE;
+  }
+  if (this->Instance)
+  {
+    vkDestroyInstance(this->Instance, nullptr);
+    this->Instance = VK_NULL_HANDLE;
+  }
+}
+
+void Context::createInstance()
+{
+  uint32_t loaderVersion = 0;
+  if (vkEnumerateInstanceVersion(&loaderVersion) != VK_SUCCESS ||
+    loaderVersion < VK_API_VERSION_1_2)
+  {
+    throw std::runtime_error("no Vulkan driver/loader with Vulkan 1.2 found");
+  }
+  std::vector<const char*> layers;
+  if (envFlag("SVDAG_VK_VALIDATION"))
+  {
+    uint32_t count = 0;
+    vkEnumerateInstanceLayerProperties(&count, nullptr);
+    std::vector<VkLayerProperties> available(count);
+    vkEnumerateInstanceLayerProperties(&count, available.data());
+    const bool found = std::any_of(available.begin(), available.end(),
+      [](const VkLayerProperties& l) { return std::strcmp(l.layerName, ValidationLayer) == 0; });
+    if (!found)
+      throw std::runtime_error("SVDAG_VK_VALIDATION is set but the Vulkan validation layer "
+                               "VK_LAYER_KHRONOS_validation is not installed");
+    layers.push_back(ValidationLayer);
+  }
+  VkApplicationInfo app{ VK_STRUCTURE_TYPE_APPLICATION_INFO };
+  app.pApplicationName = "vtkSVDAG";
+  app.pEngineName = "svdag::render";
+  app.apiVersion = VK_API_VERSION_1_2;
+  VkInstanceCreateInfo info{ VK_STRUCTURE_TYPE_INSTANCE_CREATE_INFO };
+  info.pApplicationInfo = &app;
+  info.enabledLayerCount = uint32_t(layers.size());
+  info.ppEnabledLayerNames = layers.data();
+  const VkResult result = vkCreateInstance(&info, nullptr, &this->Instance);
+  if (result != VK_SUCCESS)
+  {
+    this->Instance = VK_NULL_HANDLE;
+    throw std::runtime_error(std::string("no Vulkan driver/loader: vkCreateInstance failed (") +
+      resultName(result) + ")");
+  }
+}
+
+void Context::pickPhysicalDevice()
+{
+  uint32_t count = 0;
+  vkEnumeratePhysicalDevices(this->Instance, &count, nullptr);
+  std::vector<VkPhysicalDevice> devices(count);
+  if (count)
+    vkEnumeratePhysicalDevices(this->Instance, &count, devices.data());
+  if (devices.empty())
+    throw std::runtime_error("no Vulkan driver/loader: Vulkan reports no physical device");
+
+  std::vector<Candidate> candidates;
+  for (VkPhysicalDevice d : devices)
+    candidates.push_back(inspect(d));
+
+  const char* forced = std::getenv("SVDAG_VK_DEVICE");
+  const std::string wanted = forced ? lower(forced) : std::string();
+  const Candidate* best = nullptr;
+  bool nameMatched = false;
+  for (const Candidate& c : candidates)
+  {
+    if (!wanted.empty() && lower(c.name).find(wanted) == std::string::npos)
+      continue;
+    nameMatched = true;
+    if (c.missing.empty() && (!best || typeRank(c.type) < typeRank(best->type)))
+      best = &c;
+  }
+  if (!best)
+  {
+    std::string message = "no Vulkan device with ray tracing";
+    if (!wanted.empty())
+    {
+      message += nameMatched ? " matches" : " and no device at all matches";
+      message += std::string(" SVDAG_VK_DEVICE='") + forced + "'";
+    }
+    throw std::runtime_error(message + "; devices found:" + describe(candidates));
+  }
+  this->PhysicalDevice = best->device;
+  this->DeviceName = best->name;
+  this->CpuDevice = best->type == VK_PHYSICAL_DEVICE_TYPE_CPU;
+  this->QueueFamily = best->queueFamily;
+}
+
+void Context::createDevice()
+{
+  VkPhysicalDeviceAccelerationStructurePropertiesKHR asProps{
+    VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_ACCELERATION_STRUCTURE_PROPERTIES_KHR
+  };
+  VkPhysicalDeviceRayTracingPipelinePropertiesKHR rtProps{
+    VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_RAY_TRACING_PIPELINE_PROPERTIES_KHR
+  };
+  rtProps.pNext = &asProps;
+  VkPhysicalDeviceProperties2 props{ VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2 };
+  props.pNext = &rtProps;
+  vkGetPhysicalDeviceProperties2(this->PhysicalDevice, &props);
+  this->Limits.shaderGroupHandleSize = rtProps.shaderGroupHandleSize;
+  this->Limits.shaderGroupHandleAlignment = rtProps.shaderGroupHandleAlignment;
+  this->Limits.shaderGroupBaseAlignment = rtProps.shaderGroupBaseAlignment;
+  this->Limits.maxRayRecursionDepth = rtProps.maxRayRecursionDepth;
+  this->Limits.maxRayDispatchInvocationCount = rtProps.maxRayDispatchInvocationCount;
+  this->Limits.maxPrimitiveCount = asProps.maxPrimitiveCount;
+  this->Limits.maxInstanceCount = asProps.maxInstanceCount;
+  this->Limits.minScratchOffsetAlignment =
+    std::max<uint32_t>(1, asProps.minAccelerationStructureScratchOffsetAlignment);
+  vkGetPhysicalDeviceMemoryProperties(this->PhysicalDevice, &this->MemoryProperties);
+
+  FeatureChain enabled;
+  enabled.v12.bufferDeviceAddress = VK_TRUE;
+  enabled.as.accelerationStructure = VK_TRUE;
+  enabled.rt.rayTracingPipeline = VK_TRUE;
+  const float priority = 1.0f;
+  VkDeviceQueueCreateInfo queueInfo{ VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO };
+  queueInfo.queueFamilyIndex = this->QueueFamily;
+  queueInfo.queueCount = 1;
+  queueInfo.pQueuePriorities = &priority;
+  VkDeviceCreateInfo info{ VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO };
+  info.pNext = &enabled.base;
+  info.queueCreateInfoCount = 1;
+  info.pQueueCreateInfos = &queueInfo;
+  info.enabledExtensionCount = uint32_t(std::size(RequiredExtensions));
+  info.ppEnabledExtensionNames = RequiredExtensions;
+  check(vkCreateDevice(this->PhysicalDevice, &info, nullptr, &this->Device), "vkCreateDevice");
+  vkGetDeviceQueue(this->Device, this->QueueFamily, 0, &this->Queue);
+
+  auto load = [this](auto& fn, const char* name) {
+    fn = reinterpret_cast<std::remove_reference_t<decltype(fn)>>(
+      vkGetDeviceProcAddr(this->Device, name));
+    if (!fn)
+      throw std::runtime_error(std::string("Vulkan entry point missing: ") + name);
+  };
+  DeviceFunctions& f = this->Functions;
+  load(f.createAccelerationStructure, "vkCreateAccelerationStructureKHR");
+  load(f.destroyAccelerationStructure, "vkDestroyAccelerationStructureKHR");
+  load(f.getAccelerationStructureBuildSizes, "vkGetAccelerationStructureBuildSizesKHR");
+  load(f.getAccelerationStructureDeviceAddress, "vkGetAccelerationStructureDeviceAddressKHR");
+  load(f.cmdBuildAccelerationStructures, "vkCmdBuildAccelerationStructuresKHR");
+  load(f.cmdWriteAccelerationStructuresProperties, "vkCmdWriteAccelerationStructuresPropertiesKHR");
+  load(f.cmdCopyAccelerationStructure, "vkCmdCopyAccelerationStructureKHR");
+  load(f.createRayTracingPipelines, "vkCreateRayTracingPipelinesKHR");
+  load(f.getRayTracingShaderGroupHandles, "vkGetRayTracingShaderGroupHandlesKHR");
+  load(f.cmdTraceRays, "vkCmdTraceRaysKHR");
+
+  VkCommandPoolCreateInfo poolInfo{ VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO };
+  poolInfo.flags = VK_COMMAND_POOL_CREATE_TRANSIENT_BIT;
+  poolInfo.queueFamilyIndex = this->QueueFamily;
+  check(vkCreateCommandPool(this->Device, &poolInfo, nullptr, &this->CommandPool),
+    "vkCreateCommandPool");
+  VkFenceCreateInfo fenceInfo{ VK_STRUCTURE_TYPE_FENCE_CREATE_INFO };
+  check(vkCreateFence(this->Device, &fenceInfo, nullptr, &this->Fence), "vkCreateFence");
+}
+
+uint32_t Context::memoryType(
+  uint32_t typeBits, VkMemoryPropertyFlags required, VkMemoryPropertyFlags preferred) const
+{
+  const VkPhysicalDeviceMemoryProperties& m = this->MemoryProperties;
+  for (const VkMemoryPropertyFlags want : { required | preferred, required })
+  {
+    for (uint32_t i = 0; i < m.memoryTypeCount; ++i)
+    {
+      if ((typeBits & (1u << i)) && (m.memoryTypes[i].propertyFlags & want) == want)
+        return i;
+    }
+  }
+  throw std::runtime_error("no Vulkan memory type with the required properties");
+}
+
+void Context::submitAndWait(const std::function<void(VkCommandBuffer)>& record)
+{
+  VkCommandBufferAllocateInfo allocInfo{ VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO };
+  allocInfo.commandPool = this->CommandPool;
+  allocInfo.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
+  allocInfo.commandBufferCount = 1;
+  VkCommandBuffer cmd = VK_NULL_HANDLE;
+  check(vkAllocateCommandBuffers(this->Device, &allocInfo, &cmd), "vkAllocateCommandBuffers");
+  // Frees the command buffer on every path, exceptions from `record` included.
+  struct Release
+  {
+    VkDevice device;
+    VkCommandPool pool;
+    VkCommandBuffer cmd;
+    ~Release() { vkFreeCommandBuffers(device, pool, 1, &cmd); }
+  } release{ this->Device, this->CommandPool, cmd };
+
+  VkCommandBufferBeginInfo begin{ VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO };
+  begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
+  check(vkBeginCommandBuffer(cmd, &begin), "vkBeginCommandBuffer");
+  // Makes every write of earlier submissions (made available by their fence) visible here.
+  VkMemoryBarrier barrier{ VK_STRUCTURE_TYPE_MEMORY_BARRIER };
+  barrier.srcAccessMask = VK_ACCESS_MEMORY_WRITE_BIT;
+  barrier.dstAccessMask = VK_ACCESS_MEMORY_READ_BIT | VK_ACCESS_MEMORY_WRITE_BIT;
+  vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_ALL_COMMANDS_BIT,
+    VK_PIPELINE_STAGE_ALL_COMMANDS_BIT, 0, 1, &barrier, 0, nullptr, 0, nullptr);
+  record(cmd);
+  check(vkEndCommandBuffer(cmd), "vkEndCommandBuffer");
+  VkSubmitInfo submit{ VK_STRUCTURE_TYPE_SUBMIT_INFO };
+  submit.commandBufferCount = 1;
+  submit.pCommandBuffers = &cmd;
+  check(vkResetFences(this->Device, 1, &this->Fence), "vkResetFences");
+  check(vkQueueSubmit(this->Queue, 1, &submit, this->Fence), "vkQueueSubmit");
+  check(vkWaitForFences(this->Device, 1, &this->Fence, VK_TRUE, UINT64_MAX), "vkWaitForFences");
+}
+
+} // namespace render
+} // namespace svdag

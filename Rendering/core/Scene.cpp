@@ -1,0 +1,250 @@
+#include "svdag_render/Scene.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cstring>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+namespace svdag
+{
+namespace render
+{
+namespace
+{
+using Clock = std::chrono::steady_clock;
+
+double secondsSince(Clock::time_point start)
+{
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+// A visible block's box in index space (hi exclusive) and its block index.
+struct BlockBox
+{
+  std::array<int64_t, 3> lo;
+  std::array<int64_t, 3> hi;
+  uint32_t block;
+};
+
+// Orders boxes by recursive longest-axis median split of their centers (iteratively, with an
+// explicit stack: depth is log2(n), but an explicit stack needs no recursion limit argument).
+void medianSplitOrder(std::vector<BlockBox>& boxes)
+{
+  std::vector<std::pair<size_t, size_t>> stack{ { 0, boxes.size() } };
+  while (!stack.empty())
+  {
+    const auto [begin, end] = stack.back();
+    stack.pop_back();
+    if (end - begin <= 2)
+      continue;
+    // Twice the center (lo + hi) keeps everything in integers.
+    std::array<int64_t, 3> cmin{ { INT64_MAX, INT64_MAX, INT64_MAX } };
+    std::array<int64_t, 3> cmax{ { INT64_MIN, INT64_MIN, INT64_MIN } };
+    for (size_t i = begin; i < end; ++i)
+    {
+      for (int a = 0; a < 3; ++a)
+      {
+        const int64_t c = boxes[i].lo[a] + boxes[i].hi[a];
+        cmin[a] = std::min(cmin[a], c);
+        cmax[a] = std::max(cmax[a], c);
+      }
+    }
+    int axis = 0;
+    for (int a = 1; a < 3; ++a)
+    {
+      if (cmax[a] - cmin[a] > cmax[axis] - cmin[axis])
+        axis = a;
+    }
+    const size_t mid = begin + (end - begin) / 2;
+    std::nth_element(boxes.begin() + begin, boxes.begin() + mid, boxes.begin() + end,
+      [axis](const BlockBox& x, const BlockBox& y) {
+        const int64_t cx = x.lo[axis] + x.hi[axis], cy = y.lo[axis] + y.hi[axis];
+        return cx != cy ? cx < cy : x.block < y.block; // total order: deterministic
+      });
+    stack.emplace_back(begin, mid);
+    stack.emplace_back(mid, end);
+  }
+}
+
+void checkAddressable(uint64_t words, const char* what)
+{
+  // The shaders address bits with 32-bit offsets (Layout.h's SVDAG_OFFSET_T in GLSL).
+  if (words > (uint64_t(1) << 27))
+  {
+    throw std::runtime_error(std::string("the volume's ") + what +
+      " stream exceeds 2^32 bits, more than the GPU traversal addresses");
+  }
+}
+} // namespace
+
+std::array<double, 12> indexToWorld(const Geometry& g)
+{
+  // world = origin + A * (p - 0.5) with A = D * diag(spacing): translation origin - A * 0.5.
+  std::array<double, 12> m{};
+  for (int r = 0; r < 3; ++r)
+  {
+    double translation = g.origin[r];
+    for (int c = 0; c < 3; ++c)
+    {
+      const double a = g.direction[3 * r + c] * g.spacing[c];
+      m[4 * r + c] = a;
+      translation -= 0.5 * a;
+    }
+    m[4 * r + 3] = translation;
+  }
+  return m;
+}
+
+Scene::Scene(Context& context, std::shared_ptr<const Volume> volume)
+  : Ctx(context)
+  , Source(std::move(volume))
+{
+  if (!this->Source)
+    throw std::invalid_argument("Scene needs a volume");
+  const Volume& v = *this->Source;
+  checkAddressable(v.blocks.size(), "block");
+  checkAddressable(v.roots.size(), "root node");
+  checkAddressable(v.mids.size(), "mid node");
+  const auto start = Clock::now();
+  const VkBufferUsageFlags usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
+  auto upload = [&](const auto& words) {
+    return uploadBuffer(this->Ctx, words.data(), words.size() * sizeof(words[0]), usage);
+  };
+  this->Blocks = upload(v.blocks);
+  this->Roots = upload(v.roots);
+  this->Mids = upload(v.mids);
+  // A volume without leaves still gets a (never read) one-leaf buffer: buffers cannot be empty.
+  const std::vector<uint64_t> noLeaf(1, 0);
+  this->Leaves = upload(v.leaves.empty() ? noLeaf : v.leaves);
+  this->UploadSeconds = secondsSince(start);
+  this->build();
+}
+
+Scene::~Scene() = default;
+
+void Scene::setHiddenLabels(const std::vector<uint32_t>& labelIndices)
+{
+  std::vector<uint32_t> hidden;
+  for (uint32_t l : labelIndices)
+  {
+    if (l < this->Source->labels.size())
+      hidden.push_back(l);
+  }
+  std::sort(hidden.begin(), hidden.end());
+  hidden.erase(std::unique(hidden.begin(), hidden.end()), hidden.end());
+  if (hidden == this->Hidden)
+    return;
+  this->Hidden = std::move(hidden);
+  this->build();
+}
+
+uint64_t Scene::blasBytes() const
+{
+  uint64_t total = 0;
+  for (const auto& b : this->Blas)
+    total += b.bytes();
+  return total;
+}
+
+uint64_t Scene::streamBytes() const
+{
+  return this->Blocks.size() + this->Roots.size() + this->Mids.size() + this->Leaves.size();
+}
+
+void Scene::build()
+{
+  const auto start = Clock::now();
+  const Volume& v = *this->Source;
+  std::vector<char> visibleLabel(v.labels.size(), 1);
+  for (uint32_t l : this->Hidden)
+    visibleLabel[l] = 0;
+
+  const auto cells = v.geometry.cellCounts();
+  std::vector<BlockBox> boxes;
+  for (uint64_t i = 0; i < v.blockCount; ++i)
+  {
+    const Block b = v.block(i);
+    if (!visibleLabel[b.label])
+      continue;
+    const int64_t c[3] = { int64_t(b.cell % uint32_t(cells[0])),
+      int64_t(b.cell / uint32_t(cells[0]) % uint32_t(cells[1])),
+      int64_t(b.cell / (uint64_t(cells[0]) * uint64_t(cells[1]))) };
+    BlockBox box;
+    for (int a = 0; a < 3; ++a)
+    {
+      box.lo[a] = int64_t(layout::CELL_SIZE) * c[a] + b.lo[a];
+      box.hi[a] = int64_t(layout::CELL_SIZE) * c[a] + b.hi[a] + 1;
+    }
+    box.block = uint32_t(i);
+    boxes.push_back(box);
+  }
+  medianSplitOrder(boxes);
+
+  // Release the old BVH before building the new one (peak memory).
+  this->Tlas.reset();
+  this->Blas.clear();
+  this->Instances.reset();
+  this->PrimitiveBlocks.reset();
+
+  const uint64_t count = boxes.size();
+  this->VisibleBlocks = count;
+  this->PrimitivesPerBlas = uint32_t(std::min<uint64_t>(this->Ctx.limits().maxPrimitiveCount,
+    uint64_t(std::numeric_limits<uint32_t>::max())));
+  if (this->PrimitivesPerBlas == 0)
+    throw std::runtime_error("the Vulkan device reports maxPrimitiveCount 0");
+
+  std::vector<uint32_t> primitiveBlocks(std::max<uint64_t>(count, 1), 0);
+  std::vector<VkAabbPositionsKHR> aabbs(count);
+  for (uint64_t i = 0; i < count; ++i)
+  {
+    primitiveBlocks[i] = boxes[i].block;
+    aabbs[i] = VkAabbPositionsKHR{ float(boxes[i].lo[0]), float(boxes[i].lo[1]),
+      float(boxes[i].lo[2]), float(boxes[i].hi[0]), float(boxes[i].hi[1]), float(boxes[i].hi[2]) };
+  }
+  boxes = {};
+  this->PrimitiveBlocks = uploadBuffer(this->Ctx, primitiveBlocks.data(),
+    primitiveBlocks.size() * sizeof(uint32_t), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT);
+
+  const auto transform = indexToWorld(v.geometry);
+  std::vector<VkAccelerationStructureInstanceKHR> instances;
+  if (count > 0)
+  {
+    Buffer aabbBuffer = uploadBuffer(this->Ctx, aabbs.data(), aabbs.size() * sizeof(aabbs[0]),
+      VK_BUFFER_USAGE_ACCELERATION_STRUCTURE_BUILD_INPUT_READ_ONLY_BIT_KHR);
+    aabbs = {};
+    for (uint64_t first = 0; first < count; first += this->PrimitivesPerBlas)
+    {
+      const uint32_t n = uint32_t(std::min<uint64_t>(this->PrimitivesPerBlas, count - first));
+      this->Blas.push_back(AccelerationStructure::bottomLevel(
+        this->Ctx, aabbBuffer.address() + first * sizeof(VkAabbPositionsKHR), n));
+      VkAccelerationStructureInstanceKHR instance{};
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 4; ++c)
+          instance.transform.matrix[r][c] = float(transform[4 * r + c]);
+      instance.instanceCustomIndex = uint32_t(this->Blas.size() - 1);
+      instance.mask = 0xFF;
+      instance.instanceShaderBindingTableRecordOffset = 0;
+      instance.flags = VK_GEOMETRY_INSTANCE_FORCE_OPAQUE_BIT_KHR;
+      instance.accelerationStructureReference = this->Blas.back().address();
+      instances.push_back(instance);
+    }
+    // aabbBuffer is freed here: the BVH does not need it after the build.
+  }
+  if (instances.size() > this->Ctx.limits().maxInstanceCount ||
+    instances.size() >= (size_t(1) << 24))
+    throw std::runtime_error("the volume needs more BLAS than one TLAS can hold");
+  // An empty scene still gets a one-entry (unused) instance buffer: buffers cannot be empty.
+  const VkAccelerationStructureInstanceKHR none{};
+  this->Instances = uploadBuffer(this->Ctx, instances.empty() ? &none : instances.data(),
+    std::max<size_t>(instances.size(), 1) * sizeof(VkAccelerationStructureInstanceKHR),
+    VK_BUFFER_USAGE_ACCELERATION_STRUCTURE_BUILD_INPUT_READ_ONLY_BIT_KHR);
+  this->Tlas = AccelerationStructure::topLevel(
+    this->Ctx, this->Instances.address(), uint32_t(instances.size()));
+  this->BuildSeconds = secondsSince(start);
+}
+
+} // namespace render
+} // namespace svdag

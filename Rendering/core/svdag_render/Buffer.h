@@ -1,0 +1,59 @@
+// Vulkan buffers with device addresses and their memory: one dedicated allocation per buffer
+// (the renderer holds a handful of large buffers, so a sub-allocator would buy nothing; VMA is
+// not available in Debian 12). Memory types are chosen by use:
+//   Device   device-local, filled through a staging copy (uploadBuffer) or by the GPU
+//   Readback host-visible, coherent, preferably cached: the GPU writes, the host reads in place
+//   Upload   host-visible, coherent: the host writes in place (uniforms, staging)
+#pragma once
+
+#include "svdag_render/Context.h"
+
+#include <cstddef>
+
+namespace svdag
+{
+namespace render
+{
+
+enum class MemoryUse
+{
+  Device,
+  Readback,
+  Upload
+};
+
+class Buffer
+{
+public:
+  Buffer() = default;
+  // A buffer of `size` bytes (> 0). Transfer and device-address usage are always added.
+  // Throws std::runtime_error when Vulkan refuses.
+  Buffer(Context& context, VkDeviceSize size, VkBufferUsageFlags usage, MemoryUse use);
+  ~Buffer();
+  Buffer(Buffer&& other) noexcept;
+  Buffer& operator=(Buffer&& other) noexcept;
+  Buffer(const Buffer&) = delete;
+  Buffer& operator=(const Buffer&) = delete;
+
+  explicit operator bool() const { return this->Handle != VK_NULL_HANDLE; }
+  VkBuffer handle() const { return this->Handle; }
+  VkDeviceSize size() const { return this->Size; }
+  VkDeviceAddress address() const { return this->Address; }
+  // Host pointer for Readback and Upload buffers, nullptr for Device buffers.
+  void* mapped() const { return this->Mapped; }
+  void reset();
+
+private:
+  VkDevice Device = VK_NULL_HANDLE;
+  VkBuffer Handle = VK_NULL_HANDLE;
+  VkDeviceMemory Memory = VK_NULL_HANDLE;
+  VkDeviceSize Size = 0;
+  VkDeviceAddress Address = 0;
+  void* Mapped = nullptr;
+};
+
+// A device-local buffer holding a copy of `bytes` bytes at `data` (through a staging buffer).
+Buffer uploadBuffer(Context& context, const void* data, size_t bytes, VkBufferUsageFlags usage);
+
+} // namespace render
+} // namespace svdag

@@ -1,0 +1,109 @@
+// The Vulkan instance, the chosen ray-tracing device, its queue and the extension entry points.
+//
+// Device choice: among the physical devices that have everything the renderer needs (Vulkan 1.2,
+// VK_KHR_acceleration_structure, VK_KHR_ray_tracing_pipeline, VK_KHR_buffer_device_address,
+// VK_KHR_deferred_host_operations, their features and a compute queue), a discrete GPU is
+// preferred, then an integrated one, a virtual one, and a CPU implementation (lavapipe) last.
+// Environment:
+//   SVDAG_VK_DEVICE=<substring>  only devices whose name contains it (case-insensitive)
+//   SVDAG_VK_VALIDATION=1        enable VK_LAYER_KHRONOS_validation (messages on stderr)
+// When nothing qualifies the constructor throws std::runtime_error naming every device found and
+// what it lacks ("no Vulkan driver/loader" when the instance cannot be created); it never crashes
+// on a machine without Vulkan (the loader is linked, but an absent driver is an error, not a
+// crash).
+#pragma once
+
+#include <vulkan/vulkan.h>
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace svdag
+{
+namespace render
+{
+
+// Throws std::runtime_error("<what>: <VkResult name>") unless result is VK_SUCCESS.
+void check(VkResult result, const char* what);
+const char* resultName(VkResult result);
+
+// Entry points of device extensions (not exported by the loader).
+struct DeviceFunctions
+{
+  PFN_vkCreateAccelerationStructureKHR createAccelerationStructure = nullptr;
+  PFN_vkDestroyAccelerationStructureKHR destroyAccelerationStructure = nullptr;
+  PFN_vkGetAccelerationStructureBuildSizesKHR getAccelerationStructureBuildSizes = nullptr;
+  PFN_vkGetAccelerationStructureDeviceAddressKHR getAccelerationStructureDeviceAddress = nullptr;
+  PFN_vkCmdBuildAccelerationStructuresKHR cmdBuildAccelerationStructures = nullptr;
+  PFN_vkCmdWriteAccelerationStructuresPropertiesKHR cmdWriteAccelerationStructuresProperties =
+    nullptr;
+  PFN_vkCmdCopyAccelerationStructureKHR cmdCopyAccelerationStructure = nullptr;
+  PFN_vkCreateRayTracingPipelinesKHR createRayTracingPipelines = nullptr;
+  PFN_vkGetRayTracingShaderGroupHandlesKHR getRayTracingShaderGroupHandles = nullptr;
+  PFN_vkCmdTraceRaysKHR cmdTraceRays = nullptr;
+};
+
+// Driver limits the renderer depends on (read from the driver, never assumed).
+struct RayTracingLimits
+{
+  uint32_t shaderGroupHandleSize = 0;
+  uint32_t shaderGroupHandleAlignment = 0;
+  uint32_t shaderGroupBaseAlignment = 0;
+  uint32_t maxRayRecursionDepth = 0;
+  uint64_t maxPrimitiveCount = 0; // per BLAS
+  uint64_t maxInstanceCount = 0;  // per TLAS
+  uint32_t minScratchOffsetAlignment = 0;
+  uint32_t maxRayDispatchInvocationCount = 0;
+};
+
+class Context
+{
+public:
+  // Creates the instance and the device (see the file comment). Throws std::runtime_error.
+  Context();
+  ~Context();
+  Context(const Context&) = delete;
+  Context& operator=(const Context&) = delete;
+
+  VkInstance instance() const { return this->Instance; }
+  VkPhysicalDevice physicalDevice() const { return this->PhysicalDevice; }
+  VkDevice device() const { return this->Device; }
+  VkQueue queue() const { return this->Queue; }
+  uint32_t queueFamily() const { return this->QueueFamily; }
+  const std::string& deviceName() const { return this->DeviceName; }
+  bool isCpuDevice() const { return this->CpuDevice; }
+  const DeviceFunctions& fn() const { return this->Functions; }
+  const RayTracingLimits& limits() const { return this->Limits; }
+
+  // A memory type allowed by typeBits with all `required` flags, preferring one that also has
+  // `preferred`. Throws std::runtime_error when none exists.
+  uint32_t memoryType(uint32_t typeBits, VkMemoryPropertyFlags required,
+    VkMemoryPropertyFlags preferred = 0) const;
+
+  // Records commands into a one-time command buffer, submits it and waits for completion.
+  void submitAndWait(const std::function<void(VkCommandBuffer)>& record);
+
+private:
+  void createInstance();
+  void pickPhysicalDevice();
+  void createDevice();
+  void destroy();
+
+  VkInstance Instance = VK_NULL_HANDLE;
+  VkPhysicalDevice PhysicalDevice = VK_NULL_HANDLE;
+  VkDevice Device = VK_NULL_HANDLE;
+  VkQueue Queue = VK_NULL_HANDLE;
+  uint32_t QueueFamily = 0;
+  VkCommandPool CommandPool = VK_NULL_HANDLE;
+  VkFence Fence = VK_NULL_HANDLE;
+  std::string DeviceName;
+  bool CpuDevice = false;
+  VkPhysicalDeviceMemoryProperties MemoryProperties{};
+  DeviceFunctions Functions;
+  RayTracingLimits Limits;
+};
+
+} // namespace render
+} // namespace svdag

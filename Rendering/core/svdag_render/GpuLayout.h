@@ -1,0 +1,124 @@
+/* The data the renderer's shaders share with the host, defined once for C++ (with GLM) and GLSL.
+ *
+ * Like Module/core/svdag/Layout.h this file is written in the common subset of both languages.
+ * The one uniform block holds only vec4 / uvec4 members, so its std140 layout in GLSL is exactly
+ * the C++ struct's layout (16-byte members, no padding rules to get wrong). Buffers are reached
+ * through buffer device addresses (GL_EXT_buffer_reference): a driver may cap descriptor ranges
+ * (lavapipe: 128 MiB), addresses are not capped. Each address is a uvec2 (low, high word), two per
+ * uvec4, so GLSL needs no 64-bit integers (GL_EXT_buffer_reference_uvec2).
+ *
+ * Primary rays (the pixel-center convention; tests generate the same rays):
+ *   pixel (x, y), 0 <= x < width, 0 <= y < height, y = 0 is the BOTTOM row (VTK image order), its
+ *   outputs at index x + width * y. With the camera's unit forward F (position -> focal point),
+ *   unit right R = normalize(cross(F, viewUp)), orthogonal up U = cross(R, F), h = tan(viewAngle/2)
+ *   (vertical view angle, VTK semantics) and aspect = width / height:
+ *       u = 2 * (x + 0.5) / width - 1,   v = 2 * (y + 0.5) / height - 1
+ *       direction = normalize(F + u * h * aspect * R + v * h * U),  origin = camera position
+ *   The host stores F, h * aspect * R and h * U below (cameraForward, cameraRight, cameraUp).
+ *   The world ray is traced from t = 0; since the direction has unit length, t is the distance in
+ *   world units.
+ *
+ * Outputs, per pixel:
+ *   label   uint32  label index + 1, 0 where the ray hits nothing (background)
+ *   depth   float   distance from the camera along the ray (world units); SVDAG_DEPTH_MISS where
+ *                   label == 0. Never NaN or inf.
+ *   normal  3 float world-space unit normal of the entry face; (0, 0, 0) on a miss and where the
+ *                   camera is inside the hit voxel/box (no entry face)
+ *   hdr     4 float linear RGBA of the simple shading below
+ *   color   RGBA8   sRGB-encoded hdr, R in the lowest byte (bytes R, G, B, A in memory)
+ *
+ * Simple deterministic shading (milestone 1, before the path tracer): a label's base color comes
+ * from a hash of its label index; color = base * (ambient + diffuse * |dot(normal, -direction)|)
+ * (a headlight at the camera), alpha 1; the background color is a constant (alpha included).
+ */
+#ifndef SVDAG_RENDER_GPU_LAYOUT_H
+#define SVDAG_RENDER_GPU_LAYOUT_H
+
+#ifdef __cplusplus
+#include <cstdint>
+#include <glm/glm.hpp>
+namespace svdag
+{
+namespace render
+{
+namespace gpu
+{
+using glm::uvec4;
+using glm::vec3;
+using glm::vec4;
+typedef uint32_t uint;
+#define SVDAG_GPU_CONST constexpr uint
+#define SVDAG_GPU_FN inline
+#define SVDAG_UNIFORMS_BEGIN(Name) struct Name {
+#define SVDAG_UNIFORMS_END(instance) };
+#else
+#define SVDAG_GPU_CONST const uint
+#define SVDAG_GPU_FN
+#define SVDAG_UNIFORMS_BEGIN(Name)                                                                 \
+  layout(std140, set = 0, binding = SVDAG_BINDING_FRAME) uniform Name {
+#define SVDAG_UNIFORMS_END(instance) } instance;
+#endif
+
+/* Descriptor set 0. */
+#define SVDAG_BINDING_TLAS 0
+#define SVDAG_BINDING_FRAME 1
+
+/* Level of detail (frame.image.z). BLOCK, LEAF, VOXEL equal Traversal.h's SVDAG_LOD_*; AUTO picks
+ * one per ray from the projected size of a voxel at the block's entry distance. */
+SVDAG_GPU_CONST SVDAG_RENDER_LOD_BLOCK = 0u;
+SVDAG_GPU_CONST SVDAG_RENDER_LOD_LEAF = 1u;
+SVDAG_GPU_CONST SVDAG_RENDER_LOD_VOXEL = 2u;
+SVDAG_GPU_CONST SVDAG_RENDER_LOD_AUTO = 3u;
+
+/* Depth written where a ray hits nothing (FLT_MAX; finite, so no inf ever reaches an output). */
+#define SVDAG_DEPTH_MISS 3.402823466e38f
+
+SVDAG_UNIFORMS_BEGIN(FrameUniforms)
+  vec4 cameraPosition; // xyz: world position of the camera; w unused
+  vec4 cameraForward;  // xyz: unit forward F; w unused
+  vec4 cameraRight;    // xyz: R * tan(viewAngle / 2) * aspect; w unused
+  vec4 cameraUp;       // xyz: U * tan(viewAngle / 2); w unused
+  vec4 background;     // linear RGBA written where a ray misses
+  vec4 shading;        // x: ambient, y: diffuse (headlight Lambert); z, w unused
+  vec4 autoLod;        // x: world size of one voxel / angle of one pixel (radians): a voxel at
+                       //    distance d covers x / d pixels; y: pixels a leaf (4 voxels) or block
+                       //    (16 voxels) may cover to be drawn at that coarser level; z, w unused
+  uvec4 image;         // x: width, y: height, z: LOD (SVDAG_RENDER_LOD_*), w: unused
+  uvec4 grid;          // x, y: cells along x and y (cell index = cx + nx * (cy + ny * cz));
+                       // z: primitives per BLAS (instance i's primitive p is entry
+                       // i * z + p of the primitive -> block buffer); w: unused
+  uvec4 widths;        // x: cell bits, y: label bits, z: root ref bits, w: mid ref bits
+  uvec4 widths2;       // x: leaf ref bits, y: bits per block record; z, w unused
+  uvec4 volumeStreams; // addresses: xy blocks, zw roots
+  uvec4 volumeStreams2; // addresses: xy mids, zw leaves
+  uvec4 sceneOutputs;  // addresses: xy primitive -> block index (uint32), zw label output
+  uvec4 outputs;       // addresses: xy depth, zw normal (3 floats per pixel)
+  uvec4 outputs2;      // addresses: xy hdr (vec4 per pixel), zw color (RGBA8 per pixel)
+SVDAG_UNIFORMS_END(frame)
+
+/* Base color of a label index: a hash to a well-spread hue-like RGB in [0.15, 0.95]. */
+SVDAG_GPU_FN uint svdagHashLabel(uint x)
+{
+  // A 32-bit integer finalizer (xorshift-multiply): every bit of x affects every output bit.
+  x ^= x >> 16u;
+  x *= 0x7feb352du;
+  x ^= x >> 15u;
+  x *= 0x846ca68bu;
+  x ^= x >> 16u;
+  return x;
+}
+SVDAG_GPU_FN vec3 svdagLabelColor(uint labelIndex)
+{
+  uint h = svdagHashLabel(labelIndex);
+  vec3 c = vec3(float(h & 255u), float((h >> 8u) & 255u), float((h >> 16u) & 255u)) / 255.0f;
+  return vec3(0.15f) + 0.8f * c;
+}
+
+#ifdef __cplusplus
+static_assert(sizeof(FrameUniforms) == 16 * 16, "FrameUniforms must stay a list of 16-byte members");
+} // namespace gpu
+} // namespace render
+} // namespace svdag
+#endif
+
+#endif

@@ -1,0 +1,87 @@
+// The GPU scene of one volume: its streams (blocks, roots, mids, leaves) in device buffers read by
+// the shaders through device addresses, and the ray-tracing BVH over its VISIBLE blocks.
+//
+// Each visible block is one AABB primitive in volume INDEX space, where voxel (i, j, k) occupies
+// [i, i+1)^3 (Traversal.h); the AABB is the block's tight bounds box. Primitives are ordered by a
+// recursive longest-axis median split of the box centers before the build (lavapipe's builder
+// keeps the input order, and this order traces several times faster than a random or Morton order;
+// GPU drivers build their own hierarchy). A primitive -> block index buffer maps the ray-tracing
+// primitive back to the block record. The primitives are cut into BLAS of at most the driver's
+// maxPrimitiveCount (16,777,215 on lavapipe); the TLAS holds one instance per BLAS, all with the
+// volume's index-to-world transform (world = origin + D * diag(spacing) * (p - 0.5)) and the BLAS
+// number as instance custom index. The AABB buffer is freed right after the build.
+#pragma once
+
+#include "svdag_render/AccelerationStructure.h"
+#include "svdag_render/Buffer.h"
+#include "svdag_render/Context.h"
+
+#include <svdag/Volume.h>
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+namespace svdag
+{
+namespace render
+{
+
+// The volume's index-to-world matrix as 3 rows of 4 (VkTransformMatrixKHR's layout).
+std::array<double, 12> indexToWorld(const Geometry& geometry);
+
+class Scene
+{
+public:
+  // Uploads the streams and builds the BVH with every label visible. Throws std::runtime_error
+  // when Vulkan fails or the volume's streams exceed what the shaders address (2^32 bits each).
+  Scene(Context& context, std::shared_ptr<const Volume> volume);
+  ~Scene();
+  Scene(const Scene&) = delete;
+  Scene& operator=(const Scene&) = delete;
+
+  // Rebuilds the BVH without the blocks of these label indices (out-of-range indices are
+  // ignored). Cheap: no stream is uploaded again.
+  void setHiddenLabels(const std::vector<uint32_t>& labelIndices);
+  const std::vector<uint32_t>& hiddenLabels() const { return this->Hidden; }
+
+  const Volume& volume() const { return *this->Source; }
+  VkAccelerationStructureKHR tlas() const { return this->Tlas.handle(); }
+  VkDeviceAddress blocksAddress() const { return this->Blocks.address(); }
+  VkDeviceAddress rootsAddress() const { return this->Roots.address(); }
+  VkDeviceAddress midsAddress() const { return this->Mids.address(); }
+  VkDeviceAddress leavesAddress() const { return this->Leaves.address(); }
+  VkDeviceAddress primitiveBlocksAddress() const { return this->PrimitiveBlocks.address(); }
+  // Primitives per BLAS: instance i's primitive p is entry i * this + p of the primitive -> block
+  // buffer.
+  uint32_t primitivesPerBlas() const { return this->PrimitivesPerBlas; }
+
+  uint64_t visibleBlocks() const { return this->VisibleBlocks; }
+  size_t blasCount() const { return this->Blas.size(); }
+  uint64_t blasBytes() const;
+  uint64_t tlasBytes() const { return this->Tlas.bytes(); }
+  // Bytes of the volume's streams on the device.
+  uint64_t streamBytes() const;
+  double uploadSeconds() const { return this->UploadSeconds; }
+  double buildSeconds() const { return this->BuildSeconds; }
+
+private:
+  void build();
+
+  Context& Ctx;
+  std::shared_ptr<const Volume> Source;
+  std::vector<uint32_t> Hidden;
+  Buffer Blocks, Roots, Mids, Leaves;
+  Buffer PrimitiveBlocks;
+  Buffer Instances;
+  std::vector<AccelerationStructure> Blas;
+  AccelerationStructure Tlas;
+  uint32_t PrimitivesPerBlas = 1;
+  uint64_t VisibleBlocks = 0;
+  double UploadSeconds = 0;
+  double BuildSeconds = 0;
+};
+
+} // namespace render
+} // namespace svdag

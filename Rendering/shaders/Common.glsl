@@ -1,0 +1,48 @@
+// Declarations shared by the renderer's ray tracing shaders: the frame uniforms (GpuLayout.h),
+// buffer-reference types for the volume streams and the outputs, the ray payload and the hit
+// attributes.
+#ifndef SVDAG_RENDER_COMMON_GLSL
+#define SVDAG_RENDER_COMMON_GLSL
+
+#extension GL_EXT_buffer_reference : require
+#extension GL_EXT_buffer_reference_uvec2 : require
+
+#include "svdag_render/GpuLayout.h"
+
+layout(buffer_reference, std430, buffer_reference_align = 4) readonly buffer SvdagWords
+{
+  uint w[];
+};
+layout(buffer_reference, std430, buffer_reference_align = 8) readonly buffer SvdagLeafMasks
+{
+  uvec2 m[]; // (bits 0..31, bits 32..63)
+};
+layout(buffer_reference, std430, buffer_reference_align = 4) writeonly buffer SvdagUintOutput
+{
+  uint v[];
+};
+layout(buffer_reference, std430, buffer_reference_align = 4) writeonly buffer SvdagFloatOutput
+{
+  float v[];
+};
+layout(buffer_reference, std430, buffer_reference_align = 16) writeonly buffer SvdagVec4Output
+{
+  vec4 v[];
+};
+
+// Closest-hit -> raygen. label: label index + 1 (0: miss); t: world distance; normal: world.
+struct SvdagPayload
+{
+  vec3 normal;
+  float t;
+  uint label;
+};
+
+// Intersection -> closest-hit (16 bytes; the limit is 32). normal: object-space entry face.
+struct SvdagHitAttributes
+{
+  vec3 normal;
+  uint label;
+};
+
+#endif

@@ -1,0 +1,192 @@
+// vtksvdag-render: renders a .svdag file with the Vulkan renderer, without VTK, to PNG or EXR,
+// and prints one JSON line with the device and the timings. It exists so the renderer can run on
+// a GPU machine that has no VTK.
+//
+//   vtksvdag-render INPUT.svdag OUTPUT.png|OUTPUT.exr [--width 512] [--height 512]
+//     [--lod block|leaf|voxel|auto] [--azimuth 30] [--elevation 20] [--zoom 1]
+//     [--view-angle 30] [--hide 0,5,7] [--frames 1]
+//
+// The camera frames the whole volume (svdag::render::frameVolume). --hide takes label INDICES
+// (positions in the volume's sorted label table). --frames renders several frames and reports
+// the mean time of all but the first (which includes the driver's shader compilation) when more
+// than one is rendered. Exit status: 0 on success, 1 on bad arguments, 2 on a rendering or file
+// error (message on stderr).
+#include "ImageFiles.h"
+
+#include <svdag/File.h>
+#include <svdag_render/Renderer.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <iostream>
+#include <memory>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace
+{
+struct Options
+{
+  std::string input, output;
+  uint32_t width = 512, height = 512;
+  svdag::render::Lod lod = svdag::render::Lod::Voxel;
+  double azimuth = 30, elevation = 20, zoom = 1, viewAngle = 30;
+  std::vector<uint32_t> hidden;
+  int frames = 1;
+};
+
+struct UsageError : std::invalid_argument
+{
+  using std::invalid_argument::invalid_argument;
+};
+
+double number(const std::string& flag, const std::string& text)
+{
+  size_t used = 0;
+  double v = 0;
+  try
+  {
+    v = std::stod(text, &used);
+  }
+  catch (const std::exception&)
+  {
+    used = 0;
+  }
+  if (used != text.size() || text.empty())
+    throw UsageError(flag + " needs a number, got '" + text + "'");
+  return v;
+}
+
+uint32_t count(const std::string& flag, const std::string& text, double lo, double hi)
+{
+  const double v = number(flag, text);
+  if (v != double(uint64_t(v)) || v < lo || v > hi)
+    throw UsageError(flag + " needs an integer in [" + std::to_string(uint64_t(lo)) + ", " +
+      std::to_string(uint64_t(hi)) + "], got '" + text + "'");
+  return uint32_t(v);
+}
+
+Options parse(int argc, char** argv)
+{
+  Options o;
+  std::vector<std::string> positional;
+  for (int i = 1; i < argc; ++i)
+  {
+    const std::string arg = argv[i];
+    if (arg.rfind("--", 0) != 0)
+    {
+      positional.push_back(arg);
+      continue;
+    }
+    if (i + 1 >= argc)
+      throw UsageError(arg + " needs a value");
+    const std::string value = argv[++i];
+    if (arg == "--width")
+      o.width = count(arg, value, 1, 16384);
+    else if (arg == "--height")
+      o.height = count(arg, value, 1, 16384);
+    else if (arg == "--lod")
+      o.lod = svdag::render::parseLod(value);
+    else if (arg == "--azimuth")
+      o.azimuth = number(arg, value);
+    else if (arg == "--elevation")
+      o.elevation = number(arg, value);
+    else if (arg == "--zoom")
+      o.zoom = number(arg, value);
+    else if (arg == "--view-angle")
+      o.viewAngle = number(arg, value);
+    else if (arg == "--frames")
+      o.frames = int(count(arg, value, 1, 1000));
+    else if (arg == "--hide")
+    {
+      std::stringstream list(value);
+      std::string item;
+      while (std::getline(list, item, ','))
+        o.hidden.push_back(count(arg, item, 0, 4294967295.0));
+    }
+    else
+      throw UsageError("unknown option " + arg);
+  }
+  if (positional.size() != 2)
+    throw UsageError("expected INPUT.svdag and OUTPUT.png|OUTPUT.exr");
+  o.input = positional[0];
+  o.output = positional[1];
+  return o;
+}
+
+bool endsWith(const std::string& s, const std::string& suffix)
+{
+  return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
+std::string jsonString(const std::string& s)
+{
+  std::string out = "\"";
+  for (char c : s)
+  {
+    if (c == '"' || c == '\\')
+      out += '\\';
+    if (static_cast<unsigned char>(c) < 0x20)
+      continue;
+    out += c;
+  }
+  return out + "\"";
+}
+} // namespace
+
+int main(int argc, char** argv)
+{
+  Options o;
+  try
+  {
+    o = parse(argc, argv);
+    if (!endsWith(o.output, ".png") && !endsWith(o.output, ".exr"))
+      throw UsageError("the output file must end in .png or .exr");
+  }
+  catch (const std::invalid_argument& e)
+  {
+    std::cerr << "vtksvdag-render: " << e.what() << "\nusage: vtksvdag-render INPUT.svdag "
+              << "OUTPUT.png|OUTPUT.exr [--width N] [--height N] [--lod block|leaf|voxel|auto] "
+              << "[--azimuth DEG] [--elevation DEG] [--zoom F] [--view-angle DEG] "
+              << "[--hide I,J,...] [--frames N]\n";
+    return 1;
+  }
+  try
+  {
+    auto volume = std::make_shared<const svdag::Volume>(svdag::readFile(o.input));
+    svdag::render::Renderer renderer;
+    renderer.setVolume(volume);
+    if (!o.hidden.empty())
+      renderer.setHiddenLabels(o.hidden);
+    renderer.setImageSize(o.width, o.height);
+    renderer.setLod(o.lod);
+    renderer.setCamera(
+      svdag::render::frameVolume(volume->geometry, o.azimuth, o.elevation, o.zoom, o.viewAngle));
+    double total = 0;
+    for (int f = 0; f < o.frames; ++f)
+    {
+      renderer.render();
+      if (f > 0 || o.frames == 1)
+        total += renderer.lastFrameMilliseconds();
+    }
+    const double msPerFrame = total / (o.frames > 1 ? o.frames - 1 : 1);
+    if (endsWith(o.output, ".png"))
+      svdag::render::writePng(renderer.image(), o.output);
+    else
+      svdag::render::writeExr(renderer.image(), o.output);
+    std::printf("{\"device\": %s, \"width\": %u, \"height\": %u, \"lod\": \"%s\", "
+                "\"setup_seconds\": %.6f, \"ms_per_frame\": %.3f, \"bytes_blas\": %llu, "
+                "\"bytes_tlas\": %llu, \"visible_blocks\": %llu}\n",
+      jsonString(renderer.deviceName()).c_str(), o.width, o.height, svdag::render::lodName(o.lod),
+      renderer.setupSeconds(), msPerFrame, (unsigned long long)renderer.blasBytes(),
+      (unsigned long long)renderer.tlasBytes(), (unsigned long long)renderer.visibleBlocks());
+    return 0;
+  }
+  catch (const std::exception& e)
+  {
+    std::cerr << "vtksvdag-render: " << e.what() << "\n";
+    return 2;
+  }
+}
