@@ -187,6 +187,14 @@ class SegmentationVolume:
         -------
         vtkImageData
             The decoded image, with the original spacing, origin and direction.
+
+        Examples
+        --------
+        >>> import numpy as np, vtksvdag
+        >>> volume = vtksvdag.from_numpy(np.ones((3, 4, 5), dtype=np.int32), spacing=(1, 1, 2))
+        >>> image = volume.to_image()
+        >>> image.GetDimensions(), image.GetSpacing(), image.GetPointData().GetScalars().GetName()
+        ((3, 4, 5), (1.0, 1.0, 2.0), 'Labels')
         """
         decoder = vtkSegmentationSVDAGToImageData()
         decoder.SetInputDataObject(0, self._obj)

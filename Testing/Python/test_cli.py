@@ -213,12 +213,14 @@ def test_progress_bar_only_on_a_terminal(small_nrrd):
                 [sys.executable, "-m", "vtksvdag", *map(str, args)],
                 stdout=subprocess.PIPE, stderr=follower, timeout=120, check=False,
             )
+        finally:
             os.close(follower)
-            chunks = []
+        chunks = []
+        try:
             while True:
                 try:
                     chunk = os.read(leader, 4096)
-                except OSError:  # EIO: the terminal's other end is closed and drained
+                except OSError:  # EIO: the other end is closed and everything was read
                     break
                 if not chunk:
                     break
