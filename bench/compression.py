@@ -39,6 +39,11 @@ from vtkmodules.vtkCommonDataModel import vtkImageData
 from vtksvdag import synthetic
 from vtksvdag.vtkSVDAGCore import vtkImageDataToSegmentationSVDAG, vtkSegmentationSVDAGToImageData
 
+try:
+    from vtksvdag.vtkSVDAGIO import vtkSegmentationVolumeReader
+except ImportError:  # an older build without the IO module
+    vtkSegmentationVolumeReader = None
+
 REPO = pathlib.Path(__file__).resolve().parents[1]
 SHARED = REPO.parent / "shared"
 DATA = SHARED / "data"
@@ -79,8 +84,8 @@ COLUMNS = [
     "blocks", "root_nodes", "mid_nodes", "leaf_nodes",
     "bytes_blocks", "bytes_dag", "bytes_labels", "bytes_total",
     "pct_raw32", "min_width_bytes", "pct_raw_min", "bits_per_voxel",
-    "build_s", "build_runs", "voxels_per_s", "roundtrip",
-    "mem_path", "peak_rss_mb", "baseline_rss_mb", "peak_extra_mb", "model_mb",
+    "build_s", "build_runs", "voxels_per_s", "file_s", "file_via", "roundtrip",
+    "peak_rss_mb", "baseline_rss_mb", "peak_extra_mb", "model_mb",
     "cseg_dtype", "cseg_bytes", "cseg_s", "ours_over_cseg",
     "stream_dtype", "zstd19_bytes", "zstd19_s", "gzip9_bytes", "gzip9_s", "ours_over_zstd19",
 ]
@@ -161,11 +166,9 @@ def check_round_trip(name: str, labels: np.ndarray, svdag) -> None:
 
 def reader_class():
     """vtkSegmentationVolumeReader once it is a real reader (it was a placeholder at first)."""
-    try:
-        from vtksvdag.vtkSVDAGIO import vtkSegmentationVolumeReader
-    except ImportError:
+    if vtkSegmentationVolumeReader is None or not hasattr(vtkSegmentationVolumeReader, "SetFileName"):
         return None
-    return vtkSegmentationVolumeReader if hasattr(vtkSegmentationVolumeReader, "SetFileName") else None
+    return vtkSegmentationVolumeReader
 
 
 def compress_file(path: str):
@@ -286,6 +289,8 @@ def min_width_bytes(distinct_values: int) -> int:
 
 
 def measure_volume(name, source, labels, file_path, repeats, baseline_kb) -> dict:
+    """Measures one volume held both in memory (`labels`) and in a file (`file_path`).
+    baseline_kb None skips the peak memory subprocess."""
     labels = np.ascontiguousarray(labels)
     image = to_image(labels)
     voxels = labels.size
@@ -296,12 +301,24 @@ def measure_volume(name, source, labels, file_path, repeats, baseline_kb) -> dic
         times.append(seconds)
     build_s = statistics.median(times)
     check_round_trip(name, labels, svdag)
+    total = svdag.GetCompressedSize()
+
+    # The same volume from its file, as a user compresses it: timed, round trip checked too.
+    file_times = []
+    for _ in range(runs):
+        start = time.perf_counter()
+        from_file, how = compress_file(str(file_path))
+        file_times.append(time.perf_counter() - start)
+    check_round_trip(f"{name} ({how})", labels, from_file)
+    if from_file.GetCompressedSize() != total:
+        raise BenchError(f"{name}: compressing the file ({how}) gave {from_file.GetCompressedSize()} "
+                         f"bytes, the in-memory array {total}")
+    del from_file
 
     n_labels = svdag.GetNumberOfLabels()
     labelled = sum(svdag.GetLabelVoxelCount(i) for i in range(n_labels))
     distinct = n_labels + (1 if labelled < voxels else 0)  # the background, when present
     width = min_width_bytes(distinct)
-    total = svdag.GetCompressedSize()
     row = {
         "volume": name, "source": source,
         "dims_xyz": "x".join(str(d) for d in labels.shape[::-1]), "dtype": str(labels.dtype),
@@ -313,16 +330,16 @@ def measure_volume(name, source, labels, file_path, repeats, baseline_kb) -> dic
         "pct_raw32": 100.0 * total / (4 * voxels), "min_width_bytes": width,
         "pct_raw_min": 100.0 * total / (width * voxels), "bits_per_voxel": 8.0 * total / voxels,
         "build_s": build_s, "build_runs": runs, "voxels_per_s": voxels / build_s,
-        "roundtrip": "ok",
+        "file_s": statistics.median(file_times), "file_via": how, "roundtrip": "ok",
     }
-    if file_path is not None:
+    if baseline_kb is not None:
         probe = measure_peak_rss(str(file_path))
         if probe["bytes_total"] != total:
-            raise BenchError(f"{name}: compressing the file gave {probe['bytes_total']} bytes, "
+            raise BenchError(f"{name}: the memory subprocess got {probe['bytes_total']} bytes, "
                              f"the in-memory array {total}")
         slab = labels.shape[2] * labels.shape[1] * min(SLAB_DEPTH, labels.shape[0]) * labels.itemsize
         row.update({
-            "mem_path": probe["how"], "peak_rss_mb": probe["maxrss_kb"] * 1024 / MB,
+            "peak_rss_mb": probe["maxrss_kb"] * 1024 / MB,
             "baseline_rss_mb": baseline_kb * 1024 / MB,
             "peak_extra_mb": (probe["maxrss_kb"] - baseline_kb) * 1024 / MB,
             "model_mb": (slab + 1.5 * total) / MB,
@@ -403,13 +420,14 @@ def print_report(rows, anchors):
           r["stream_dtype"], r["ours_over_cseg"], r["ours_over_zstd19"]] for r in rows],
     )
     print_table(
-        "Time and memory (measured; build = compress an in-memory array, median of build_runs; "
-        "peak = a subprocess reading + compressing the file; model = one slab + 1.5 x output)",
-        ["volume", "build s", "runs", "Mvox/s", "cseg s", "zstd19 s", "gzip9 s",
-         "peak MB", "baseline MB", "peak-base MB", "model MB", "via"],
-        [[r["volume"], r["build_s"], r["build_runs"], r["voxels_per_s"] / 1e6, r["cseg_s"],
-          r["zstd19_s"], r["gzip9_s"], r.get("peak_rss_mb"), r.get("baseline_rss_mb"),
-          r.get("peak_extra_mb"), r.get("model_mb"), r.get("mem_path")] for r in rows],
+        "Time and memory (measured; build = compress an in-memory array, file = read + compress "
+        "the gzip NRRD file, medians of `runs`; peak = a subprocess reading + compressing the "
+        "file; model = one slab + 1.5 x output)",
+        ["volume", "build s", "runs", "Mvox/s", "file s", "cseg s", "zstd19 s", "gzip9 s",
+         "peak MB", "baseline MB", "peak-base MB", "model MB", "file via"],
+        [[r["volume"], r["build_s"], r["build_runs"], r["voxels_per_s"] / 1e6, r["file_s"],
+          r["cseg_s"], r["zstd19_s"], r["gzip9_s"], r.get("peak_rss_mb"), r.get("baseline_rss_mb"),
+          r.get("peak_extra_mb"), r.get("model_mb"), r["file_via"]] for r in rows],
     )
     if not anchors:
         print(f"\n(no reported anchors: no table with a 'paper SVDAG MB' column in {ANCHORS})")
@@ -424,6 +442,7 @@ def print_report(rows, anchors):
         table.append([
             r["volume"], paper_mb, paper_s, csgv_mb, anchor_value(a, "CSGV GPU MB"), cseg_mb,
             ours, ours / paper_mb if paper_mb else None, r["build_s"] / paper_s if paper_s else None,
+            r["file_s"] / paper_s if paper_s else None,
             ours / csgv_mb if csgv_mb else None,
             (r["cseg_bytes"] / MB) / cseg_mb if cseg_mb else None,
         ])
@@ -431,7 +450,7 @@ def print_report(rows, anchors):
         f"REPORTED, NOT MEASURED HERE (from {ANCHORS.relative_to(REPO.parent)}; other runs, other "
         "days) beside our measured bytes and build time",
         ["volume", "paper MB", "paper build s", "CSGV file MB", "CSGV GPU MB", "cseg MB (rep.)",
-         "ours MB", "ours/paper", "build/paper", "ours/CSGV file", "cseg here/rep."],
+         "ours MB", "ours/paper", "build/paper", "file/paper", "ours/CSGV file", "cseg here/rep."],
         table,
     )
 
@@ -469,31 +488,26 @@ def run(args) -> int:
     generated = QUICK_GENERATED_VOLUMES if args.quick else GENERATED_VOLUMES
     print(f"machine: {machine_description()}")
     print(f"mode: {'quick' if args.quick else 'full'}; data: {DATA}")
-    reader = reader_class()
-    print("file path for peak memory: "
-          + ("vtkSegmentationVolumeReader" if reader else
-             "pynrrd + vtkImageDataToSegmentationSVDAG (vtkSegmentationVolumeReader not available yet)"))
+    print("from a file: " + ("vtkSegmentationVolumeReader" if reader_class() else
+          "pynrrd + vtkImageDataToSegmentationSVDAG (vtkSegmentationVolumeReader not available)"))
 
-    baseline_kb = 0 if args.no_memory else measure_peak_rss("-")["maxrss_kb"]
+    baseline_kb = None if args.no_memory else measure_peak_rss("-")["maxrss_kb"]
     rows = []
     with tempfile.TemporaryDirectory(prefix="svdag-bench-") as tmp:
-        for name in real:
-            path = DATA / f"{name}.nrrd"
-            if not path.is_file():
-                raise BenchError(f"missing volume {path}")
-            labels, _ = nrrd.read(str(path), index_order="C")
-            rows.append(measure_volume(name, "file", labels, None if args.no_memory else path,
-                                       args.repeats, baseline_kb))
-            print(f"  {name}: {rows[-1]['bytes_total'] / MB:.3f} MB, round trip ok", flush=True)
-        for name, make in generated.items():
-            labels = make()
-            path = None
-            if not args.no_memory:
-                # Written to a file so that its peak memory is measured the same way.
-                path = pathlib.Path(tmp) / f"{name}.nrrd"
+        volumes = [(name, "file", DATA / f"{name}.nrrd", None) for name in real]
+        volumes += [(name, "generated", pathlib.Path(tmp) / f"{name}.nrrd", make)
+                    for name, make in generated.items()]
+        for name, source, path, make in volumes:
+            if make is None:
+                if not path.is_file():
+                    raise BenchError(f"missing volume {path}")
+                labels, _ = nrrd.read(str(path), index_order="C")
+            else:
+                labels = make()
+                # Written to a file so that it is read and measured like the real volumes.
                 nrrd.write(str(path), labels, index_order="C", compression_level=1)
-            rows.append(measure_volume(name, "generated", labels, path, args.repeats, baseline_kb))
-            print(f"  {name}: {rows[-1]['bytes_total'] / MB:.3f} MB, round trip ok", flush=True)
+            rows.append(measure_volume(name, source, labels, path, args.repeats, baseline_kb))
+            print(f"  {name}: {rows[-1]['bytes_total'] / MB:.3f} MB, round trips ok", flush=True)
 
     print_report(rows, read_anchors(ANCHORS))
     csv_path, png_path = out / "compression.csv", out / "compression.png"

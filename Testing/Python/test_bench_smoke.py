@@ -25,8 +25,8 @@ EXPECTED_COLUMNS = [
     "blocks", "root_nodes", "mid_nodes", "leaf_nodes",
     "bytes_blocks", "bytes_dag", "bytes_labels", "bytes_total",
     "pct_raw32", "min_width_bytes", "pct_raw_min", "bits_per_voxel",
-    "build_s", "build_runs", "voxels_per_s", "roundtrip",
-    "mem_path", "peak_rss_mb", "baseline_rss_mb", "peak_extra_mb", "model_mb",
+    "build_s", "build_runs", "voxels_per_s", "file_s", "file_via", "roundtrip",
+    "peak_rss_mb", "baseline_rss_mb", "peak_extra_mb", "model_mb",
     "cseg_dtype", "cseg_bytes", "cseg_s", "ours_over_cseg",
     "stream_dtype", "zstd19_bytes", "zstd19_s", "gzip9_bytes", "gzip9_s", "ours_over_zstd19",
 ]
@@ -77,6 +77,7 @@ def test_csv_values_are_consistent(quick_run):
         assert r["cseg_dtype"] in ("uint32", "uint64")
         assert int(r["zstd19_bytes"]) > 0 and int(r["gzip9_bytes"]) > 0
         assert float(r["peak_rss_mb"]) >= float(r["baseline_rss_mb"]) > 0
+        assert r["file_via"] in ("reader", "pynrrd+filter")
     by_name = {r["volume"]: r for r in rows}
     # Known facts about the inputs (shared/data/README.md and the generators' definitions).
     assert by_name["fib25_64"]["labels"] == "52" and by_name["fib25_64"]["dtype"] == "uint64"
@@ -93,7 +94,7 @@ def test_report_and_plot(quick_run):
     assert "machine:" in stdout
     assert "REPORTED, NOT MEASURED HERE" in stdout
     for name in EXPECTED_ROWS:
-        assert f"{name}: " in stdout and "round trip ok" in stdout
+        assert f"{name}: " in stdout and "round trips ok" in stdout
 
 
 def load_bench_module():
