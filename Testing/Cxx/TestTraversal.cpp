@@ -12,6 +12,7 @@
 // reached at that t.
 #include "svdag/Builder.h"
 #include "svdag/RayCaster.h"
+#include "svdag/Traversal.h"
 
 #include <gtest/gtest.h>
 
@@ -553,4 +554,34 @@ TEST(Traversal, CastManyMatchesCastOnThreads)
   std::vector<svdag::Ray> bad = testRays;
   bad[500].direction = { 0, 0, 0 };
   EXPECT_THROW(caster.castMany(bad, Lod::Voxel, hits, threaded), std::invalid_argument);
+}
+
+TEST(Traversal, BlockFunctionDirectly)
+{
+  // The shared C++/GLSL function on one full block, without the caster around it.
+  const LabelVolume v = makeVolume("full cell", { 16, 16, 16 }, [](int, int, int) { return 1u; });
+  const svdag::Volume volume = compress(v);
+  ASSERT_EQ(volume.blockCount, 1u);
+  const svdag::Block b = volume.block(0);
+  const svdag::traversal::Streams streams{ volume.roots.data(), volume.mids.data(),
+    volume.leaves.data() };
+  auto cast = [&](glm::vec3 origin, glm::vec3 dir, float tmin, float tmax) {
+    return svdag::traversal::svdagIntersectBlock(streams, glm::uvec3(b.lo[0], b.lo[1], b.lo[2]),
+      glm::uvec3(b.hi[0], b.hi[1], b.hi[2]), b.root, volume.widths.midRefBits,
+      volume.widths.leafRefBits, origin, dir, tmin, tmax, svdag::traversal::SVDAG_LOD_VOXEL);
+  };
+  svdag::traversal::SvdagBlockHit h = cast({ 8.5f, 20.f, 3.5f }, { 0.f, -1.f, 0.f }, 0.f, 100.f);
+  ASSERT_TRUE(h.hit);
+  EXPECT_FLOAT_EQ(h.t, 4.f);
+  EXPECT_EQ(h.normal, glm::ivec3(0, 1, 0));
+  EXPECT_EQ(h.voxel, glm::ivec3(8, 15, 3));
+  // Empty or NaN intervals and a zero direction never hit.
+  EXPECT_FALSE(cast({ 8.5f, 8.5f, 8.5f }, { 1.f, 0.f, 0.f }, 2.f, 1.f).hit);
+  EXPECT_FALSE(cast({ 8.5f, 8.5f, 8.5f }, { 1.f, 0.f, 0.f }, std::nanf(""), 1.f).hit);
+  EXPECT_FALSE(cast({ 8.5f, 8.5f, 8.5f }, { 0.f, 0.f, 0.f }, 0.f, 1.f).hit);
+  // Denormal components count as zero: no inf or NaN, the ray runs along the axis.
+  h = cast({ -3.f, 8.5f, 8.5f }, { 1.f, 1e-40f, -1e-41f }, 0.f, 100.f);
+  ASSERT_TRUE(h.hit);
+  EXPECT_FLOAT_EQ(h.t, 3.f);
+  EXPECT_EQ(h.voxel, glm::ivec3(0, 8, 8));
 }

@@ -49,7 +49,8 @@ struct RayHit
 class RayCaster
 {
 public:
-  // Keeps a reference to the volume, which must outlive the caster.
+  // Keeps a reference to the volume, which must outlive the caster and be valid (built by the
+  // Builder or loaded and checked with Volume::validate: the traversal trusts its references).
   explicit RayCaster(const Volume& volume);
 
   // The first hit along the ray within [tmin, tmax] (an empty interval is a miss). Throws

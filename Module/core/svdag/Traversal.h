@@ -207,6 +207,8 @@ SVDAG_FN SvdagBlockHit svdagIntersectBlock(SVDAG_STREAMS_PARAM uvec3 lo, uvec3 h
   result.normal = ivec3(0);
   result.voxel = ivec3(0);
 
+  if (!(tmin <= tmax)) // an empty interval (or NaN) is a miss
+    return result;
   SvdagRay ray = svdagMakeRay(origin, dir);
   ivec3 boxLo = ivec3(lo);
   ivec3 boxHi = ivec3(hi);
