@@ -179,3 +179,7 @@ def test_misses_and_errors(segmentation):
     assert caster.CastRay(far, (0, 0, -1)) == 0
     assert len(errors) == 3
     assert caster.GetHitLabelIndex() == -1 and caster.GetHitBlockIndex() == -1
+    caster.SetLODToLeaf()
+    caster.SetMaximumDistance(12.5)
+    text = str(caster)
+    assert "LOD: leaf" in text and "MaximumDistance: 12.5" in text and "Hit: 0" in text
