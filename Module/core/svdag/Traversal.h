@@ -23,7 +23,8 @@
  *   - The ray is origin + t * dir for t in [tmin, tmax]; t is in units of |dir| (pass a unit
  *     vector to get distances). Components with |dir| < SVDAG_PARALLEL_EPS count as zero: along
  *     such an axis the ray is inside a slab [a, b) iff a <= origin < b (half-open, like voxels).
- *     A direction with all components below that is no ray and never hits.
+ *     A direction with all components below that is no ray and never hits; nor does an empty
+ *     (or NaN) interval [tmin, tmax].
  *   - Boxes are otherwise closed: a ray that only touches a box at a face, edge or corner may or
  *     may not hit it (a zero-length contact); everything with a positive length inside is found.
  *   - Result: hit flag; t = where the ray enters the hit box (block box, leaf box or voxel),
