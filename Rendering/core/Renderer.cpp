@@ -166,8 +166,8 @@ void Renderer::setHiddenLabels(const std::vector<uint32_t>& labelIndices)
   if (!this->Device->scene)
     throw std::runtime_error("setHiddenLabels needs a volume first (setVolume)");
   const auto start = Clock::now();
-  this->Device->scene->setHiddenLabels(labelIndices);
-  this->SetupSeconds = std::chrono::duration<double>(Clock::now() - start).count();
+  if (this->Device->scene->setHiddenLabels(labelIndices))
+    this->SetupSeconds = std::chrono::duration<double>(Clock::now() - start).count();
 }
 
 void Renderer::setImageSize(uint32_t width, uint32_t height)

@@ -125,7 +125,7 @@ Scene::Scene(Context& context, std::shared_ptr<const Volume> volume)
 
 Scene::~Scene() = default;
 
-void Scene::setHiddenLabels(const std::vector<uint32_t>& labelIndices)
+bool Scene::setHiddenLabels(const std::vector<uint32_t>& labelIndices)
 {
   std::vector<uint32_t> hidden;
   for (uint32_t l : labelIndices)
@@ -136,9 +136,10 @@ void Scene::setHiddenLabels(const std::vector<uint32_t>& labelIndices)
   std::sort(hidden.begin(), hidden.end());
   hidden.erase(std::unique(hidden.begin(), hidden.end()), hidden.end());
   if (hidden == this->Hidden)
-    return;
+    return false;
   this->Hidden = std::move(hidden);
   this->build();
+  return true;
 }
 
 uint64_t Scene::blasBytes() const

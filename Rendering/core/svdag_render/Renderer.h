@@ -65,7 +65,8 @@ public:
 
   // Uploads a volume and builds its BVH (keeps the hidden labels). Throws std::runtime_error.
   void setVolume(std::shared_ptr<const Volume> volume);
-  // Label indices left out of the BVH; rebuilds it when the set changes.
+  // Label indices left out of the BVH; rebuilds it when the set changes (setupSeconds then
+  // measures the rebuild).
   void setHiddenLabels(const std::vector<uint32_t>& labelIndices);
   void setCamera(const Camera& camera) { this->View = camera; }
   const Camera& camera() const { return this->View; }
@@ -75,6 +76,7 @@ public:
   Lod lod() const { return this->Detail; }
   // Lod::Auto draws a leaf (block) where a leaf (block) covers at most this many pixels (> 0).
   void setAutoLodPixels(float pixels);
+  float autoLodPixels() const { return this->AutoLodPixels; }
   void setBackground(const std::array<float, 4>& linearRGBA) { this->Background = linearRGBA; }
 
   // Traces one frame and reads the outputs back. Throws std::runtime_error (no volume, Vulkan
@@ -82,7 +84,8 @@ public:
   const Image& render();
   const Image& image() const { return this->Output; }
 
-  // Upload + BVH build of the last setVolume / setHiddenLabels, seconds.
+  // Upload + BVH build of the last setVolume, or BVH rebuild of the last setHiddenLabels that
+  // changed the set, seconds.
   double setupSeconds() const { return this->SetupSeconds; }
   // Wall time of the last frame (record, trace, wait), milliseconds.
   double lastFrameMilliseconds() const { return this->FrameMilliseconds; }

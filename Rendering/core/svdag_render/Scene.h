@@ -42,8 +42,8 @@ public:
   Scene& operator=(const Scene&) = delete;
 
   // Rebuilds the BVH without the blocks of these label indices (out-of-range indices are
-  // ignored). Cheap: no stream is uploaded again.
-  void setHiddenLabels(const std::vector<uint32_t>& labelIndices);
+  // ignored) if the set changed; returns whether it rebuilt. Cheap: no stream is uploaded again.
+  bool setHiddenLabels(const std::vector<uint32_t>& labelIndices);
   const std::vector<uint32_t>& hiddenLabels() const { return this->Hidden; }
 
   const Volume& volume() const { return *this->Source; }

@@ -1,0 +1,294 @@
+#include "vtkSegmentationSVDAGRenderer.h"
+
+#include "vtkFloatArray.h"
+#include "vtkImageData.h"
+#include "vtkIntArray.h"
+#include "vtkNew.h"
+#include "vtkObjectFactory.h"
+#include "vtkPointData.h"
+#include "vtkSegmentationSVDAG.h"
+#include "vtkSmartPointer.h"
+#include "vtkUnsignedCharArray.h"
+
+#include <svdag_render/Renderer.h>
+
+#include <cstring>
+#include <exception>
+#include <set>
+#include <string>
+#include <vector>
+
+struct vtkSegmentationSVDAGRenderer::Internals
+{
+  vtkSmartPointer<vtkSegmentationSVDAG> Input;
+  std::unique_ptr<svdag::render::Renderer> Renderer;
+  // The volume the renderer holds (uploaded), to re-upload only when the input's volume changes.
+  std::shared_ptr<const svdag::Volume> Uploaded;
+  std::set<vtkIdType> Hidden;
+  vtkNew<vtkImageData> Output;
+  bool CameraSet = false;
+};
+
+vtkStandardNewMacro(vtkSegmentationSVDAGRenderer);
+
+vtkSegmentationSVDAGRenderer::vtkSegmentationSVDAGRenderer()
+  : Internal(new Internals)
+{
+}
+
+vtkSegmentationSVDAGRenderer::~vtkSegmentationSVDAGRenderer() = default;
+
+void vtkSegmentationSVDAGRenderer::SetInputData(vtkSegmentationSVDAG* volume)
+{
+  if (this->Internal->Input != volume)
+  {
+    this->Internal->Input = volume;
+    this->Modified();
+  }
+}
+
+vtkSegmentationSVDAG* vtkSegmentationSVDAGRenderer::GetInput()
+{
+  return this->Internal->Input;
+}
+
+void vtkSegmentationSVDAGRenderer::SetCameraPosition(double x, double y, double z)
+{
+  this->CameraPosition[0] = x;
+  this->CameraPosition[1] = y;
+  this->CameraPosition[2] = z;
+  this->Internal->CameraSet = true;
+  this->Modified();
+}
+
+void vtkSegmentationSVDAGRenderer::SetCameraFocalPoint(double x, double y, double z)
+{
+  this->CameraFocalPoint[0] = x;
+  this->CameraFocalPoint[1] = y;
+  this->CameraFocalPoint[2] = z;
+  this->Internal->CameraSet = true;
+  this->Modified();
+}
+
+void vtkSegmentationSVDAGRenderer::SetCameraViewUp(double x, double y, double z)
+{
+  this->CameraViewUp[0] = x;
+  this->CameraViewUp[1] = y;
+  this->CameraViewUp[2] = z;
+  this->Internal->CameraSet = true;
+  this->Modified();
+}
+
+void vtkSegmentationSVDAGRenderer::SetCameraViewAngle(double degrees)
+{
+  // Open interval (0, 180): clamp like vtkCamera::SetViewAngle does to [0.00000001, 179].
+  degrees = degrees < 1e-8 ? 1e-8 : (degrees > 179 ? 179 : degrees);
+  if (this->CameraViewAngle != degrees)
+  {
+    this->CameraViewAngle = degrees;
+    this->Modified();
+  }
+}
+
+int vtkSegmentationSVDAGRenderer::ResetCamera(double azimuth, double elevation, double zoom)
+{
+  vtkSegmentationSVDAG* input = this->Internal->Input;
+  if (!input || !input->HasVolume())
+  {
+    vtkErrorMacro("ResetCamera needs an input volume (SetInputData)");
+    return 0;
+  }
+  try
+  {
+    const svdag::render::Camera c = svdag::render::frameVolume(
+      input->GetVolume()->geometry, azimuth, elevation, zoom, this->CameraViewAngle);
+    for (int a = 0; a < 3; ++a)
+    {
+      this->CameraPosition[a] = c.position[a];
+      this->CameraFocalPoint[a] = c.focalPoint[a];
+      this->CameraViewUp[a] = c.viewUp[a];
+    }
+  }
+  catch (const std::exception& e)
+  {
+    vtkErrorMacro("ResetCamera: " << e.what());
+    return 0;
+  }
+  this->Internal->CameraSet = true;
+  this->Modified();
+  return 1;
+}
+
+void vtkSegmentationSVDAGRenderer::HideLabel(vtkIdType index)
+{
+  if (this->Internal->Hidden.insert(index).second)
+    this->Modified();
+}
+
+void vtkSegmentationSVDAGRenderer::ShowLabel(vtkIdType index)
+{
+  if (this->Internal->Hidden.erase(index))
+    this->Modified();
+}
+
+void vtkSegmentationSVDAGRenderer::ShowAllLabels()
+{
+  if (!this->Internal->Hidden.empty())
+  {
+    this->Internal->Hidden.clear();
+    this->Modified();
+  }
+}
+
+bool vtkSegmentationSVDAGRenderer::IsLabelHidden(vtkIdType index) const
+{
+  return this->Internal->Hidden.count(index) != 0;
+}
+
+int vtkSegmentationSVDAGRenderer::Render()
+{
+  Internals& in = *this->Internal;
+  if (!in.Input || !in.Input->HasVolume())
+  {
+    vtkErrorMacro("Render needs an input volume (SetInputData)");
+    return 0;
+  }
+  if (!in.CameraSet && !this->ResetCamera())
+    return 0;
+  try
+  {
+    if (!in.Renderer)
+    {
+      in.Renderer = std::make_unique<svdag::render::Renderer>();
+      in.Uploaded.reset();
+    }
+    svdag::render::Renderer& r = *in.Renderer;
+    if (in.Uploaded != in.Input->GetVolume())
+    {
+      r.setVolume(in.Input->GetVolume());
+      in.Uploaded = in.Input->GetVolume();
+    }
+    std::vector<uint32_t> hidden;
+    for (vtkIdType index : in.Hidden)
+    {
+      if (index >= 0 && index <= vtkIdType(UINT32_MAX))
+        hidden.push_back(uint32_t(index));
+    }
+    r.setHiddenLabels(hidden);
+    svdag::render::Camera camera;
+    for (int a = 0; a < 3; ++a)
+    {
+      camera.position[a] = this->CameraPosition[a];
+      camera.focalPoint[a] = this->CameraFocalPoint[a];
+      camera.viewUp[a] = this->CameraViewUp[a];
+    }
+    camera.viewAngle = this->CameraViewAngle;
+    r.setCamera(camera);
+    r.setImageSize(uint32_t(this->Width), uint32_t(this->Height));
+    r.setLod(static_cast<svdag::render::Lod>(this->LOD));
+    r.setAutoLodPixels(float(this->AutoLODPixels));
+    r.setBackground({ { float(this->Background[0]), float(this->Background[1]),
+      float(this->Background[2]), float(this->Background[3]) } });
+    r.render();
+  }
+  catch (const std::exception& e)
+  {
+    vtkErrorMacro("Render failed: " << e.what());
+    return 0;
+  }
+
+  const svdag::render::Image& image = in.Renderer->image();
+  const vtkIdType pixels = vtkIdType(image.width) * image.height;
+  vtkNew<vtkImageData> output;
+  output->SetDimensions(int(image.width), int(image.height), 1);
+  vtkNew<vtkUnsignedCharArray> color;
+  color->SetName("Color");
+  color->SetNumberOfComponents(4);
+  color->SetNumberOfTuples(pixels);
+  // Packed RGBA8 with R in the lowest byte: bytes R, G, B, A on a little-endian host; unpack
+  // explicitly so the order does not depend on the host.
+  for (vtkIdType i = 0; i < pixels; ++i)
+  {
+    for (int c = 0; c < 4; ++c)
+      color->SetValue(4 * i + c, static_cast<unsigned char>(image.color[i] >> (8 * c)));
+  }
+  auto floats = [pixels](const char* name, int components, const std::vector<float>& values) {
+    vtkNew<vtkFloatArray> a;
+    a->SetName(name);
+    a->SetNumberOfComponents(components);
+    a->SetNumberOfTuples(pixels);
+    std::memcpy(a->GetPointer(0), values.data(), values.size() * sizeof(float));
+    return vtkSmartPointer<vtkFloatArray>(a.GetPointer());
+  };
+  vtkNew<vtkIntArray> label;
+  label->SetName("Label");
+  label->SetNumberOfTuples(pixels);
+  for (vtkIdType i = 0; i < pixels; ++i)
+    label->SetValue(i, int(image.label[i]));
+  vtkPointData* pd = output->GetPointData();
+  pd->SetScalars(color);
+  pd->AddArray(floats("HDR", 4, image.hdr));
+  pd->AddArray(floats("Depth", 1, image.depth));
+  pd->AddArray(label);
+  pd->AddArray(floats("Normal", 3, image.normal));
+  in.Output->ShallowCopy(output);
+  return 1;
+}
+
+vtkImageData* vtkSegmentationSVDAGRenderer::GetOutput()
+{
+  return this->Internal->Output;
+}
+
+const char* vtkSegmentationSVDAGRenderer::GetDeviceName() const
+{
+  return this->Internal->Renderer ? this->Internal->Renderer->deviceName().c_str() : "";
+}
+
+double vtkSegmentationSVDAGRenderer::GetSetupSeconds() const
+{
+  return this->Internal->Renderer ? this->Internal->Renderer->setupSeconds() : 0.0;
+}
+
+double vtkSegmentationSVDAGRenderer::GetLastFrameMilliseconds() const
+{
+  return this->Internal->Renderer ? this->Internal->Renderer->lastFrameMilliseconds() : 0.0;
+}
+
+vtkTypeInt64 vtkSegmentationSVDAGRenderer::GetBLASBytes() const
+{
+  return this->Internal->Renderer ? vtkTypeInt64(this->Internal->Renderer->blasBytes()) : 0;
+}
+
+vtkTypeInt64 vtkSegmentationSVDAGRenderer::GetTLASBytes() const
+{
+  return this->Internal->Renderer ? vtkTypeInt64(this->Internal->Renderer->tlasBytes()) : 0;
+}
+
+void vtkSegmentationSVDAGRenderer::PrintSelf(ostream& os, vtkIndent indent)
+{
+  this->Superclass::PrintSelf(os, indent);
+  os << indent << "Input: " << this->Internal->Input.GetPointer() << "\n";
+  os << indent << "Width: " << this->Width << "\n";
+  os << indent << "Height: " << this->Height << "\n";
+  os << indent << "LOD: " << this->LOD << "\n";
+  os << indent << "AutoLODPixels: " << this->AutoLODPixels << "\n";
+  os << indent << "CameraPosition: " << this->CameraPosition[0] << " " << this->CameraPosition[1]
+     << " " << this->CameraPosition[2] << "\n";
+  os << indent << "CameraFocalPoint: " << this->CameraFocalPoint[0] << " "
+     << this->CameraFocalPoint[1] << " " << this->CameraFocalPoint[2] << "\n";
+  os << indent << "CameraViewUp: " << this->CameraViewUp[0] << " " << this->CameraViewUp[1] << " "
+     << this->CameraViewUp[2] << "\n";
+  os << indent << "CameraViewAngle: " << this->CameraViewAngle << "\n";
+  os << indent << "Background: " << this->Background[0] << " " << this->Background[1] << " "
+     << this->Background[2] << " " << this->Background[3] << "\n";
+  os << indent << "HiddenLabels:";
+  for (vtkIdType index : this->Internal->Hidden)
+    os << " " << index;
+  os << "\n";
+  os << indent << "DeviceName: " << this->GetDeviceName() << "\n";
+  os << indent << "SetupSeconds: " << this->GetSetupSeconds() << "\n";
+  os << indent << "LastFrameMilliseconds: " << this->GetLastFrameMilliseconds() << "\n";
+  os << indent << "BLASBytes: " << this->GetBLASBytes() << "\n";
+  os << indent << "TLASBytes: " << this->GetTLASBytes() << "\n";
+}

@@ -1,0 +1,160 @@
+/**
+ * @class   vtkSegmentationSVDAGRenderer
+ * @brief   renders a vtkSegmentationSVDAG with Vulkan ray tracing into an image (primary hits)
+ *
+ * One ray per pixel through the volume's blocks (a BLAS of block boxes; a custom intersection
+ * shader walks each block's DAG with the same traversal code as the CPU ray caster). The output
+ * is a vtkImageData of Width x Height points with the point-data arrays
+ *   "Color"  4 x unsigned char  sRGB RGBA of a simple headlight shading (label color from a hash
+ *                               of the label index), the background color where nothing is hit
+ *   "HDR"    4 x float          the same color, linear
+ *   "Depth"  float              world distance from the camera along the ray; FLT_MAX on a miss
+ *   "Label"  int                label index + 1 (0: background)
+ *   "Normal" 3 x float          world-space unit normal of the face entered (0 on a miss and
+ *                               where the camera is inside the hit voxel)
+ * Pixel (x, y), y = 0 the bottom row, is the point x + Width * y. Its ray starts at the camera
+ * position with the direction normalize(F + u * tan(a/2) * Width/Height * R + v * tan(a/2) * U),
+ * u = 2 (x + 0.5) / Width - 1, v = 2 (y + 0.5) / Height - 1, F the unit direction to the focal
+ * point, R = normalize(F x ViewUp), U = R x F and a the vertical view angle (VTK camera semantics).
+ *
+ * The camera is set with SetCameraPosition/FocalPoint/ViewUp/ViewAngle, or framed around the
+ * whole volume with ResetCamera(azimuth, elevation, zoom); a camera never set is reset on the
+ * first Render(). Hidden labels (by label index) are left out of the BVH, which is rebuilt on the
+ * next Render() (cheap: the volume is not uploaded again).
+ *
+ * The Vulkan device is chosen on the first Render(): a GPU with ray tracing if present, else a
+ * CPU implementation (lavapipe); the environment variable SVDAG_VK_DEVICE=<substring> forces
+ * one, SVDAG_VK_VALIDATION=1 enables the validation layer. Render() returns 0 and reports the
+ * reason with vtkErrorMacro (for example no device with ray tracing: the message names each
+ * device found and what it lacks).
+ */
+#ifndef vtkSegmentationSVDAGRenderer_h
+#define vtkSegmentationSVDAGRenderer_h
+
+#include "vtkObject.h"
+#include "vtkSVDAGRenderingModule.h" // for export macro
+
+#include <memory> // for std::unique_ptr
+
+class vtkImageData;
+class vtkSegmentationSVDAG;
+
+class VTKSVDAGRENDERING_EXPORT vtkSegmentationSVDAGRenderer : public vtkObject
+{
+public:
+  static vtkSegmentationSVDAGRenderer* New();
+  vtkTypeMacro(vtkSegmentationSVDAGRenderer, vtkObject);
+  void PrintSelf(ostream& os, vtkIndent indent) override;
+
+  /** Level of detail: the block's box, the first non-empty 4^3 leaf, the voxel (lossless), or
+   * per ray from the projected size of a voxel (AUTO). */
+  enum
+  {
+    LOD_BLOCK = 0,
+    LOD_LEAF = 1,
+    LOD_VOXEL = 2,
+    LOD_AUTO = 3
+  };
+
+  ///@{
+  /** The volume to render. */
+  void SetInputData(vtkSegmentationSVDAG* volume);
+  vtkSegmentationSVDAG* GetInput();
+  ///@}
+
+  ///@{
+  /** Image size in pixels (default 256 x 256). */
+  vtkSetClampMacro(Width, int, 1, 16384);
+  vtkGetMacro(Width, int);
+  vtkSetClampMacro(Height, int, 1, 16384);
+  vtkGetMacro(Height, int);
+  ///@}
+
+  ///@{
+  /** Level of detail, LOD_BLOCK .. LOD_AUTO (default LOD_VOXEL). */
+  vtkSetClampMacro(LOD, int, LOD_BLOCK, LOD_AUTO);
+  vtkGetMacro(LOD, int);
+  ///@}
+
+  ///@{
+  /** LOD_AUTO draws a block (leaf) where its 16 (4) voxels project to at most this many pixels
+   * at the block's entry distance, else voxels (default 1). */
+  vtkSetClampMacro(AutoLODPixels, double, 1e-6, 1e6);
+  vtkGetMacro(AutoLODPixels, double);
+  ///@}
+
+  ///@{
+  /** The camera, in world coordinates, with VTK's semantics (view angle: vertical, degrees). */
+  void SetCameraPosition(double x, double y, double z);
+  void SetCameraPosition(const double p[3]) { this->SetCameraPosition(p[0], p[1], p[2]); }
+  vtkGetVector3Macro(CameraPosition, double);
+  void SetCameraFocalPoint(double x, double y, double z);
+  void SetCameraFocalPoint(const double p[3]) { this->SetCameraFocalPoint(p[0], p[1], p[2]); }
+  vtkGetVector3Macro(CameraFocalPoint, double);
+  void SetCameraViewUp(double x, double y, double z);
+  void SetCameraViewUp(const double v[3]) { this->SetCameraViewUp(v[0], v[1], v[2]); }
+  vtkGetVector3Macro(CameraViewUp, double);
+  void SetCameraViewAngle(double degrees);
+  vtkGetMacro(CameraViewAngle, double);
+  ///@}
+
+  /**
+   * Frames the whole volume like vtkRenderer::ResetCamera (from +z, +y up, the bounding sphere
+   * fitting the view angle), then orbits by azimuth and elevation (degrees) and moves closer by
+   * zoom (> 0; 2 halves the distance). Returns 0 (and reports an error) without an input.
+   */
+  int ResetCamera(double azimuth = 0.0, double elevation = 0.0, double zoom = 1.0);
+
+  ///@{
+  /** Labels (by index in the volume's label table) left out of the image. */
+  void HideLabel(vtkIdType index);
+  void ShowLabel(vtkIdType index);
+  void ShowAllLabels();
+  bool IsLabelHidden(vtkIdType index) const;
+  ///@}
+
+  ///@{
+  /** Linear RGBA written where no block is hit (default 0.1, 0.1, 0.12, 1). */
+  vtkSetVector4Macro(Background, double);
+  vtkGetVector4Macro(Background, double);
+  ///@}
+
+  /** Renders one frame into the output. Returns 1 on success, 0 on failure (vtkErrorMacro). */
+  int Render();
+
+  /** The image of the last successful Render() (empty before). */
+  vtkImageData* GetOutput();
+
+  ///@{
+  /** The Vulkan device used ("" before the first Render()), the seconds of the last upload and
+   * BVH build, the milliseconds of the last frame and the bytes of the BVH. */
+  const char* GetDeviceName() const;
+  double GetSetupSeconds() const;
+  double GetLastFrameMilliseconds() const;
+  vtkTypeInt64 GetBLASBytes() const;
+  vtkTypeInt64 GetTLASBytes() const;
+  ///@}
+
+protected:
+  vtkSegmentationSVDAGRenderer();
+  ~vtkSegmentationSVDAGRenderer() override;
+
+  int Width = 256;
+  int Height = 256;
+  int LOD = LOD_VOXEL;
+  double AutoLODPixels = 1;
+  double CameraPosition[3] = { 0, 0, 1 };
+  double CameraFocalPoint[3] = { 0, 0, 0 };
+  double CameraViewUp[3] = { 0, 1, 0 };
+  double CameraViewAngle = 30;
+  double Background[4] = { 0.1, 0.1, 0.12, 1 };
+
+private:
+  vtkSegmentationSVDAGRenderer(const vtkSegmentationSVDAGRenderer&) = delete;
+  void operator=(const vtkSegmentationSVDAGRenderer&) = delete;
+
+  struct Internals;
+  std::unique_ptr<Internals> Internal;
+};
+
+#endif
