@@ -245,5 +245,6 @@ def test_writer_errors(tmp_path, rng):
 
     writer.SetCompressionLevel(99)
     assert writer.GetCompressionLevel() == 22
+    assert "CompressionLevel: 22" in str(writer) and "empty.svdag" in str(writer)  # PrintSelf
     writer.SetCompressionLevel(-4)
     assert writer.GetCompressionLevel() == 0
