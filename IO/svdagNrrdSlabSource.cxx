@@ -1,6 +1,6 @@
 #include "svdagNrrdSlabSource.h"
 
-#include "svdagInflateStream.h"
+#include "svdagVoxelStream.h"
 
 #include "vtkErrorCode.h"
 
@@ -11,7 +11,6 @@
 #include <cstdlib>
 #include <cstring>
 #include <map>
-#include <sys/stat.h>
 #include <vector>
 
 namespace
@@ -204,24 +203,11 @@ bool isSpatialKind(const std::string& kind)
   return k == "domain" || k == "space" || k == "time" || k == "???" || k == "none";
 }
 
-uint64_t fileSize(const std::string& path)
-{
-  struct stat st;
-  if (stat(path.c_str(), &st) != 0)
-    return 0;
-  return static_cast<uint64_t>(st.st_size);
-}
 } // namespace
 
 struct svdagNrrdSlabSource::Impl
 {
-  std::string fileName;
-  std::string dataFileName;
-  FilePtr data;
-  std::unique_ptr<svdagInflateStream> inflater; // gzip encoding; null for raw
-  uint64_t dataOffset = 0;                      // raw: byte offset of voxel 0 in the data file
-  bool swap = false;
-  int32_t nextZ = 0; // gzip: the next slab the stream is positioned at
+  std::unique_ptr<svdagVoxelStream> voxels;
 };
 
 bool svdagNrrdSlabSource::hasMagic(const std::string& fileName)
@@ -234,7 +220,6 @@ bool svdagNrrdSlabSource::hasMagic(const std::string& fileName)
 svdagNrrdSlabSource::svdagNrrdSlabSource(const std::string& fileName)
   : impl(new Impl)
 {
-  impl->fileName = fileName;
   FilePtr header(std::fopen(fileName.c_str(), "rb"));
   if (!header)
     throw svdagReadError(vtkErrorCode::CannotOpenFileError, "cannot open " + fileName);
@@ -370,15 +355,18 @@ svdagNrrdSlabSource::svdagNrrdSlabSource(const std::string& fileName)
   this->checkGeometry(fileName);
 
   // Byte order.
+  bool bigEndian = false;
   if (bytes > 1)
   {
     const std::string endian = lower(required("endian"));
     if (endian != "little" && endian != "big")
       formatError(fileName + ": unknown endian '" + endian + "'");
-    impl->swap = (endian == "little") != svdagHostIsLittleEndian();
+    bigEndian = endian == "big";
   }
 
-  // Where the data is.
+  // Where the data is: after the header's blank line, or in the file named by 'data file'.
+  std::string dataFileName = fileName;
+  FilePtr data;
   const std::string* dataFile = field("data file");
   if (!dataFile)
     dataFile = field("datafile");
@@ -388,27 +376,25 @@ svdagNrrdSlabSource::svdagNrrdSlabSource(const std::string& fileName)
     if (w.size() != 1 || w[0] == "LIST")
       formatError(fileName + ": NRRD data split over several files ('data file: " + *dataFile +
         "') is not supported");
-    impl->dataFileName = w[0];
-    if (impl->dataFileName[0] != '/')
+    dataFileName = w[0];
+    if (dataFileName[0] != '/')
     {
       const size_t slash = fileName.find_last_of('/');
       if (slash != std::string::npos)
-        impl->dataFileName = fileName.substr(0, slash + 1) + impl->dataFileName;
+        dataFileName = fileName.substr(0, slash + 1) + dataFileName;
     }
-    impl->data.reset(std::fopen(impl->dataFileName.c_str(), "rb"));
-    if (!impl->data)
+    data.reset(std::fopen(dataFileName.c_str(), "rb"));
+    if (!data)
       throw svdagReadError(vtkErrorCode::FileNotFoundError,
-        fileName + ": cannot open its data file " + impl->dataFileName);
+        fileName + ": cannot open its data file " + dataFileName);
   }
   else
   {
     if (!blankLineSeen)
       throw svdagReadError(vtkErrorCode::PrematureEndOfFileError,
         fileName + ": the NRRD header is not followed by data (no blank line, no 'data file')");
-    impl->dataFileName = fileName;
-    impl->data = std::move(header);
+    data = std::move(header);
   }
-  std::FILE* data = impl->data.get();
 
   long long lineSkip = 0, byteSkip = 0;
   if (const std::string* v = field("line skip"))
@@ -424,44 +410,41 @@ svdagNrrdSlabSource::svdagNrrdSlabSource(const std::string& fileName)
   for (long long i = 0; i < lineSkip; ++i)
   {
     int c;
-    while ((c = std::fgetc(data)) != EOF && c != '\n')
+    while ((c = std::fgetc(data.get())) != EOF && c != '\n')
     {
     }
     if (c == EOF)
       throw svdagReadError(vtkErrorCode::PrematureEndOfFileError,
-        impl->dataFileName + ": ends inside the lines skipped by 'line skip'");
+        dataFileName + ": ends inside the lines skipped by 'line skip'");
   }
+  const uint64_t here = static_cast<uint64_t>(ftello(data.get()));
+  data.reset();
 
-  const uint64_t totalBytes = this->Geometry.voxelCount() * uint64_t(bytes);
   const std::string encoding = lower(required("encoding"));
   if (encoding == "raw")
   {
-    const uint64_t size = fileSize(impl->dataFileName);
-    const uint64_t here = static_cast<uint64_t>(ftello(data));
+    uint64_t offset = here + uint64_t(byteSkip);
     if (byteSkip == -1)
     {
-      // -1: the data is the last totalBytes bytes of the file.
-      if (size < here + totalBytes)
+      // -1: the data is the last bytes of the file.
+      const uint64_t total = this->Geometry.voxelCount() * uint64_t(bytes);
+      const uint64_t size = svdagVoxelStream::fileSize(dataFileName);
+      if (size < here + total)
         throw svdagReadError(vtkErrorCode::PrematureEndOfFileError,
-          impl->dataFileName + " is too short for the volume its header describes");
-      impl->dataOffset = size - totalBytes;
+          dataFileName + " is too short for the volume its header describes");
+      offset = size - total;
     }
-    else
-    {
-      impl->dataOffset = here + uint64_t(byteSkip);
-      if (size < impl->dataOffset || size - impl->dataOffset < totalBytes)
-        throw svdagReadError(vtkErrorCode::PrematureEndOfFileError,
-          impl->dataFileName + " holds " + std::to_string(size > impl->dataOffset ? size - impl->dataOffset : 0) +
-            " data bytes, the header describes " + std::to_string(totalBytes) +
-            " (truncated file?)");
-    }
+    impl->voxels.reset(new svdagVoxelStream(dataFileName, svdagVoxelStream::Encoding::Raw,
+      offset, this->Geometry, this->Type, bigEndian));
   }
   else if (encoding == "gzip" || encoding == "gz")
   {
+    // For compressed encodings the byte skip applies to the decompressed bytes.
     if (byteSkip == -1)
       formatError(fileName + ": 'byte skip: -1' is only allowed with raw encoding");
-    impl->inflater.reset(new svdagInflateStream(data, impl->dataFileName));
-    impl->inflater->skip(uint64_t(byteSkip));
+    impl->voxels.reset(new svdagVoxelStream(dataFileName,
+      svdagVoxelStream::Encoding::Compressed, here, this->Geometry, this->Type, bigEndian,
+      uint64_t(byteSkip)));
   }
   else
   {
@@ -475,26 +458,5 @@ svdagNrrdSlabSource::~svdagNrrdSlabSource() = default;
 void svdagNrrdSlabSource::readSlab(int32_t z0, int32_t nz, void* dst)
 {
   this->checkSlab(z0, nz);
-  const int size = svdag::scalarSize(this->Type);
-  const uint64_t slice = uint64_t(this->Geometry.dims[0]) * uint64_t(this->Geometry.dims[1]);
-  const uint64_t bytes = slice * uint64_t(nz) * uint64_t(size);
-  if (impl->inflater)
-  {
-    if (z0 != impl->nextZ)
-      formatError(impl->fileName + ": gzip-encoded slabs must be read in order");
-    impl->inflater->read(dst, bytes);
-    impl->nextZ = z0 + nz;
-  }
-  else
-  {
-    std::FILE* data = impl->data.get();
-    if (fseeko(data, static_cast<off_t>(impl->dataOffset + slice * uint64_t(z0) * uint64_t(size)),
-          SEEK_SET) != 0 ||
-      std::fread(dst, 1, bytes, data) != bytes)
-      throw svdagReadError(vtkErrorCode::PrematureEndOfFileError,
-        impl->dataFileName + ": cannot read z-slices " + std::to_string(z0) + ".." +
-          std::to_string(z0 + nz - 1) + " (file truncated while reading?)");
-  }
-  if (impl->swap)
-    svdagSwapBytes(dst, slice * uint64_t(nz), size);
+  impl->voxels->readSlab(z0, nz, dst);
 }

@@ -93,7 +93,11 @@ svdagTiffSlabSource::svdagTiffSlabSource(const std::string& fileName)
     impl->fail(vtkErrorCode::FileFormatError, "cannot open as TIFF");
 
   // Every page must agree on size and sample layout.
+  // libtiff counts pages by following the chain of directory offsets; in a truncated file the
+  // chain breaks, which it reports as an error while still returning the pages it found.
   const tdir_t pages = TIFFNumberOfDirectories(impl->tiff);
+  if (!impl->errorText.empty())
+    impl->fail(vtkErrorCode::PrematureEndOfFileError, "broken chain of pages (truncated file?)");
   if (pages < 1 || pages > INT32_MAX)
     impl->fail(vtkErrorCode::FileFormatError, "no readable page");
   uint32_t width0 = 0, height0 = 0;

@@ -4,14 +4,14 @@
  *
  * The file is never held in memory as a whole: it is read in slabs of 16 z-slices that are fed
  * to the SVDAG builder one after the other, so peak memory stays near one slab plus the
- * compressed output (exceptions: MetaImage and NIfTI with qfac = -1, see below). Cells of a slab are scanned in parallel
- * with vtkSMPTools; the output does not depend on the thread count.
+ * compressed output (exception: NIfTI with qfac = -1, see below). Cells of a slab are scanned
+ * in parallel with vtkSMPTools; the output does not depend on the thread count.
  *
  * The format is detected from the file's content, not its name:
  * - NRRD (.nrrd, detached .nhdr; raw or gzip; 3D Slicer .seg.nrrd with one labelmap layer),
  *   geometry from space directions/space origin or spacings, in the file's own space;
- * - MetaImage (.mha, .mhd) through vtkMetaImageReader. Read whole: VTK 9.1's reader writes the
- *   whole image whatever extent is requested, so it cannot stream slabs;
+ * - MetaImage (.mha, .mhd; raw or zlib), slab by slab. Its text header is parsed here: VTK 9.1's
+ *   vtkMetaImageReader cannot serve a slab extent and accepts truncated data silently;
  * - VTK XML image data (.vti) through vtkXMLImageDataReader, slab by slab;
  * - NIfTI-1/2 (.nii, .nii.gz, .hdr/.img) through vtkNIFTIImageReader, slab by slab, in the
  *   file's voxel order (nibabel's array order, x fastest); origin, spacing and direction come
