@@ -5,11 +5,12 @@ Run from the repository root (see bench/README.md for the columns and the target
 
     .venv/bin/python bench/compression.py [--quick] [--out bench/out]
 
-For every volume (the real ones in ../shared/data and generated ones) it compresses with
-vtkImageDataToSegmentationSVDAG, decodes and compares (a mismatch stops the run with exit
+For every volume (the real ones in ../shared/data and generated ones, written to a temporary
+file) it compresses the in-memory array with vtkImageDataToSegmentationSVDAG and the file with
+vtkSegmentationVolumeReader, decodes both and compares (a mismatch stops the run with exit
 status 1), measures the reference codecs on the same array, measures the peak memory of
-compressing from a file in a subprocess, prints plain-text tables, and writes compression.csv and
-compression.png to the output folder. Figures reported elsewhere (../shared/notes/anchors.md) are
+compressing from the file in a subprocess, prints plain-text tables, and writes compression.csv
+and compression.png to the output folder. Figures reported elsewhere (../shared/notes/anchors.md) are
 printed in a separate table and never mixed with measured ones.
 """
 from __future__ import annotations
