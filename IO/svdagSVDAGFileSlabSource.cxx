@@ -9,21 +9,21 @@ svdagSVDAGFileSlabSource::svdagSVDAGFileSlabSource(const std::string& fileName)
 {
   try
   {
-    this->Volume = svdag::readFile(fileName);
+    this->Volume = std::make_shared<const svdag::Volume>(svdag::readFile(fileName));
   }
   catch (const svdag::FileError& e)
   {
     throw svdagReadError(vtkErrorCode::FileFormatError, fileName + ": " + e.what());
   }
-  this->Geometry = this->Volume.geometry;
-  this->Type = this->Volume.scalarType;
+  this->Geometry = this->Volume->geometry;
+  this->Type = this->Volume->scalarType;
   this->checkGeometry(fileName);
 }
 
 void svdagSVDAGFileSlabSource::readSlab(int32_t z0, int32_t nz, void* dst)
 {
   this->checkSlab(z0, nz);
-  svdag::decodeSlab(this->Volume, z0, nz, dst);
+  svdag::decodeSlab(*this->Volume, z0, nz, dst);
 }
 
 bool svdagSVDAGFileSlabSource::hasMagic(const std::string& fileName)

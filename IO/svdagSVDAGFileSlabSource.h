@@ -12,11 +12,11 @@ public:
   explicit svdagSVDAGFileSlabSource(const std::string& fileName);
   const char* formatName() const override { return "SVDAG"; }
   void readSlab(int32_t z0, int32_t nz, void* dst) override;
-  const svdag::Volume* compressedVolume() const override { return &this->Volume; }
+  std::shared_ptr<const svdag::Volume> compressedVolume() const override { return this->Volume; }
   static bool hasMagic(const std::string& fileName);
 
 private:
-  svdag::Volume Volume;
+  std::shared_ptr<const svdag::Volume> Volume;
 };
 
 #endif

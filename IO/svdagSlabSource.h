@@ -10,6 +10,7 @@
 #include "svdag/Volume.h"
 
 #include <cstdint>
+#include <memory>
 #include <stdexcept>
 #include <string>
 
@@ -47,7 +48,7 @@ public:
 
   // Sources of already compressed files (.svdag) return their volume, so the reader can pass
   // it through when no label needs to change; every other source returns null.
-  virtual const svdag::Volume* compressedVolume() const { return nullptr; }
+  virtual std::shared_ptr<const svdag::Volume> compressedVolume() const { return nullptr; }
 
 protected:
   svdagSlabSource() = default;

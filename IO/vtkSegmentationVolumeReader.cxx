@@ -18,10 +18,19 @@
 
 vtkStandardNewMacro(vtkSegmentationVolumeReader);
 
-vtkSegmentationVolumeReader::vtkSegmentationVolumeReader() = default;
+struct vtkSegmentationVolumeReader::Internals
+{
+  std::unique_ptr<svdagSlabSource> Source;
+};
+
+vtkSegmentationVolumeReader::vtkSegmentationVolumeReader()
+  : Internal(new Internals)
+{
+}
 
 vtkSegmentationVolumeReader::~vtkSegmentationVolumeReader()
 {
+  delete this->Internal;
   this->SetFileName(nullptr);
   this->SetDatasetName(nullptr);
 }
@@ -79,33 +88,40 @@ svdagSlabSourceOptions sourceOptions(const char* datasetName)
 }
 
 int vtkSegmentationVolumeReader::RequestInformation(
-  vtkInformation*, vtkInformationVector**, vtkInformationVector*)
+  vtkInformation*, vtkInformationVector**, vtkInformationVector* out)
 {
   this->SetErrorCode(vtkErrorCode::NoError);
   this->FileFormat.clear();
+  this->Internal->Source.reset();
+  // On failure RequestData does not run: empty the output here, so that it never shows the
+  // volume of a previous file.
+  auto fail = [&](unsigned long code) {
+    this->SetErrorCode(code);
+    if (vtkSegmentationSVDAG* output = vtkSegmentationSVDAG::GetData(out))
+      output->Initialize();
+    return 0;
+  };
   if (!this->FileName || !*this->FileName)
   {
     vtkErrorMacro("No FileName set.");
-    this->SetErrorCode(vtkErrorCode::NoFileNameError);
-    return 0;
+    return fail(vtkErrorCode::NoFileNameError);
   }
   try
   {
     // Opening a source reads and checks the whole header.
-    const auto source = svdagOpenSlabSource(this->FileName, sourceOptions(this->DatasetName));
-    this->FileFormat = source->formatName();
+    this->Internal->Source =
+      svdagOpenSlabSource(this->FileName, sourceOptions(this->DatasetName));
+    this->FileFormat = this->Internal->Source->formatName();
   }
   catch (const svdagReadError& e)
   {
     vtkErrorMacro("Cannot read " << this->FileName << ": " << e.what());
-    this->SetErrorCode(e.code());
-    return 0;
+    return fail(e.code());
   }
   catch (const std::exception& e)
   {
     vtkErrorMacro("Cannot read " << this->FileName << ": " << e.what());
-    this->SetErrorCode(vtkErrorCode::UnknownError);
-    return 0;
+    return fail(vtkErrorCode::UnknownError);
   }
   return 1;
 }
@@ -135,20 +151,23 @@ int vtkSegmentationVolumeReader::RequestData(
 
   try
   {
-    // A fresh source: streams that decompress cannot rewind.
-    const auto source = svdagOpenSlabSource(this->FileName, sourceOptions(this->DatasetName));
+    // The source RequestInformation opened, or a fresh one (streams that decompress cannot
+    // rewind, so a source serves one RequestData).
+    std::unique_ptr<svdagSlabSource> source = std::move(this->Internal->Source);
+    if (!source)
+      source = svdagOpenSlabSource(this->FileName, sourceOptions(this->DatasetName));
     this->FileFormat = source->formatName();
     const svdag::Geometry& geometry = source->geometry();
     const svdag::ScalarType type = source->scalarType();
 
     // A compressed file whose labels need no change is passed through as it is.
-    if (const svdag::Volume* volume = source->compressedVolume())
+    if (const auto volume = source->compressedVolume())
     {
       uint64_t background = 0;
       svdag::scalarStore(type, &background, 0, options.background);
       if (options.excluded.empty() && svdag::scalarLoad(type, &background, 0) == volume->background)
       {
-        output->SetVolume(std::make_shared<const svdag::Volume>(*volume));
+        output->SetVolume(volume);
         this->UpdateProgress(1.0);
         return 1;
       }

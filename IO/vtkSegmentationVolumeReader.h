@@ -102,6 +102,11 @@ protected:
   std::string FileFormat;
 
 private:
+  // The source opened by RequestInformation, handed to the next RequestData (a file is opened and
+  // its header parsed once per update).
+  struct Internals;
+  Internals* Internal;
+
   vtkSegmentationVolumeReader(const vtkSegmentationVolumeReader&) = delete;
   void operator=(const vtkSegmentationVolumeReader&) = delete;
 };

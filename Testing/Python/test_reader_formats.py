@@ -458,6 +458,57 @@ def test_progress_events(tmp_path, rng):
     assert sorted(set(p for p in progress if p > 0)) == pytest.approx([16 / 40, 32 / 40, 1.0])
 
 
+def test_abort_leaves_no_volume(tmp_path, rng):
+    labels = make_labels((40, 33, 17), "uint16", rng)
+    path = tmp_path / "labels.nrrd"
+    nrrd.write(str(path), labels, {"encoding": "gzip"}, index_order="C")
+    reader = vtkSegmentationVolumeReader()
+    reader.SetFileName(str(path))
+    reader.AddObserver(vtkCommand.ProgressEvent, lambda o, e: o.SetAbortExecute(1))
+    log = ErrorLog(reader.GetExecutive())
+    reader.Update()
+    assert not reader.GetOutput().HasVolume()
+
+
+def test_failed_read_clears_previous_output(tmp_path, rng):
+    """After a good file, a bad one leaves no stale volume behind."""
+    labels = make_labels((5, 6, 7), "uint8", rng)
+    good = tmp_path / "good.nrrd"
+    nrrd.write(str(good), labels, index_order="C")
+    reader = vtkSegmentationVolumeReader()
+    log = ErrorLog(reader, reader.GetExecutive())
+    reader.SetFileName(str(good))
+    reader.Update()
+    assert reader.GetOutput().HasVolume() and reader.GetFileFormat() == "NRRD"
+    reader.SetFileName(str(tmp_path / "missing.nrrd"))
+    reader.Update()
+    assert reader.GetErrorCode() == vtkErrorCode.FileNotFoundError
+    assert not reader.GetOutput().HasVolume() and reader.GetFileFormat() == ""
+    assert log.messages
+
+
+def test_information_pass_then_data(tmp_path, rng):
+    """UpdateInformation opens the file once; the following Update streams from that source."""
+    labels = make_labels((40, 33, 17), "int32", rng)
+    path = tmp_path / "labels.nii.gz"
+    nibabel.save(nibabel.Nifti1Image(labels.transpose(2, 1, 0), np.eye(4), dtype=np.int32), path)
+    reader = vtkSegmentationVolumeReader()
+    reader.SetFileName(str(path))
+    reader.UpdateInformation()
+    assert reader.GetFileFormat() == "NIfTI" and not reader.GetOutput().HasVolume()
+    reader.Update()
+    decode = vtkSegmentationSVDAGToImageData()
+    decode.SetInputConnection(reader.GetOutputPort())
+    decode.Update()
+    decoded = vtk_to_numpy(decode.GetOutput().GetPointData().GetScalars()).reshape(labels.shape)
+    np.testing.assert_array_equal(decoded, labels)
+    # A second update with a changed setting reads the file again, from the start.
+    reader.SetBackgroundLabel(int(labels[0, 0, 0]))
+    decode.Update()
+    again = vtk_to_numpy(decode.GetOutput().GetPointData().GetScalars()).reshape(labels.shape)
+    np.testing.assert_array_equal(again, labels)
+
+
 # -------------------------------------------------------------------------------------- bad input
 
 # Runs in a fresh interpreter: reads a file, prints the reader's result as JSON.
