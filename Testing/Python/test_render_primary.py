@@ -1,0 +1,397 @@
+"""vtkSegmentationSVDAGRenderer (Vulkan ray tracing, primary hits) against the CPU ray caster.
+
+Runs on whatever ray-tracing device the machine has (lavapipe here). For several random camera
+views of a random volume and of a real segmentation, at every LOD, the renderer's Label and Depth
+outputs must equal those of vtkSegmentationSVDAGRayCaster for the same rays. The rays follow the
+renderer's documented pixel-center convention (GpuLayout.h, vtkSegmentationSVDAGRenderer.h):
+pixel (x, y), y = 0 the bottom row, at index x + width * y, with direction
+normalize(F + u * tan(a/2) * aspect * R + v * tan(a/2) * U), u = 2 (x + 0.5) / width - 1,
+v = 2 (y + 0.5) / height - 1. They are generated here in double precision, independently.
+
+Pixels whose ray passes within float rounding of a voxel edge or corner may legitimately see
+another label, so labels must agree on >= 99.9% of the pixels, and depths to 1e-4 (relative)
+where both hit the same label.
+"""
+import math
+
+import nrrd
+import numpy as np
+import pytest
+from vtkmodules.util.misc import calldata_type
+from vtkmodules.util.numpy_support import numpy_to_vtk, vtk_to_numpy
+from vtkmodules.util.vtkConstants import VTK_STRING
+from vtkmodules.vtkCommonDataModel import vtkImageData
+
+from vtksvdag.vtkSVDAGCore import (
+    vtkImageDataToSegmentationSVDAG,
+    vtkSegmentationSVDAGRayCaster,
+)
+from vtksvdag.vtkSVDAGRendering import vtkSegmentationSVDAGRenderer
+
+WIDTH, HEIGHT = 64, 48
+LODS = (
+    vtkSegmentationSVDAGRenderer.LOD_BLOCK,
+    vtkSegmentationSVDAGRenderer.LOD_LEAF,
+    vtkSegmentationSVDAGRenderer.LOD_VOXEL,
+)
+DEPTH_MISS = np.float32(3.402823466e38)
+
+
+def build(labels, spacing=(1, 1, 1), origin=(0, 0, 0), direction=None, excluded=()):
+    """A vtkSegmentationSVDAG from a (z, y, x) label array."""
+    image = vtkImageData()
+    image.SetDimensions(labels.shape[2], labels.shape[1], labels.shape[0])
+    image.SetSpacing(*spacing)
+    image.SetOrigin(*origin)
+    if direction is not None:
+        image.SetDirectionMatrix(*np.asarray(direction, float).ravel())
+    image.GetPointData().SetScalars(numpy_to_vtk(np.ascontiguousarray(labels).ravel(), deep=True))
+    builder = vtkImageDataToSegmentationSVDAG()
+    builder.SetInputData(image)
+    for value in excluded:
+        builder.AddExcludedLabel(int(value))
+    builder.Update()
+    return builder.GetOutput()
+
+
+def rotation(rng):
+    """A random proper rotation matrix."""
+    q, r = np.linalg.qr(rng.normal(size=(3, 3)))
+    q = q * np.sign(np.diag(r))
+    if np.linalg.det(q) < 0:
+        q[:, 0] = -q[:, 0]
+    return q
+
+
+@pytest.fixture(scope="module")
+def random_volume():
+    rng = np.random.default_rng(2024)
+    shape = (21, 37, 29)  # z, y, x: odd sizes, cells cut by the volume's border
+    labels = rng.integers(1, 9, size=shape).astype(np.uint16)
+    labels[rng.random(shape) < 0.8] = 0  # sparse: rays travel through the blocks
+    labels[:, :, 20:] = 0
+    labels[3:9, 5:30, 2:12] = 7  # one solid box: full octants and complemented leaves
+    return labels, build(labels, spacing=(0.7, 1.0, 1.3), origin=(5.0, -3.0, 10.0),
+                         direction=rotation(rng))
+
+
+@pytest.fixture(scope="module")
+def real_labels(shared_data):
+    labels, _ = nrrd.read(str(shared_data / "plantseg_1135_mini.nrrd"), index_order="C")
+    return labels
+
+
+@pytest.fixture(scope="module")
+def real_volume(real_labels):
+    return real_labels, build(real_labels, spacing=(1.0, 0.9, 1.2), origin=(-50.0, 0.0, 20.0))
+
+
+def lod_boxes(labels, lod):
+    """Index-space boxes (lo, hi exclusive, x y z) and label values of what a coarse LOD hits:
+    per 16^3 cell and label, the tight box of the label's voxels (LOD_BLOCK), or each non-empty
+    4^3 leaf of that block clipped to the box (LOD_LEAF). Built from the label array alone."""
+    los, his, values = [], [], []
+    for cz in range(0, labels.shape[0], 16):
+        for cy in range(0, labels.shape[1], 16):
+            for cx in range(0, labels.shape[2], 16):
+                cell = labels[cz:cz + 16, cy:cy + 16, cx:cx + 16]
+                corner = np.array([cx, cy, cz])
+                for value in np.unique(cell[cell != 0]):
+                    z, y, x = np.nonzero(cell == value)
+                    xyz = np.stack([x, y, z], axis=1)
+                    block_lo, block_hi = xyz.min(axis=0), xyz.max(axis=0) + 1
+                    if lod == vtkSegmentationSVDAGRenderer.LOD_BLOCK:
+                        boxes = [(block_lo, block_hi)]
+                    else:
+                        leaves = np.unique(xyz // 4, axis=0) * 4
+                        boxes = [(np.maximum(leaf, block_lo), np.minimum(leaf + 4, block_hi))
+                                 for leaf in leaves]
+                    for lo, hi in boxes:
+                        los.append(corner + lo)
+                        his.append(corner + hi)
+                        values.append(value)
+    return np.array(los, float), np.array(his, float), np.array(values, np.int64)
+
+
+def to_index_space(volume, origin, dirs):
+    """World rays -> index space (world = origin + D diag(spacing) (p - 0.5)); t is unchanged."""
+    direction, spacing, volume_origin = [0.0] * 9, [0.0] * 3, [0.0] * 3
+    volume.GetDirection(direction)
+    volume.GetSpacing(spacing)
+    volume.GetOrigin(volume_origin)
+    m_inv = np.linalg.inv(np.reshape(direction, (3, 3)) @ np.diag(spacing))
+    return m_inv @ (origin - np.array(volume_origin)) + 0.5, dirs @ m_inv.T
+
+
+def valid_coarse_labels(labels, volume, origin, dirs, lod):
+    """Per ray, the label values whose box (lod_boxes) the ray enters first: overlapping boxes of
+    different labels in one cell tie, and then any of them is a right answer."""
+    lo, hi, values = lod_boxes(labels, lod)
+    o, d = to_index_space(volume, origin, dirs)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t0 = (lo[None, :, :] - o[None, None, :]) / d[:, None, :]
+        t1 = (hi[None, :, :] - o[None, None, :]) / d[:, None, :]
+    enter = np.maximum(np.nanmax(np.minimum(t0, t1), axis=2), 0)
+    leave = np.nanmin(np.maximum(t0, t1), axis=2)
+    hit = enter <= leave
+    enter = np.where(hit, enter, np.inf)
+    nearest = enter.min(axis=1)
+    tied = hit & (enter <= nearest[:, None] + 1e-4 * (1 + nearest[:, None]))
+    return [set(values[row]) for row in tied]
+
+
+def primary_rays(renderer):
+    """World-space origin and unit directions (pixels in output order) of the renderer's rays."""
+    position = np.array(renderer.GetCameraPosition(), float)
+    forward = np.array(renderer.GetCameraFocalPoint(), float) - position
+    forward /= np.linalg.norm(forward)
+    right = np.cross(forward, renderer.GetCameraViewUp())
+    right /= np.linalg.norm(right)
+    up = np.cross(right, forward)
+    h = math.tan(math.radians(renderer.GetCameraViewAngle()) / 2)
+    width, height = renderer.GetWidth(), renderer.GetHeight()
+    x, y = np.meshgrid(np.arange(width), np.arange(height))  # y = 0 first: the bottom row
+    u = 2 * (x.ravel() + 0.5) / width - 1
+    v = 2 * (y.ravel() + 0.5) / height - 1
+    dirs = forward + (u * h * width / height)[:, None] * right + (v * h)[:, None] * up
+    return position, dirs / np.linalg.norm(dirs, axis=1, keepdims=True)
+
+
+def cpu_reference(volume, renderer, lod):
+    """Label (index + 1, 0 = miss) and depth per pixel from the CPU ray caster."""
+    caster = vtkSegmentationSVDAGRayCaster()
+    caster.SetInputData(volume)
+    caster.SetLOD(lod)
+    origin, dirs = primary_rays(renderer)
+    labels = np.zeros(len(dirs), np.int64)
+    depth = np.full(len(dirs), np.inf)
+    for i, d in enumerate(dirs):
+        if caster.CastRay(origin, d):
+            labels[i] = caster.GetHitLabelIndex() + 1
+            depth[i] = caster.GetHitDistance()
+    return labels, depth
+
+
+def outputs(renderer):
+    data = renderer.GetOutput().GetPointData()
+    return (vtk_to_numpy(data.GetArray("Label")).astype(np.int64),
+            vtk_to_numpy(data.GetArray("Depth")).astype(np.float64))
+
+
+def make_renderer(volume):
+    renderer = vtkSegmentationSVDAGRenderer()
+    renderer.SetInputData(volume)
+    renderer.SetWidth(WIDTH)
+    renderer.SetHeight(HEIGHT)
+    return renderer
+
+
+def world_point(volume, p):
+    """World position of index-space point p (world = origin + D diag(spacing) (p - 0.5))."""
+    direction, spacing, origin = [0.0] * 9, [0.0] * 3, [0.0] * 3
+    volume.GetDirection(direction)
+    volume.GetSpacing(spacing)
+    volume.GetOrigin(origin)
+    return np.array(origin) + np.reshape(direction, (3, 3)) @ (np.array(spacing) * (p - 0.5))
+
+
+def random_views(rng, labels, volume):
+    """Camera setups (description, function that sets the renderer's camera): orbits around
+    the volume; one zoomed in so far that the camera is inside the volume (in the real volume,
+    inside a labelled voxel: every ray hits at distance 0); and one from the center of an empty voxel inside the volume, looking at a
+    random point (rays start among the blocks, inside cells)."""
+    views = []
+    for _ in range(2):
+        azimuth, elevation, zoom = rng.uniform(-180, 180), rng.uniform(-80, 80), rng.uniform(0.9, 2.5)
+        views.append((f"orbit ({azimuth:.0f}, {elevation:.0f}, {zoom:.1f})",
+                      lambda r, a=azimuth, e=elevation, z=zoom: r.ResetCamera(a, e, z)))
+    views.append(("zoomed into the volume", lambda r: r.ResetCamera(-155, -44, 6.0)))
+    inner = labels[2:-2, 2:-2, 2:-2]
+    z, y, x = np.argwhere(inner == 0)[rng.integers(np.count_nonzero(inner == 0))] + 2
+    eye = world_point(volume, np.array([x, y, z]) + 0.5)
+    target = world_point(volume, rng.uniform(0, 1, 3) * labels.shape[::-1])
+
+    def inside(renderer):
+        renderer.SetCameraPosition(*eye)
+        renderer.SetCameraFocalPoint(*target)
+        renderer.SetCameraViewUp(0.0, 0.0, 1.0)
+        renderer.SetCameraViewAngle(60.0)
+        return 1
+    views.append(("camera in an empty voxel inside the volume", inside))
+    return views
+
+
+def assert_matches_cpu(labels, volume, renderer, lod, what):
+    """Voxel LOD: the labels must agree. Block and leaf LOD: boxes of different labels overlap
+    inside a cell, so where several are entered at the same distance the label is any of them
+    (checked against an independent brute force over the boxes); hit/miss and depth must agree."""
+    renderer.SetLOD(lod)
+    assert renderer.Render() == 1
+    gpu_label, gpu_depth = outputs(renderer)
+    cpu_label, cpu_depth = cpu_reference(volume, renderer, lod)
+    if lod == vtkSegmentationSVDAGRenderer.LOD_VOXEL:
+        same = gpu_label == cpu_label
+    else:
+        table = vtk_to_numpy(volume.NewLabelValues()).astype(np.int64)
+        origin, dirs = primary_rays(renderer)
+        allowed = valid_coarse_labels(labels, volume, origin, dirs, lod)
+        same = np.array([
+            (g == 0 and not ok) if c == 0 else (g > 0 and table[g - 1] in ok and c > 0)
+            for g, c, ok in zip(gpu_label, cpu_label, allowed)]) & ((gpu_label > 0) == (cpu_label > 0))
+    agreement = same.mean()
+    assert agreement >= 0.999, (
+        f"{what} LOD {lod}: labels agree on {agreement:.4%} of the pixels "
+        f"(gpu {gpu_label[~same][:8]}, cpu {cpu_label[~same][:8]})")
+    both = same & (cpu_label > 0)
+    assert np.allclose(gpu_depth[both], cpu_depth[both], rtol=1e-4, atol=1e-5), (
+        f"{what} LOD {lod}: depth differs, max relative error "
+        f"{np.max(np.abs(gpu_depth[both] - cpu_depth[both]) / np.maximum(cpu_depth[both], 1e-9)):.3g}")
+    # Misses carry the documented far value, never inf or NaN.
+    assert np.all(gpu_depth[gpu_label == 0] == DEPTH_MISS)
+    assert np.all(np.isfinite(gpu_depth))
+    return gpu_label, cpu_label
+
+
+@pytest.mark.parametrize("which", ["random_volume", "real_volume"])
+def test_primary_hits_match_cpu_ray_caster(which, request):
+    labels, volume = request.getfixturevalue(which)
+    renderer = make_renderer(volume)
+    rng = np.random.default_rng(7 if which == "random_volume" else 11)
+    hits = 0
+    views = random_views(rng, labels, volume)
+    for description, set_camera in views:
+        assert set_camera(renderer) == 1
+        for lod in LODS:
+            gpu_label, _ = assert_matches_cpu(labels, volume, renderer, lod,
+                                              f"{which}, {description}:")
+            hits += np.count_nonzero(gpu_label)
+    # The views must actually see the volume (a test of empty images would prove nothing).
+    assert hits > 0.2 * len(views) * len(LODS) * WIDTH * HEIGHT
+
+
+def test_outputs_are_consistent(real_volume):
+    renderer = make_renderer(real_volume[1])
+    renderer.ResetCamera(30, 20, 1.2)
+    assert renderer.Render() == 1
+    out = renderer.GetOutput()
+    assert out.GetDimensions() == (WIDTH, HEIGHT, 1)
+    data = out.GetPointData()
+    label = vtk_to_numpy(data.GetArray("Label"))
+    normal = vtk_to_numpy(data.GetArray("Normal"))
+    hdr = vtk_to_numpy(data.GetArray("HDR"))
+    color = vtk_to_numpy(data.GetArray("Color"))
+    assert color.shape == (WIDTH * HEIGHT, 4) and hdr.shape == (WIDTH * HEIGHT, 4)
+    hit = label > 0
+    assert hit.any() and (~hit).any()
+    # Unit normals on hits (the camera is outside), zero normals on misses.
+    assert np.allclose(np.linalg.norm(normal[hit], axis=1), 1, atol=1e-5)
+    assert np.all(normal[~hit] == 0)
+    # Background where nothing is hit; the sRGB color encodes the linear HDR color.
+    assert np.allclose(hdr[~hit], renderer.GetBackground(), atol=1e-6)
+    srgb = np.where(hdr[:, :3] <= 0.0031308, 12.92 * hdr[:, :3],
+                    1.055 * np.clip(hdr[:, :3], 0, 1) ** (1 / 2.4) - 0.055)
+    assert np.max(np.abs(np.round(np.clip(srgb, 0, 1) * 255) - color[:, :3])) <= 1
+    assert np.all(color[hit, 3] == 255)
+    assert np.all(np.isfinite(hdr)) and np.all(np.isfinite(normal))
+    # Deterministic: the same frame twice gives the same bytes.
+    first = {name: vtk_to_numpy(data.GetArray(name)).copy()
+             for name in ("Color", "HDR", "Depth", "Label", "Normal")}
+    assert renderer.Render() == 1
+    data = renderer.GetOutput().GetPointData()
+    for name, values in first.items():
+        assert np.array_equal(vtk_to_numpy(data.GetArray(name)), values), name
+    assert renderer.GetBLASBytes() > 0 and renderer.GetTLASBytes() > 0
+    assert renderer.GetSetupSeconds() > 0 and renderer.GetLastFrameMilliseconds() > 0
+    assert renderer.GetDeviceName() != ""
+
+
+def test_auto_lod_chooses_per_ray(real_volume):
+    """AUTO with a huge pixel budget draws blocks everywhere, with a tiny one voxels everywhere,
+    and in between each pixel shows what one of the fixed levels shows."""
+    renderer = make_renderer(real_volume[1])
+    renderer.ResetCamera(-40, 25, 1.0)
+    fixed = {}
+    for lod in LODS:
+        renderer.SetLOD(lod)
+        assert renderer.Render() == 1
+        fixed[lod] = outputs(renderer)
+    renderer.SetLOD(vtkSegmentationSVDAGRenderer.LOD_AUTO)
+    for pixels, expected in ((1e6, vtkSegmentationSVDAGRenderer.LOD_BLOCK),
+                             (1e-6, vtkSegmentationSVDAGRenderer.LOD_VOXEL)):
+        renderer.SetAutoLODPixels(pixels)
+        assert renderer.Render() == 1
+        label, depth = outputs(renderer)
+        assert np.array_equal(label, fixed[expected][0])
+        assert np.array_equal(depth, fixed[expected][1])
+    renderer.SetAutoLODPixels(4.0)  # 64x48 pixels: leaves and blocks at some distances
+    assert renderer.Render() == 1
+    label, _ = outputs(renderer)
+    some_level = np.zeros(len(label), bool)
+    for lod in LODS:
+        some_level |= label == fixed[lod][0]
+    assert some_level.mean() >= 0.999
+
+
+def test_hidden_labels_vanish(real_volume):
+    labels, volume = real_volume
+    renderer = make_renderer(volume)
+    renderer.ResetCamera(10, 30, 1.3)
+    assert renderer.Render() == 1
+    label, _ = outputs(renderer)
+    visible, counts = np.unique(label[label > 0], return_counts=True)
+    hidden = visible[np.argsort(counts)[-3:]] - 1  # the three largest on screen
+    for index in hidden:
+        renderer.HideLabel(int(index))
+    assert renderer.Render() == 1
+    label_hidden, depth_hidden = outputs(renderer)
+    assert not np.isin(label_hidden - 1, hidden).any()
+    # The pixels they covered now show what lies behind them: exactly the image of a volume
+    # built without those labels (compared by label value, the label tables differ).
+    values = vtk_to_numpy(volume.NewLabelValues()).astype(np.int64)
+    without = build(labels, spacing=(1.0, 0.9, 1.2), origin=(-50.0, 0.0, 20.0),
+                    excluded=values[hidden])
+    reference = make_renderer(without)
+    for name in ("CameraPosition", "CameraFocalPoint", "CameraViewUp"):
+        getattr(reference, "Set" + name)(getattr(renderer, "Get" + name)())
+    assert reference.Render() == 1
+    ref_label, ref_depth = outputs(reference)
+    ref_values = vtk_to_numpy(without.NewLabelValues()).astype(np.int64)
+    as_value = lambda lab, table: np.where(lab > 0, table[np.maximum(lab - 1, 0)], -1)
+    assert np.array_equal(as_value(label_hidden, values), as_value(ref_label, ref_values))
+    assert np.array_equal(depth_hidden, ref_depth)
+    renderer.ShowAllLabels()
+    assert renderer.Render() == 1
+    assert np.array_equal(outputs(renderer)[0], label)
+
+
+def test_forced_missing_device_is_a_clear_error(real_volume, monkeypatch):
+    working = make_renderer(real_volume[1])
+    assert working.Render() == 1
+    device = working.GetDeviceName()
+    monkeypatch.setenv("SVDAG_VK_DEVICE", "nonexistent")
+    renderer = make_renderer(real_volume[1])
+    messages = []
+
+    @calldata_type(VTK_STRING)
+    def on_error(_obj, _event, message):
+        messages.append(message)
+
+    renderer.AddObserver("ErrorEvent", on_error)
+    assert renderer.Render() == 0
+    assert len(messages) == 1
+    assert "SVDAG_VK_DEVICE='nonexistent'" in messages[0]
+    # It names every device found, so also the one a normal run picks.
+    assert "devices found" in messages[0] and device in messages[0]
+
+
+def test_render_without_input_is_an_error():
+    renderer = vtkSegmentationSVDAGRenderer()
+    messages = []
+
+    @calldata_type(VTK_STRING)
+    def on_error(_obj, _event, message):
+        messages.append(message)
+
+    renderer.AddObserver("ErrorEvent", on_error)
+    assert renderer.Render() == 0
+    assert messages and "input" in messages[0]
