@@ -280,7 +280,7 @@ def test_nifti_qform_only(tmp_path, rng, flip):
 def test_tiff(tmp_path, rng, shape, dtype):
     labels = make_labels(shape, dtype, rng)
     path = tmp_path / "labels.tif"
-    tifffile.imwrite(path, labels)
+    tifffile.imwrite(path, labels, photometric="minisblack")
     assert len(tifffile.TiffFile(path).pages) == shape[0]
     assert_reads(path, labels, "TIFF")
 
@@ -291,7 +291,7 @@ def test_tiff(tmp_path, rng, shape, dtype):
 def test_tiff_layouts(tmp_path, rng, options):
     labels = make_labels((20, 45, 38), "uint16", rng)
     path = tmp_path / "layout.tif"
-    tifffile.imwrite(path, labels, **options)
+    tifffile.imwrite(path, labels, photometric="minisblack", **options)
     assert_reads(path, labels, "TIFF")
 
 
@@ -585,7 +585,7 @@ def write_good(fmt, tmp_path, labels):
         nibabel.save(nibabel.Nifti1Image(labels.transpose(2, 1, 0), np.eye(4)), path)
     elif fmt == "tif":
         path = tmp_path / "t.tif"
-        tifffile.imwrite(path, labels)
+        tifffile.imwrite(path, labels, photometric="minisblack")
     elif fmt == "h5":
         path = tmp_path / "t.h5"
         with h5py.File(path, "w") as f:
@@ -659,7 +659,7 @@ def test_float_data(tmp_path, fmt):
         nibabel.save(nibabel.Nifti1Image(data, np.eye(4)), path)
     elif fmt == "tif":
         path = tmp_path / "f.tif"
-        tifffile.imwrite(path, data)
+        tifffile.imwrite(path, data, photometric="minisblack")
     elif fmt == "h5":
         path = tmp_path / "f.h5"
         with h5py.File(path, "w") as f:
