@@ -247,6 +247,23 @@ def test_nifti(tmp_path, rng, suffix, shape, dtype):
                  direction=a[:3, :3] / spacing)
 
 
+@pytest.mark.parametrize("kind", ["nifti2", "pair"])
+def test_nifti2_and_pairs(tmp_path, rng, kind):
+    """NIfTI-2 single files and NIfTI-1 .hdr/.img pairs."""
+    labels = make_labels((40, 33, 17), "uint32", rng)
+    affine = np.diag([0.5, 0.75, 1.25, 1.0])
+    affine[:3, 3] = [3.0, -1.0, 2.0]
+    data = np.ascontiguousarray(labels.transpose(2, 1, 0))
+    if kind == "nifti2":
+        path = tmp_path / "labels2.nii"
+        nibabel.save(nibabel.Nifti2Image(data, affine, dtype=np.uint32), path)
+    else:
+        path = tmp_path / "labels.hdr"
+        nibabel.save(nibabel.Nifti1Pair(data, affine, dtype=np.uint32), path)
+        assert (tmp_path / "labels.img").exists()
+    assert_reads(path, labels, "NIfTI", spacing=(0.5, 0.75, 1.25), origin=(3.0, -1.0, 2.0))
+
+
 @pytest.mark.parametrize("flip", [False, True])
 def test_nifti_qform_only(tmp_path, rng, flip):
     """A file with only a qform (sform code 0): geometry from the quaternion, as nibabel."""
@@ -312,11 +329,11 @@ def test_hdf5(tmp_path, rng, shape, dtype):
 
 def test_hdf5_dataset_choice(tmp_path, rng):
     a = make_labels((19, 21, 37), "uint32", rng)
-    b = make_labels((3, 4, 5), "int8", rng)
+    b = make_labels((3, 4, 5), "int16", rng)
     path = tmp_path / "two.h5"
     with h5py.File(path, "w") as f:
         f["a"] = a
-        f["group/b"] = b.astype(">i1")
+        f["group/b"] = b.astype(">i2")  # big-endian on disk
     reader, decoded, _, errors = read(path)  # ambiguous without a dataset name
     assert decoded is None and reader.GetErrorCode() != 0
     assert any("2 3D integer datasets" in e and "SetDatasetName" in e for e in errors)
