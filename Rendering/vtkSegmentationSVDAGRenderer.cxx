@@ -163,6 +163,7 @@ int vtkSegmentationSVDAGRenderer::Render()
       in.Uploaded.reset();
     }
     svdag::render::Renderer& r = *in.Renderer;
+    r.setPrimitivesPerBlasLimit(uint32_t(this->MaximumBlocksPerBLAS));
     if (in.Uploaded != in.Input->GetVolume())
     {
       r.setVolume(in.Input->GetVolume());
@@ -260,6 +261,11 @@ vtkTypeInt64 vtkSegmentationSVDAGRenderer::GetBLASBytes() const
   return this->Internal->Renderer ? vtkTypeInt64(this->Internal->Renderer->blasBytes()) : 0;
 }
 
+int vtkSegmentationSVDAGRenderer::GetNumberOfBLAS() const
+{
+  return this->Internal->Renderer ? int(this->Internal->Renderer->blasCount()) : 0;
+}
+
 vtkTypeInt64 vtkSegmentationSVDAGRenderer::GetTLASBytes() const
 {
   return this->Internal->Renderer ? vtkTypeInt64(this->Internal->Renderer->tlasBytes()) : 0;
@@ -291,4 +297,6 @@ void vtkSegmentationSVDAGRenderer::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "LastFrameMilliseconds: " << this->GetLastFrameMilliseconds() << "\n";
   os << indent << "BLASBytes: " << this->GetBLASBytes() << "\n";
   os << indent << "TLASBytes: " << this->GetTLASBytes() << "\n";
+  os << indent << "MaximumBlocksPerBLAS: " << this->MaximumBlocksPerBLAS << "\n";
+  os << indent << "NumberOfBLAS: " << this->GetNumberOfBLAS() << "\n";
 }

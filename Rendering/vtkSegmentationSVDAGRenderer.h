@@ -114,6 +114,16 @@ public:
   ///@}
 
   ///@{
+  /** Most blocks per bottom-level acceleration structure (BLAS); 0 (default) uses the device's
+   * limit (16,777,215 on lavapipe), and volumes with more visible blocks are split into several
+   * BLAS. Smaller values trace slower: they exist to exercise the split (tests). */
+  vtkSetClampMacro(MaximumBlocksPerBLAS, vtkTypeInt64, 0, VTK_INT_MAX);
+  vtkGetMacro(MaximumBlocksPerBLAS, vtkTypeInt64);
+  /** Number of BLAS of the last Render(). */
+  int GetNumberOfBLAS() const;
+  ///@}
+
+  ///@{
   /** Linear RGBA written where no block is hit (default 0.1, 0.1, 0.12, 1). */
   vtkSetVector4Macro(Background, double);
   vtkGetVector4Macro(Background, double);
@@ -143,6 +153,7 @@ protected:
   int Height = 256;
   int LOD = LOD_VOXEL;
   double AutoLODPixels = 1;
+  vtkTypeInt64 MaximumBlocksPerBLAS = 0;
   double CameraPosition[3] = { 0, 0, 1 };
   double CameraFocalPoint[3] = { 0, 0, 0 };
   double CameraViewUp[3] = { 0, 1, 0 };

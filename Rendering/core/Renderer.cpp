@@ -157,6 +157,8 @@ void Renderer::setVolume(std::shared_ptr<const Volume> volume)
   this->Device->scene.reset();
   const auto start = Clock::now();
   this->Device->scene = std::make_unique<Scene>(this->Device->context, std::move(volume));
+  // Both rebuild the BVH only if they differ from the defaults (all visible, no cap).
+  this->Device->scene->setPrimitivesPerBlasLimit(this->BlasLimit);
   this->Device->scene->setHiddenLabels(hidden);
   this->SetupSeconds = std::chrono::duration<double>(Clock::now() - start).count();
 }
@@ -168,6 +170,21 @@ void Renderer::setHiddenLabels(const std::vector<uint32_t>& labelIndices)
   const auto start = Clock::now();
   if (this->Device->scene->setHiddenLabels(labelIndices))
     this->SetupSeconds = std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+void Renderer::setPrimitivesPerBlasLimit(uint32_t limit)
+{
+  this->BlasLimit = limit;
+  if (!this->Device->scene)
+    return;
+  const auto start = Clock::now();
+  if (this->Device->scene->setPrimitivesPerBlasLimit(limit))
+    this->SetupSeconds = std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+size_t Renderer::blasCount() const
+{
+  return this->Device->scene ? this->Device->scene->blasCount() : 0;
 }
 
 void Renderer::setImageSize(uint32_t width, uint32_t height)

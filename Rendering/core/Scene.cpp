@@ -142,6 +142,15 @@ bool Scene::setHiddenLabels(const std::vector<uint32_t>& labelIndices)
   return true;
 }
 
+bool Scene::setPrimitivesPerBlasLimit(uint32_t limit)
+{
+  if (limit == this->PrimitivesPerBlasLimit)
+    return false;
+  this->PrimitivesPerBlasLimit = limit;
+  this->build();
+  return true;
+}
+
 uint64_t Scene::blasBytes() const
 {
   uint64_t total = 0;
@@ -194,6 +203,8 @@ void Scene::build()
   this->VisibleBlocks = count;
   this->PrimitivesPerBlas = uint32_t(std::min<uint64_t>(this->Ctx.limits().maxPrimitiveCount,
     uint64_t(std::numeric_limits<uint32_t>::max())));
+  if (this->PrimitivesPerBlasLimit > 0)
+    this->PrimitivesPerBlas = std::min(this->PrimitivesPerBlas, this->PrimitivesPerBlasLimit);
   if (this->PrimitivesPerBlas == 0)
     throw std::runtime_error("the Vulkan device reports maxPrimitiveCount 0");
 

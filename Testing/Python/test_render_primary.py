@@ -395,3 +395,90 @@ def test_render_without_input_is_an_error():
     renderer.AddObserver("ErrorEvent", on_error)
     assert renderer.Render() == 0
     assert messages and "input" in messages[0]
+
+
+def test_split_into_several_blas_gives_the_same_image(real_volume):
+    """Volumes beyond the device's BLAS primitive limit are split into several BLAS (one TLAS
+    instance each); capping the blocks per BLAS forces that path on a small volume."""
+    renderer = make_renderer(real_volume[1])
+    renderer.ResetCamera(70, -20, 1.4)
+    assert renderer.Render() == 1
+    assert renderer.GetNumberOfBLAS() == 1
+    single = outputs(renderer)
+    renderer.SetMaximumBlocksPerBLAS(37)  # not a divisor of the block count: a short last BLAS
+    assert renderer.Render() == 1
+    blocks = real_volume[1].GetNumberOfBlocks()
+    assert renderer.GetNumberOfBLAS() == -(-blocks // 37)
+    split = outputs(renderer)
+    assert np.array_equal(single[0], split[0])
+    assert np.array_equal(single[1], split[1])
+
+
+def test_all_labels_hidden_is_an_empty_image(random_volume):
+    labels, volume = random_volume
+    renderer = make_renderer(volume)
+    renderer.ResetCamera(0, 0, 1)
+    for index in range(volume.GetNumberOfLabels()):
+        renderer.HideLabel(index)
+    assert renderer.Render() == 1
+    label, depth = outputs(renderer)
+    assert np.all(label == 0) and np.all(depth == DEPTH_MISS)
+    assert renderer.GetNumberOfBLAS() == 0
+
+
+def cli_path():
+    import vtksvdag.vtkSVDAGRendering as module
+    import pathlib
+    # <build>/python/vtksvdag/vtkSVDAGRendering*.so -> <build>/bin/vtksvdag-render
+    path = pathlib.Path(module.__file__).resolve().parents[2] / "bin" / "vtksvdag-render"
+    assert path.is_file(), f"the command line renderer was not built: {path}"
+    return path
+
+
+def test_command_line_renders_a_file(real_volume, tmp_path):
+    import json
+    import subprocess
+
+    from PIL import Image
+    from vtksvdag.vtkSVDAGIO import vtkSegmentationSVDAGWriter
+
+    svdag_file = tmp_path / "plant.svdag"
+    writer = vtkSegmentationSVDAGWriter()
+    writer.SetInputData(real_volume[1])
+    writer.SetFileName(str(svdag_file))
+    assert writer.Write() == 1
+    png, exr = tmp_path / "plant.png", tmp_path / "plant.exr"
+    run = subprocess.run([str(cli_path()), str(svdag_file), str(png), "--width", "40",
+                          "--height", "30", "--lod", "leaf", "--azimuth", "15"],
+                         capture_output=True, text=True, timeout=120)
+    assert run.returncode == 0, run.stderr
+    report = json.loads(run.stdout)
+    assert report["width"] == 40 and report["height"] == 30 and report["lod"] == "leaf"
+    assert report["bytes_blas"] > 0 and report["bytes_tlas"] > 0 and report["device"]
+    assert report["setup_seconds"] > 0 and report["ms_per_frame"] > 0
+    image = np.asarray(Image.open(png))
+    assert image.shape == (30, 40, 4)
+    # The same view through the VTK class: the PNG holds the Color output, rows top first.
+    renderer = vtkSegmentationSVDAGRenderer()
+    renderer.SetInputData(real_volume[1])
+    renderer.SetWidth(40)
+    renderer.SetHeight(30)
+    renderer.SetLOD(vtkSegmentationSVDAGRenderer.LOD_LEAF)
+    renderer.ResetCamera(15, 20, 1)  # the command line's default elevation is 20
+    assert renderer.Render() == 1
+    color = vtk_to_numpy(renderer.GetOutput().GetPointData().GetArray("Color"))
+    assert np.array_equal(image[::-1].reshape(-1, 4), color)
+
+    run = subprocess.run([str(cli_path()), str(svdag_file), str(exr), "--width", "8",
+                          "--height", "8"], capture_output=True, text=True, timeout=120)
+    assert run.returncode == 0, run.stderr
+    assert exr.read_bytes()[:4] == b"\x76\x2f\x31\x01"  # OpenEXR magic
+
+    bad = subprocess.run([str(cli_path()), str(svdag_file), str(png), "--lod", "fine"],
+                         capture_output=True, text=True, timeout=60)
+    assert bad.returncode == 1 and "unknown LOD" in bad.stderr
+    corrupt = tmp_path / "corrupt.svdag"
+    corrupt.write_bytes(svdag_file.read_bytes()[:100])
+    failed = subprocess.run([str(cli_path()), str(corrupt), str(png)],
+                            capture_output=True, text=True, timeout=60)
+    assert failed.returncode == 2 and "vtksvdag-render:" in failed.stderr

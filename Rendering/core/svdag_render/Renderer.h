@@ -68,6 +68,9 @@ public:
   // Label indices left out of the BVH; rebuilds it when the set changes (setupSeconds then
   // measures the rebuild).
   void setHiddenLabels(const std::vector<uint32_t>& labelIndices);
+  // Caps the primitives per BLAS (0: the driver's limit); see Scene::setPrimitivesPerBlasLimit.
+  void setPrimitivesPerBlasLimit(uint32_t limit);
+  size_t blasCount() const;
   void setCamera(const Camera& camera) { this->View = camera; }
   const Camera& camera() const { return this->View; }
   // Throws std::invalid_argument for 0 or more pixels than the device dispatches (or 2^28).
@@ -101,6 +104,7 @@ private:
   uint32_t Height = 256;
   Lod Detail = Lod::Voxel;
   float AutoLodPixels = 1.0f;
+  uint32_t BlasLimit = 0;
   std::array<float, 4> Background{ { 0.1f, 0.1f, 0.12f, 1.0f } };
   Image Output;
   double SetupSeconds = 0;

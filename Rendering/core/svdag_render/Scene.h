@@ -45,6 +45,10 @@ public:
   // ignored) if the set changed; returns whether it rebuilt. Cheap: no stream is uploaded again.
   bool setHiddenLabels(const std::vector<uint32_t>& labelIndices);
   const std::vector<uint32_t>& hiddenLabels() const { return this->Hidden; }
+  // Caps the primitives per BLAS below the driver's maxPrimitiveCount (0: no cap) and rebuilds
+  // if that changes the split; returns whether it rebuilt. More, smaller BLAS trace slower: this
+  // exists to exercise the multi-BLAS path on small volumes (tests).
+  bool setPrimitivesPerBlasLimit(uint32_t limit);
 
   const Volume& volume() const { return *this->Source; }
   VkAccelerationStructureKHR tlas() const { return this->Tlas.handle(); }
@@ -78,6 +82,7 @@ private:
   std::vector<AccelerationStructure> Blas;
   AccelerationStructure Tlas;
   uint32_t PrimitivesPerBlas = 1;
+  uint32_t PrimitivesPerBlasLimit = 0;
   uint64_t VisibleBlocks = 0;
   double UploadSeconds = 0;
   double BuildSeconds = 0;
