@@ -158,18 +158,20 @@ def primary_rays(renderer):
 
 
 def cpu_reference(volume, renderer, lod):
-    """Label (index + 1, 0 = miss) and depth per pixel from the CPU ray caster."""
+    """Label (index + 1, 0 = miss), depth and world normal per pixel from the CPU ray caster."""
     caster = vtkSegmentationSVDAGRayCaster()
     caster.SetInputData(volume)
     caster.SetLOD(lod)
     origin, dirs = primary_rays(renderer)
     labels = np.zeros(len(dirs), np.int64)
     depth = np.full(len(dirs), np.inf)
+    normals = np.zeros((len(dirs), 3))
     for i, d in enumerate(dirs):
         if caster.CastRay(origin, d):
             labels[i] = caster.GetHitLabelIndex() + 1
             depth[i] = caster.GetHitDistance()
-    return labels, depth
+            normals[i] = caster.GetHitNormal()
+    return labels, depth, normals
 
 
 def outputs(renderer):
@@ -228,7 +230,8 @@ def assert_matches_cpu(labels, volume, renderer, lod, what):
     renderer.SetLOD(lod)
     assert renderer.Render() == 1
     gpu_label, gpu_depth = outputs(renderer)
-    cpu_label, cpu_depth = cpu_reference(volume, renderer, lod)
+    gpu_normal = vtk_to_numpy(renderer.GetOutput().GetPointData().GetArray("Normal"))
+    cpu_label, cpu_depth, cpu_normal = cpu_reference(volume, renderer, lod)
     if lod == vtkSegmentationSVDAGRenderer.LOD_VOXEL:
         same = gpu_label == cpu_label
     else:
@@ -246,6 +249,10 @@ def assert_matches_cpu(labels, volume, renderer, lod, what):
     assert np.allclose(gpu_depth[both], cpu_depth[both], rtol=1e-4, atol=1e-5), (
         f"{what} LOD {lod}: depth differs, max relative error "
         f"{np.max(np.abs(gpu_depth[both] - cpu_depth[both]) / np.maximum(cpu_depth[both], 1e-9)):.3g}")
+    # The entry face's world normal (zero where the ray starts inside); a ray through an edge
+    # may enter by either face, so again 99.9% of the pixels.
+    normal_agreement = np.all(np.abs(gpu_normal[both] - cpu_normal[both]) < 1e-4, axis=1).mean()
+    assert not both.any() or normal_agreement >= 0.999, f"{what} LOD {lod}: normals agree on {normal_agreement:.4%}"
     # Misses carry the documented far value, never inf or NaN.
     assert np.all(gpu_depth[gpu_label == 0] == DEPTH_MISS)
     assert np.all(np.isfinite(gpu_depth))
@@ -482,3 +489,24 @@ def test_command_line_renders_a_file(real_volume, tmp_path):
     failed = subprocess.run([str(cli_path()), str(corrupt), str(png)],
                             capture_output=True, text=True, timeout=60)
     assert failed.returncode == 2 and "vtksvdag-render:" in failed.stderr
+
+
+def test_degenerate_camera_is_an_error(real_volume):
+    renderer = make_renderer(real_volume[1])
+    messages = []
+
+    @calldata_type(VTK_STRING)
+    def on_error(_obj, _event, message):
+        messages.append(message)
+
+    renderer.AddObserver("ErrorEvent", on_error)
+    renderer.SetCameraPosition(1.0, 2.0, 3.0)
+    renderer.SetCameraFocalPoint(1.0, 2.0, 3.0)
+    assert renderer.Render() == 0
+    assert "focal point" in messages[-1]
+    renderer.SetCameraFocalPoint(1.0, 2.0, 10.0)
+    renderer.SetCameraViewUp(0.0, 0.0, 1.0)  # parallel to the view direction
+    assert renderer.Render() == 0
+    assert "view up" in messages[-1]
+    renderer.SetCameraViewUp(0.0, 1.0, 0.0)
+    assert renderer.Render() == 1
