@@ -11,7 +11,7 @@
 #include <cstring>
 
 svdagNiftiSlabSource::svdagNiftiSlabSource(const std::string& fileName)
-  : svdagVTKImageSlabSource(vtkSmartPointer<vtkNIFTIImageReader>::New(), fileName, false)
+  : svdagVTKImageSlabSource(vtkSmartPointer<vtkNIFTIImageReader>::New(), fileName)
 {
   auto* reader = vtkNIFTIImageReader::SafeDownCast(this->Reader);
   reader->SetFileName(fileName.c_str());
@@ -41,7 +41,8 @@ svdagNiftiSlabSource::svdagNiftiSlabSource(const std::string& fileName)
   // the whole image only: with a sub-extent it reads the file's slices of that extent and
   // reverses them within the slab. Such files are read whole (and the reversal undone).
   this->SlicesReversed = reader->GetQFac() < 0;
-  this->WholeRead = this->SlicesReversed;
+  if (this->SlicesReversed)
+    this->readWhole();
 
   // The index-to-world affine (3x4, row-major), as nibabel's img.affine.
   double m[3][4] = { { 0 } };

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <unistd.h>
 
 void svdagSlabSource::checkGeometry(const std::string& fileName) const
 {
@@ -57,6 +58,13 @@ void svdagSwapBytes(void* data, size_t count, int size)
   {
     std::reverse(bytes, bytes + size);
   }
+}
+
+uint64_t svdagPhysicalMemoryBytes()
+{
+  const long pages = sysconf(_SC_PHYS_PAGES);
+  const long pageSize = sysconf(_SC_PAGESIZE);
+  return pages > 0 && pageSize > 0 ? uint64_t(pages) * uint64_t(pageSize) : 0;
 }
 
 bool svdagHostIsLittleEndian()

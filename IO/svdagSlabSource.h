@@ -70,6 +70,8 @@ svdag::ScalarType svdagIntegerScalarType(bool isSigned, int bytes, const std::st
 [[noreturn]] void svdagThrowNotIntegerLabels(const std::string& fileName, const std::string& type);
 // Reverses the byte order of `count` values of `size` bytes in place.
 void svdagSwapBytes(void* data, size_t count, int size);
+// Bytes of physical memory on this machine (0 if unknown): the bound for any one buffer.
+uint64_t svdagPhysicalMemoryBytes();
 // True on little-endian hosts.
 bool svdagHostIsLittleEndian();
 

@@ -4,10 +4,11 @@
 #include "vtkXMLImageDataReader.h"
 
 svdagVTIImageSlabSource::svdagVTIImageSlabSource(const std::string& fileName)
-  : svdagVTKImageSlabSource(vtkSmartPointer<vtkXMLImageDataReader>::New(), fileName, false)
+  : svdagVTKImageSlabSource(vtkSmartPointer<vtkXMLImageDataReader>::New(), fileName)
 {
   vtkXMLImageDataReader::SafeDownCast(this->Reader)->SetFileName(fileName.c_str());
   this->open();
+  this->checkGeometry(fileName);
 }
 
 bool svdagVTIImageSlabSource::canRead(const std::string& fileName)

@@ -38,10 +38,9 @@ std::string messageOf(const std::string& text)
 }
 
 svdagVTKImageSlabSource::svdagVTKImageSlabSource(
-  vtkSmartPointer<vtkAlgorithm> reader, const std::string& fileName, bool wholeRead)
+  vtkSmartPointer<vtkAlgorithm> reader, const std::string& fileName)
   : Reader(std::move(reader))
   , FileName(fileName)
-  , WholeRead(wholeRead)
 {
   this->ErrorObserver = vtkSmartPointer<vtkCallbackCommand>::New();
   this->ErrorObserver->SetCallback(storeErrorText);
@@ -126,6 +125,18 @@ void svdagVTKImageSlabSource::open()
       "label volumes need one component per voxel; " + this->FileName + " has " +
         std::to_string(components));
   this->Type = static_cast<svdag::ScalarType>(coreType);
+}
+
+void svdagVTKImageSlabSource::readWhole()
+{
+  // The wrapped reader allocates the whole image: refuse what cannot fit in memory.
+  const uint64_t bytes = this->Geometry.voxelCount() * uint64_t(svdag::scalarSize(this->Type));
+  const uint64_t memory = svdagPhysicalMemoryBytes();
+  if (memory > 0 && bytes > memory)
+    throw svdagReadError(vtkErrorCode::OutOfDiskSpaceError,
+      this->FileName + ": the image takes " + std::to_string(bytes) +
+        " bytes, more than this machine's memory (it must be read whole)");
+  this->WholeRead = true;
 }
 
 void svdagVTKImageSlabSource::readSlab(int32_t z0, int32_t nz, void* dst)

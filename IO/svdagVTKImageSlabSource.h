@@ -22,27 +22,26 @@ public:
   void readSlab(int32_t z0, int32_t nz, void* dst) override;
 
 protected:
-  // `reader` has its file name set. With wholeRead the reader is updated once for the whole
-  // image (for readers that cannot produce a sub-extent) and slabs are copied out of it.
-  svdagVTKImageSlabSource(
-    vtkSmartPointer<vtkAlgorithm> reader, const std::string& fileName, bool wholeRead);
+  // `reader` gets its file name from the subclass, which then calls open().
+  svdagVTKImageSlabSource(vtkSmartPointer<vtkAlgorithm> reader, const std::string& fileName);
   // Runs the information pass and fills Geometry and Type. Subclasses call it from their
-  // constructor (then adjust the geometry if their format needs to).
+  // constructor, adjust the geometry if their format needs to, then call checkGeometry().
   void open();
   // Slice of the reader's output (counted from its whole extent's first slice) that holds
   // slice z of the volume; NIfTI overrides it where vtkNIFTIImageReader reverses the slices.
   virtual int32_t readerSlice(int32_t z) const { return z; }
+  // Switches to whole-image reads (call after open()); throws if the image cannot fit in memory.
+  void readWhole();
   // Throws the error the wrapped reader reported since the last call, if any.
   void throwReaderError(const char* during);
 
   vtkSmartPointer<vtkAlgorithm> Reader;
   std::string FileName;
-  // Update the whole image once and copy slabs out of it (set before the first readSlab).
-  bool WholeRead = false;
 
 private:
   vtkSmartPointer<vtkCallbackCommand> ErrorObserver;
   std::string ErrorText;
+  bool WholeRead = false; // update the whole image once and copy slabs out of it
   bool WholeReadDone = false;
   int WholeExtent[6] = { 0, -1, 0, -1, 0, -1 };
   int VTKScalarType = 0;

@@ -7,6 +7,12 @@
 
 #include <sys/stat.h>
 
+namespace
+{
+// Deflate's best ratio is 1032:1 (a run of zeros); twice that leaves margin for any encoder.
+constexpr uint64_t MaxDeflateRatio = 2048;
+}
+
 struct svdagVoxelStream::Impl
 {
   std::string fileName;
@@ -62,6 +68,12 @@ svdagVoxelStream::svdagVoxelStream(const std::string& fileName, Encoding encodin
     if (dataOffset >= size || fseeko(impl->file, off_t(dataOffset), SEEK_SET) != 0)
       throw svdagReadError(vtkErrorCode::PrematureEndOfFileError,
         fileName + ": no compressed data after the header (truncated file?)");
+    // Deflate cannot compress better than about 1032:1, so a header that claims far more voxels
+    // than the compressed bytes can hold is wrong; say so before anything is allocated.
+    if ((size - dataOffset) * MaxDeflateRatio < total)
+      throw svdagReadError(vtkErrorCode::FileFormatError,
+        fileName + ": the header describes " + std::to_string(total) + " bytes of voxels, more "
+          "than its " + std::to_string(size - dataOffset) + " compressed bytes can hold");
     impl->inflater.reset(new svdagInflateStream(impl->file, fileName));
     impl->inflater->skip(skipAfterInflate);
   }

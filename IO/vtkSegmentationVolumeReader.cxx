@@ -173,10 +173,23 @@ int vtkSegmentationVolumeReader::RequestData(
       }
     }
 
+    // One slab is the reader's working memory. A volume whose slab alone exceeds the machine's
+    // memory (absurd but well-formed dimensions) is refused before anything is allocated.
+    const uint64_t slabBytes = uint64_t(geometry.dims[0]) * uint64_t(geometry.dims[1]) *
+      uint64_t(std::min(svdag::Builder::SlabDepth, geometry.dims[2])) *
+      uint64_t(svdag::scalarSize(type));
+    const uint64_t memory = svdagPhysicalMemoryBytes();
+    if (memory > 0 && slabBytes > memory)
+    {
+      vtkErrorMacro("Cannot read " << this->FileName << ": one slab of 16 z-slices takes "
+                                   << slabBytes << " bytes, more than this machine's memory.");
+      this->SetErrorCode(vtkErrorCode::OutOfDiskSpaceError);
+      return 0;
+    }
     svdag::Builder builder(geometry, type, options, vtkSVDAGParallelFor());
-    std::vector<uint8_t> slab(size_t(geometry.dims[0]) * size_t(geometry.dims[1]) *
-      size_t(std::min(svdag::Builder::SlabDepth, geometry.dims[2])) *
-      size_t(svdag::scalarSize(type)));
+    // Not value-initialised: the source overwrites every byte.
+    std::unique_ptr<uint8_t[]> slabMemory(new uint8_t[size_t(slabBytes)]);
+    uint8_t* slab = slabMemory.get();
     for (int32_t z0 = 0; z0 < geometry.dims[2]; z0 += svdag::Builder::SlabDepth)
     {
       if (this->GetAbortExecute())
@@ -185,8 +198,8 @@ int vtkSegmentationVolumeReader::RequestData(
         return 0;
       }
       const int32_t nz = std::min(svdag::Builder::SlabDepth, geometry.dims[2] - z0);
-      source->readSlab(z0, nz, slab.data());
-      builder.addSlab(z0, nz, slab.data());
+      source->readSlab(z0, nz, slab);
+      builder.addSlab(z0, nz, slab);
       this->UpdateProgress(double(z0 + nz) / geometry.dims[2]);
     }
     output->SetVolume(std::make_shared<const svdag::Volume>(builder.finish()));

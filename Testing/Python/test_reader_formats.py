@@ -742,6 +742,22 @@ def test_bad_nrrd_headers(tmp_path, fields, message):
     assert_fails(path, message=message)
 
 
+def test_nrrd_gzip_claiming_too_many_voxels(tmp_path):
+    """Well-formed but absurd sizes with little gzip data: refused before any allocation."""
+    path = tmp_path / "bomb.nrrd"
+    path.write_bytes(nrrd_header(type="uint64", endian="little", encoding="gzip",
+                                 sizes="65536 65536 16") + gzip.compress(bytes(1000)))
+    assert_fails(path, vtkErrorCode.FileFormatError, "compressed bytes can hold")
+
+
+def test_hdf5_slab_larger_than_memory(tmp_path):
+    """A valid HDF5 file (chunked, nothing written) whose one slab would not fit in memory."""
+    path = tmp_path / "huge.h5"
+    with h5py.File(path, "w") as f:
+        f.create_dataset("labels", shape=(16, 2**20, 2**20), dtype=np.uint64, chunks=(1, 64, 64))
+    assert_fails(path, vtkErrorCode.OutOfDiskSpaceError, "more than this machine's memory")
+
+
 def test_nrrd_short_raw_data(tmp_path):
     path = tmp_path / "short.nrrd"
     path.write_bytes(nrrd_header(sizes="4 4 4") + bytes(63))
