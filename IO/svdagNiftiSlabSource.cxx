@@ -29,10 +29,12 @@ svdagNiftiSlabSource::svdagNiftiSlabSource(const std::string& fileName)
           " dimensions (dim[" + std::to_string(d) + "] = " + std::to_string(header->GetDim(d)) +
           "); label volumes need 3");
   }
-  // Scaled values are not labels.
+  // Scaled values are not labels. A slope of 0 (or NaN, as nibabel writes) means no scaling.
   const double slope = header->GetSclSlope();
   const double inter = header->GetSclInter();
-  if ((slope != 0 && slope != 1) || (slope != 0 && inter != 0))
+  const bool scaled = std::isfinite(slope) && slope != 0 &&
+    (slope != 1 || (std::isfinite(inter) && inter != 0));
+  if (scaled)
     throw svdagReadError(vtkErrorCode::FileFormatError,
       fileName + " scales its values (scl_slope " + std::to_string(slope) + ", scl_inter " +
         std::to_string(inter) + "); label volumes need unscaled integers");

@@ -695,6 +695,31 @@ def test_float_data(tmp_path, fmt):
     assert_fails(path, vtkErrorCode.FileFormatError, "label volumes need integer scalars")
 
 
+def test_four_dimensional_volumes_are_rejected(tmp_path):
+    nii = tmp_path / "time.nii.gz"
+    nibabel.save(nibabel.Nifti1Image(np.zeros((6, 5, 4, 3), np.uint8), np.eye(4), dtype=np.uint8),
+                 nii)
+    assert_fails(nii, vtkErrorCode.FileFormatError, "label volumes need 3")
+    h5 = tmp_path / "planes.h5"
+    with h5py.File(h5, "w") as f:
+        f["labels"] = np.zeros((4, 5), np.uint8)
+    r = read(h5, dataset="labels")
+    assert r[1] is None and any("label volumes need 3" in e for e in r[3])
+    tif = tmp_path / "mixed.tif"
+    with tifffile.TiffWriter(tif) as w:
+        w.write(np.zeros((8, 8), np.uint8), photometric="minisblack")
+        w.write(np.zeros((8, 9), np.uint8), photometric="minisblack")
+    assert_fails(tif, vtkErrorCode.FileFormatError, "differs from page 0")
+
+
+def test_scaled_nifti_is_rejected(tmp_path):
+    image = nibabel.Nifti1Image(np.zeros((6, 5, 4), np.int16), np.eye(4), dtype=np.int16)
+    image.header.set_slope_inter(2.0, 1.0)
+    path = tmp_path / "scaled.nii"
+    nibabel.save(image, path)
+    assert_fails(path, vtkErrorCode.FileFormatError, "scales its values")
+
+
 def test_multicomponent_data(tmp_path):
     image = vtkImageData()
     image.SetDimensions(3, 4, 5)
