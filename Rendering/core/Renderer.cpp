@@ -239,7 +239,10 @@ const Image& Renderer::render()
   const double pixelAngle =
     2 * std::tan(this->View.viewAngle * 3.14159265358979323846 / 360) / this->Height;
   gpu::FrameUniforms u{};
-  u.cameraPosition = vec(this->View.position);
+  // Relative to the scene's reference point, in double before rounding to float (Scene.h).
+  const auto& reference = g.scene->worldReference();
+  u.cameraPosition = vec({ { this->View.position[0] - reference[0],
+    this->View.position[1] - reference[1], this->View.position[2] - reference[2] } });
   u.cameraForward = vec(basis.forward);
   u.cameraRight = vec(basis.right);
   u.cameraUp = vec(basis.up);

@@ -1,5 +1,7 @@
 #include "svdag_render/Scene.h"
 
+#include "svdag_render/Camera.h"
+
 #include <algorithm>
 #include <chrono>
 #include <cstring>
@@ -105,6 +107,9 @@ Scene::Scene(Context& context, std::shared_ptr<const Volume> volume)
   if (!this->Source)
     throw std::invalid_argument("Scene needs a volume");
   const Volume& v = *this->Source;
+  const auto bounds = worldBounds(v.geometry);
+  for (int a = 0; a < 3; ++a)
+    this->Reference[a] = (bounds[2 * a] + bounds[2 * a + 1]) / 2;
   checkAddressable(v.blocks.size(), "block");
   checkAddressable(v.roots.size(), "root node");
   checkAddressable(v.mids.size(), "mid node");
@@ -220,7 +225,10 @@ void Scene::build()
   this->PrimitiveBlocks = uploadBuffer(this->Ctx, primitiveBlocks.data(),
     primitiveBlocks.size() * sizeof(uint32_t), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT);
 
-  const auto transform = indexToWorld(v.geometry);
+  // Index -> world - Reference (the shift is applied in double, see Scene.h).
+  auto transform = indexToWorld(v.geometry);
+  for (int r = 0; r < 3; ++r)
+    transform[4 * r + 3] -= this->Reference[r];
   std::vector<VkAccelerationStructureInstanceKHR> instances;
   if (count > 0)
   {

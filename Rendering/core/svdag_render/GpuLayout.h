@@ -14,6 +14,8 @@
  *   (vertical view angle, VTK semantics) and aspect = width / height:
  *       u = 2 * (x + 0.5) / width - 1,   v = 2 * (y + 0.5) / height - 1
  *       direction = normalize(F + u * h * aspect * R + v * h * U),  origin = camera position
+ *   (on the GPU, world coordinates are shifted by a reference point near the volume, Scene.h;
+ *   distances and directions do not change)
  *   The host stores F, h * aspect * R and h * U below (cameraForward, cameraRight, cameraUp).
  *   The world ray is traced from t = 0; since the direction has unit length, t is the distance in
  *   world units.
@@ -74,7 +76,8 @@ SVDAG_GPU_CONST SVDAG_RENDER_LOD_AUTO = 3u;
 #define SVDAG_DEPTH_MISS 3.402823466e38f
 
 SVDAG_UNIFORMS_BEGIN(FrameUniforms)
-  vec4 cameraPosition; // xyz: world position of the camera; w unused
+  vec4 cameraPosition; // xyz: world position of the camera minus the scene's reference point
+                       // (Scene.h: the instance transform is shifted alike); w unused
   vec4 cameraForward;  // xyz: unit forward F; w unused
   vec4 cameraRight;    // xyz: R * tan(viewAngle / 2) * aspect; w unused
   vec4 cameraUp;       // xyz: U * tan(viewAngle / 2); w unused

@@ -10,6 +10,12 @@
 // maxPrimitiveCount (16,777,215 on lavapipe); the TLAS holds one instance per BLAS, all with the
 // volume's index-to-world transform (world = origin + D * diag(spacing) * (p - 0.5)) and the BLAS
 // number as instance custom index. The AABB buffer is freed right after the build.
+//
+// Precision: the GPU works in float. World coordinates are shifted by a reference point (the
+// center of the volume's world bounds) in double precision on the host, both in the instance
+// transform and in the camera position the renderer uploads, so a volume far from the world
+// origin loses no precision; only the camera's distance to the volume and the volume's size
+// matter.
 #pragma once
 
 #include "svdag_render/AccelerationStructure.h"
@@ -51,6 +57,8 @@ public:
   bool setPrimitivesPerBlasLimit(uint32_t limit);
 
   const Volume& volume() const { return *this->Source; }
+  // The point subtracted from world coordinates on the GPU (see Precision above).
+  const std::array<double, 3>& worldReference() const { return this->Reference; }
   VkAccelerationStructureKHR tlas() const { return this->Tlas.handle(); }
   VkDeviceAddress blocksAddress() const { return this->Blocks.address(); }
   VkDeviceAddress rootsAddress() const { return this->Roots.address(); }
@@ -76,6 +84,7 @@ private:
   Context& Ctx;
   std::shared_ptr<const Volume> Source;
   std::vector<uint32_t> Hidden;
+  std::array<double, 3> Reference{ { 0, 0, 0 } };
   Buffer Blocks, Roots, Mids, Leaves;
   Buffer PrimitiveBlocks;
   Buffer Instances;
