@@ -157,7 +157,7 @@ svdagMetaImageSlabSource::svdagMetaImageSlabSource(const std::string& fileName)
   if (!metType(typeName, isSigned, bytes))
     formatError(fileName + ": MetaImage element type '" + typeName + "' is not supported");
   if (bytes == 0)
-    svdagThrowNotIntegerLabels(fileName, typeName);
+    svdagThrowNotIntegerLabels(fileName, typeName == "MET_FLOAT" ? "float" : "double");
   this->Type = svdagIntegerScalarType(isSigned, bytes, fileName + " has " + typeName);
   if (const std::string* channels = field("elementnumberofchannels"))
   {

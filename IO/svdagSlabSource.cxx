@@ -47,8 +47,10 @@ svdag::ScalarType svdagIntegerScalarType(bool isSigned, int bytes, const std::st
 
 void svdagThrowNotIntegerLabels(const std::string& fileName, const std::string& type)
 {
+  // C type names in numpy's spelling, which says the width.
+  const std::string name = type == "float" ? "float32" : type == "double" ? "float64" : type;
   throw svdagReadError(vtkErrorCode::FileFormatError,
-    "label volumes need integer scalars; " + fileName + " has " + type);
+    "label volumes need integer scalars; " + fileName + " has " + name);
 }
 
 void svdagSwapBytes(void* data, size_t count, int size)

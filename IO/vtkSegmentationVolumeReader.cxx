@@ -78,6 +78,13 @@ vtkTypeInt64 vtkSegmentationVolumeReader::GetExcludedLabel(vtkIdType i) const
 
 namespace
 {
+// A source's message without the "FILE: " it starts with (the reader names the file itself).
+std::string withoutFileName(const std::string& message, const char* fileName)
+{
+  const std::string prefix = std::string(fileName) + ": ";
+  return message.compare(0, prefix.size(), prefix) == 0 ? message.substr(prefix.size()) : message;
+}
+
 svdagSlabSourceOptions sourceOptions(const char* datasetName)
 {
   svdagSlabSourceOptions options;
@@ -115,7 +122,8 @@ int vtkSegmentationVolumeReader::RequestInformation(
   }
   catch (const svdagReadError& e)
   {
-    vtkErrorMacro("Cannot read " << this->FileName << ": " << e.what());
+    vtkErrorMacro(
+      "Cannot read " << this->FileName << ": " << withoutFileName(e.what(), this->FileName));
     return fail(e.code());
   }
   catch (const std::exception& e)
@@ -206,7 +214,8 @@ int vtkSegmentationVolumeReader::RequestData(
   }
   catch (const svdagReadError& e)
   {
-    vtkErrorMacro("Cannot read " << this->FileName << ": " << e.what());
+    vtkErrorMacro(
+      "Cannot read " << this->FileName << ": " << withoutFileName(e.what(), this->FileName));
     this->SetErrorCode(e.code());
     return 0;
   }

@@ -693,6 +693,7 @@ def test_float_data(tmp_path, fmt):
         writer.SetInputData(image_from_numpy(data))
         writer.Write()
     assert_fails(path, vtkErrorCode.FileFormatError, "label volumes need integer scalars")
+    assert_fails(path, message=f"{path.name} has float32")
 
 
 def test_four_dimensional_volumes_are_rejected(tmp_path):
