@@ -518,3 +518,18 @@ def test_degenerate_camera_is_an_error(real_volume):
     assert "view up" in messages[-1]
     renderer.SetCameraViewUp(0.0, 1.0, 0.0)
     assert renderer.Render() == 1
+
+
+def test_empty_and_single_voxel_volumes():
+    empty = build(np.zeros((5, 6, 7), np.uint8))
+    renderer = make_renderer(empty)
+    assert renderer.Render() == 1  # the camera was never set: Render frames the volume
+    label, depth = outputs(renderer)
+    assert np.all(label == 0) and np.all(depth == DEPTH_MISS)
+    one = np.full((1, 1, 1), 3, np.uint8)
+    single = build(one, spacing=(2.0, 3.0, 0.5))
+    renderer.SetInputData(single)
+    renderer.ResetCamera(20, 30, 1.5)
+    for lod in LODS:
+        label, _ = assert_matches_cpu(one, single, renderer, lod, "single voxel")
+        assert np.count_nonzero(label) > WIDTH * HEIGHT // 10
