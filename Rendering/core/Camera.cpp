@@ -98,7 +98,9 @@ Camera frameVolume(
   // rotates with the elevation, so it stays orthogonal to the view direction.
   const double az = azimuth * Pi / 180, el = elevation * Pi / 180;
   const Vec back = { std::cos(el) * std::sin(az), std::sin(el), std::cos(el) * std::cos(az) };
-  const Vec up = { -std::sin(el) * std::sin(az), std::cos(el), -std::sin(el) * std::cos(az) };
+  // (+ 0.0 turns -0 into 0, for tidy printing.)
+  const Vec up = { -std::sin(el) * std::sin(az) + 0.0, std::cos(el) + 0.0,
+    -std::sin(el) * std::cos(az) + 0.0 };
   Camera camera;
   camera.focalPoint = center;
   camera.position = { center[0] + distance * back[0], center[1] + distance * back[1],
