@@ -228,6 +228,8 @@ const Image& Renderer::render()
   Gpu& g = *this->Device;
   if (!g.scene)
     throw std::runtime_error("render needs a volume first (setVolume)");
+  if (!g.scene->ready())
+    throw std::runtime_error("the scene's BVH is not built: its last build failed");
   const RayBasis basis = rayBasis(this->View, this->Width, this->Height);
   const uint32_t pixels = this->Width * this->Height;
   g.resizeOutputs(pixels);

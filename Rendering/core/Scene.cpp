@@ -140,7 +140,7 @@ bool Scene::setHiddenLabels(const std::vector<uint32_t>& labelIndices)
   }
   std::sort(hidden.begin(), hidden.end());
   hidden.erase(std::unique(hidden.begin(), hidden.end()), hidden.end());
-  if (hidden == this->Hidden)
+  if (hidden == this->Hidden && this->Built)
     return false;
   this->Hidden = std::move(hidden);
   this->build();
@@ -149,7 +149,7 @@ bool Scene::setHiddenLabels(const std::vector<uint32_t>& labelIndices)
 
 bool Scene::setPrimitivesPerBlasLimit(uint32_t limit)
 {
-  if (limit == this->PrimitivesPerBlasLimit)
+  if (limit == this->PrimitivesPerBlasLimit && this->Built)
     return false;
   this->PrimitivesPerBlasLimit = limit;
   this->build();
@@ -198,7 +198,9 @@ void Scene::build()
   }
   medianSplitOrder(boxes);
 
-  // Release the old BVH before building the new one (peak memory).
+  // Release the old BVH before building the new one (peak memory). Until the end of this
+  // function the scene is not ready: a failure leaves it so, and the next call rebuilds.
+  this->Built = false;
   this->Tlas.reset();
   this->Blas.clear();
   this->Instances.reset();
@@ -264,6 +266,7 @@ void Scene::build()
   this->Tlas = AccelerationStructure::topLevel(
     this->Ctx, this->Instances.address(), uint32_t(instances.size()));
   this->BuildSeconds = secondsSince(start);
+  this->Built = true;
 }
 
 } // namespace render

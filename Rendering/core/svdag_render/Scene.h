@@ -59,6 +59,8 @@ public:
   const Volume& volume() const { return *this->Source; }
   // The point subtracted from world coordinates on the GPU (see Precision above).
   const std::array<double, 3>& worldReference() const { return this->Reference; }
+  // False after a failed (re)build (out of memory, say) until a later one succeeds.
+  bool ready() const { return this->Built; }
   VkAccelerationStructureKHR tlas() const { return this->Tlas.handle(); }
   VkDeviceAddress blocksAddress() const { return this->Blocks.address(); }
   VkDeviceAddress rootsAddress() const { return this->Roots.address(); }
@@ -92,6 +94,7 @@ private:
   AccelerationStructure Tlas;
   uint32_t PrimitivesPerBlas = 1;
   uint32_t PrimitivesPerBlasLimit = 0;
+  bool Built = false;
   uint64_t VisibleBlocks = 0;
   double UploadSeconds = 0;
   double BuildSeconds = 0;
