@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <stdexcept>
@@ -127,6 +128,18 @@ Candidate inspect(VkPhysicalDevice device)
   return c;
 }
 
+// Prints validation warnings and errors on stderr.
+VKAPI_ATTR VkBool32 VKAPI_CALL printValidationMessage(
+  VkDebugUtilsMessageSeverityFlagBitsEXT severity, VkDebugUtilsMessageTypeFlagsEXT,
+  const VkDebugUtilsMessengerCallbackDataEXT* data, void*)
+{
+  const char* level =
+    (severity & VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT) ? "error" : "warning";
+  std::fprintf(stderr, "svdag::render Vulkan validation %s: %s\n", level,
+    data && data->pMessage ? data->pMessage : "");
+  return VK_FALSE;
+}
+
 std::string describe(const std::vector<Candidate>& candidates)
 {
   std::string s;
@@ -212,6 +225,14 @@ void Context::destroy()
     vkDestroyDevice(this->Device, nullptr);
     this->Device = VK_NULL_HANDLE;
   }
+  if (this->Messenger)
+  {
+    auto destroyMessenger = reinterpret_cast<PFN_vkDestroyDebugUtilsMessengerEXT>(
+      vkGetInstanceProcAddr(this->Instance, "vkDestroyDebugUtilsMessengerEXT"));
+    if (destroyMessenger)
+      destroyMessenger(this->Instance, this->Messenger, nullptr);
+    this->Messenger = VK_NULL_HANDLE;
+  }
   if (this->Instance)
   {
     vkDestroyInstance(this->Instance, nullptr);
@@ -228,7 +249,9 @@ void Context::createInstance()
     throw std::runtime_error("no Vulkan driver/loader with Vulkan 1.2 found");
   }
   std::vector<const char*> layers;
-  if (envFlag("SVDAG_VK_VALIDATION"))
+  std::vector<const char*> extensions;
+  const bool validation = envFlag("SVDAG_VK_VALIDATION");
+  if (validation)
   {
     uint32_t count = 0;
     vkEnumerateInstanceLayerProperties(&count, nullptr);
@@ -240,6 +263,7 @@ void Context::createInstance()
       throw std::runtime_error("SVDAG_VK_VALIDATION is set but the Vulkan validation layer "
                                "VK_LAYER_KHRONOS_validation is not installed");
     layers.push_back(ValidationLayer);
+    extensions.push_back(VK_EXT_DEBUG_UTILS_EXTENSION_NAME); // provided by the layer
   }
   VkApplicationInfo app{ VK_STRUCTURE_TYPE_APPLICATION_INFO };
   app.pApplicationName = "vtkSVDAG";
@@ -249,12 +273,32 @@ void Context::createInstance()
   info.pApplicationInfo = &app;
   info.enabledLayerCount = uint32_t(layers.size());
   info.ppEnabledLayerNames = layers.data();
+  info.enabledExtensionCount = uint32_t(extensions.size());
+  info.ppEnabledExtensionNames = extensions.data();
   const VkResult result = vkCreateInstance(&info, nullptr, &this->Instance);
   if (result != VK_SUCCESS)
   {
     this->Instance = VK_NULL_HANDLE;
     throw std::runtime_error(std::string("no Vulkan driver/loader: vkCreateInstance failed (") +
       resultName(result) + ")");
+  }
+  if (validation)
+  {
+    auto createMessenger = reinterpret_cast<PFN_vkCreateDebugUtilsMessengerEXT>(
+      vkGetInstanceProcAddr(this->Instance, "vkCreateDebugUtilsMessengerEXT"));
+    if (!createMessenger)
+      throw std::runtime_error("the validation layer has no VK_EXT_debug_utils");
+    VkDebugUtilsMessengerCreateInfoEXT messenger{
+      VK_STRUCTURE_TYPE_DEBUG_UTILS_MESSENGER_CREATE_INFO_EXT
+    };
+    messenger.messageSeverity = VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT |
+      VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT;
+    messenger.messageType = VK_DEBUG_UTILS_MESSAGE_TYPE_GENERAL_BIT_EXT |
+      VK_DEBUG_UTILS_MESSAGE_TYPE_VALIDATION_BIT_EXT |
+      VK_DEBUG_UTILS_MESSAGE_TYPE_PERFORMANCE_BIT_EXT;
+    messenger.pfnUserCallback = printValidationMessage;
+    check(createMessenger(this->Instance, &messenger, nullptr, &this->Messenger),
+      "vkCreateDebugUtilsMessengerEXT");
   }
 }
 

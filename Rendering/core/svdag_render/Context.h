@@ -92,6 +92,7 @@ private:
   void destroy();
 
   VkInstance Instance = VK_NULL_HANDLE;
+  VkDebugUtilsMessengerEXT Messenger = VK_NULL_HANDLE; // with SVDAG_VK_VALIDATION only
   VkPhysicalDevice PhysicalDevice = VK_NULL_HANDLE;
   VkDevice Device = VK_NULL_HANDLE;
   VkQueue Queue = VK_NULL_HANDLE;
