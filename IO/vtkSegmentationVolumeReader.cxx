@@ -51,31 +51,6 @@ const char* vtkSegmentationVolumeReader::GetDescriptiveName()
   return "Segmentation label volume";
 }
 
-void vtkSegmentationVolumeReader::AddExcludedLabel(vtkTypeInt64 label)
-{
-  this->ExcludedLabels.push_back(label);
-  this->Modified();
-}
-
-void vtkSegmentationVolumeReader::RemoveAllExcludedLabels()
-{
-  if (!this->ExcludedLabels.empty())
-  {
-    this->ExcludedLabels.clear();
-    this->Modified();
-  }
-}
-
-vtkIdType vtkSegmentationVolumeReader::GetNumberOfExcludedLabels() const
-{
-  return static_cast<vtkIdType>(this->ExcludedLabels.size());
-}
-
-vtkTypeInt64 vtkSegmentationVolumeReader::GetExcludedLabel(vtkIdType i) const
-{
-  return (i >= 0 && i < this->GetNumberOfExcludedLabels()) ? this->ExcludedLabels[size_t(i)] : 0;
-}
-
 namespace
 {
 // A source's message without the "FILE: " it starts with (the reader names the file itself).
@@ -152,10 +127,7 @@ int vtkSegmentationVolumeReader::RequestData(
     return 0;
   }
 
-  svdag::BuildOptions options;
-  options.background = static_cast<uint64_t>(this->BackgroundLabel);
-  for (vtkTypeInt64 label : this->ExcludedLabels)
-    options.excluded.push_back(static_cast<uint64_t>(label));
+  const svdag::BuildOptions options = this->GetBuildOptions();
 
   try
   {
@@ -240,9 +212,4 @@ void vtkSegmentationVolumeReader::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "FileName: " << (this->FileName ? this->FileName : "(none)") << "\n";
   os << indent << "DatasetName: " << (this->DatasetName ? this->DatasetName : "(none)") << "\n";
   os << indent << "FileFormat: " << this->FileFormat << "\n";
-  os << indent << "BackgroundLabel: " << this->BackgroundLabel << "\n";
-  os << indent << "ExcludedLabels:";
-  for (vtkTypeInt64 label : this->ExcludedLabels)
-    os << " " << label;
-  os << "\n";
 }

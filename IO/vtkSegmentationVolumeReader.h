@@ -60,20 +60,6 @@ public:
   virtual const char* GetDescriptiveName();
 
   ///@{
-  /** Label value not stored (default 0), in the file's scalar type (-1 is 255 for uint8). */
-  vtkSetMacro(BackgroundLabel, vtkTypeInt64);
-  vtkGetMacro(BackgroundLabel, vtkTypeInt64);
-  ///@}
-
-  ///@{
-  /** Labels left out of the compressed volume (they decode as background). */
-  void AddExcludedLabel(vtkTypeInt64 label);
-  void RemoveAllExcludedLabels();
-  vtkIdType GetNumberOfExcludedLabels() const;
-  vtkTypeInt64 GetExcludedLabel(vtkIdType i) const;
-  ///@}
-
-  ///@{
   /**
    * HDF5 only: path of the dataset to read ("/volumes/labels"). If unset, the file must hold
    * exactly one 3D integer dataset.
@@ -97,8 +83,6 @@ protected:
 
   char* FileName = nullptr;
   char* DatasetName = nullptr;
-  vtkTypeInt64 BackgroundLabel = 0;
-  std::vector<vtkTypeInt64> ExcludedLabels;
   std::string FileFormat;
 
 private:

@@ -28,31 +28,6 @@ vtkImageDataToSegmentationSVDAG::vtkImageDataToSegmentationSVDAG()
 
 vtkImageDataToSegmentationSVDAG::~vtkImageDataToSegmentationSVDAG() = default;
 
-void vtkImageDataToSegmentationSVDAG::AddExcludedLabel(vtkTypeInt64 label)
-{
-  this->ExcludedLabels.push_back(label);
-  this->Modified();
-}
-
-void vtkImageDataToSegmentationSVDAG::RemoveAllExcludedLabels()
-{
-  if (!this->ExcludedLabels.empty())
-  {
-    this->ExcludedLabels.clear();
-    this->Modified();
-  }
-}
-
-vtkIdType vtkImageDataToSegmentationSVDAG::GetNumberOfExcludedLabels() const
-{
-  return static_cast<vtkIdType>(this->ExcludedLabels.size());
-}
-
-vtkTypeInt64 vtkImageDataToSegmentationSVDAG::GetExcludedLabel(vtkIdType i) const
-{
-  return (i >= 0 && i < this->GetNumberOfExcludedLabels()) ? this->ExcludedLabels[size_t(i)] : 0;
-}
-
 int vtkImageDataToSegmentationSVDAG::FillInputPortInformation(int, vtkInformation* info)
 {
   info->Set(vtkAlgorithm::INPUT_REQUIRED_DATA_TYPE(), "vtkImageData");
@@ -120,10 +95,7 @@ int vtkImageDataToSegmentationSVDAG::RequestData(
   const double* direction = image->GetDirectionMatrix()->GetData();
   std::copy(direction, direction + 9, geometry.direction.begin());
 
-  svdag::BuildOptions options;
-  options.background = static_cast<uint64_t>(this->BackgroundLabel);
-  for (vtkTypeInt64 label : this->ExcludedLabels)
-    options.excluded.push_back(static_cast<uint64_t>(label));
+  const svdag::BuildOptions options = this->GetBuildOptions();
 
   try
   {
@@ -153,9 +125,4 @@ int vtkImageDataToSegmentationSVDAG::RequestData(
 void vtkImageDataToSegmentationSVDAG::PrintSelf(ostream& os, vtkIndent indent)
 {
   this->Superclass::PrintSelf(os, indent);
-  os << indent << "BackgroundLabel: " << this->BackgroundLabel << "\n";
-  os << indent << "ExcludedLabels:";
-  for (vtkTypeInt64 label : this->ExcludedLabels)
-    os << " " << label;
-  os << "\n";
 }

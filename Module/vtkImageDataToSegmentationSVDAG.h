@@ -6,18 +6,13 @@
  * integer component of any width, signed or unsigned. The volume is processed in slabs of 16
  * z-slices; cells of a slab are scanned in parallel with vtkSMPTools, and the result does not
  * depend on the number of threads. Voxels equal to BackgroundLabel, or to an excluded label,
- * are not stored and decode as background.
- *
- * Label values are given as 64-bit integers interpreted in the input's scalar type (for
- * example -1 means 255 for unsigned char input).
+ * are not stored and decode as background (see vtkSegmentationSVDAGAlgorithm).
  */
 #ifndef vtkImageDataToSegmentationSVDAG_h
 #define vtkImageDataToSegmentationSVDAG_h
 
 #include "vtkSVDAGCoreModule.h" // for export macro
 #include "vtkSegmentationSVDAGAlgorithm.h"
-
-#include <vector> // for std::vector
 
 class VTKSVDAGCORE_EXPORT vtkImageDataToSegmentationSVDAG : public vtkSegmentationSVDAGAlgorithm
 {
@@ -29,19 +24,6 @@ public:
   /** Sets the label image to compress (for a pipeline connection use SetInputConnection). */
   void SetInputData(vtkDataObject* image) { this->SetInputDataObject(0, image); }
 
-  ///@{
-  /** Label value not stored (default 0). */
-  vtkSetMacro(BackgroundLabel, vtkTypeInt64);
-  vtkGetMacro(BackgroundLabel, vtkTypeInt64);
-  ///@}
-
-  ///@{
-  /** Labels left out of the compressed volume (they decode as background). */
-  void AddExcludedLabel(vtkTypeInt64 label);
-  void RemoveAllExcludedLabels();
-  vtkIdType GetNumberOfExcludedLabels() const;
-  vtkTypeInt64 GetExcludedLabel(vtkIdType i) const;
-  ///@}
 
 protected:
   vtkImageDataToSegmentationSVDAG();
@@ -50,9 +32,6 @@ protected:
   int FillInputPortInformation(int port, vtkInformation* info) override;
   int RequestUpdateExtent(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
   int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
-
-  vtkTypeInt64 BackgroundLabel = 0;
-  std::vector<vtkTypeInt64> ExcludedLabels;
 
 private:
   vtkImageDataToSegmentationSVDAG(const vtkImageDataToSegmentationSVDAG&) = delete;

@@ -7,6 +7,8 @@
 #include "vtkSegmentationSVDAG.h"
 #include "vtkStreamingDemandDrivenPipeline.h"
 
+#include "svdag/Builder.h"
+
 vtkStandardNewMacro(vtkSegmentationSVDAGAlgorithm);
 
 vtkSegmentationSVDAGAlgorithm::vtkSegmentationSVDAGAlgorithm()
@@ -82,7 +84,46 @@ int vtkSegmentationSVDAGAlgorithm::FillInputPortInformation(int, vtkInformation*
   return 1;
 }
 
+void vtkSegmentationSVDAGAlgorithm::AddExcludedLabel(vtkTypeInt64 label)
+{
+  this->ExcludedLabels.push_back(label);
+  this->Modified();
+}
+
+void vtkSegmentationSVDAGAlgorithm::RemoveAllExcludedLabels()
+{
+  if (!this->ExcludedLabels.empty())
+  {
+    this->ExcludedLabels.clear();
+    this->Modified();
+  }
+}
+
+vtkIdType vtkSegmentationSVDAGAlgorithm::GetNumberOfExcludedLabels() const
+{
+  return static_cast<vtkIdType>(this->ExcludedLabels.size());
+}
+
+vtkTypeInt64 vtkSegmentationSVDAGAlgorithm::GetExcludedLabel(vtkIdType i) const
+{
+  return (i >= 0 && i < this->GetNumberOfExcludedLabels()) ? this->ExcludedLabels[size_t(i)] : 0;
+}
+
+svdag::BuildOptions vtkSegmentationSVDAGAlgorithm::GetBuildOptions() const
+{
+  svdag::BuildOptions options;
+  options.background = static_cast<uint64_t>(this->BackgroundLabel);
+  for (vtkTypeInt64 label : this->ExcludedLabels)
+    options.excluded.push_back(static_cast<uint64_t>(label));
+  return options;
+}
+
 void vtkSegmentationSVDAGAlgorithm::PrintSelf(ostream& os, vtkIndent indent)
 {
   this->Superclass::PrintSelf(os, indent);
+  os << indent << "BackgroundLabel: " << this->BackgroundLabel << "\n";
+  os << indent << "ExcludedLabels:";
+  for (vtkTypeInt64 label : this->ExcludedLabels)
+    os << " " << label;
+  os << "\n";
 }

@@ -6,12 +6,25 @@
  * class creates the vtkSegmentationSVDAG output itself in RequestDataObject. Subclasses
  * implement RequestInformation and RequestData as usual. Input ports default to none; a filter
  * sets its own number of input ports and overrides FillInputPortInformation.
+ *
+ * It also holds what every compressing algorithm is asked: the background label and the labels
+ * to leave out. Label values are 64-bit integers interpreted in the input's scalar type (for
+ * example -1 means 255 for unsigned char input).
  */
 #ifndef vtkSegmentationSVDAGAlgorithm_h
 #define vtkSegmentationSVDAGAlgorithm_h
 
 #include "vtkAlgorithm.h"
 #include "vtkSVDAGCoreModule.h" // for export macro
+
+#include <vector> // for std::vector
+
+#ifndef __VTK_WRAP__
+namespace svdag
+{
+struct BuildOptions;
+}
+#endif
 
 class vtkSegmentationSVDAG;
 
@@ -24,6 +37,20 @@ public:
 
   /** The output of port 0, after an update. */
   vtkSegmentationSVDAG* GetOutput();
+
+  ///@{
+  /** Label value not stored (default 0). */
+  vtkSetMacro(BackgroundLabel, vtkTypeInt64);
+  vtkGetMacro(BackgroundLabel, vtkTypeInt64);
+  ///@}
+
+  ///@{
+  /** Labels left out of the compressed volume (they decode as background). */
+  void AddExcludedLabel(vtkTypeInt64 label);
+  void RemoveAllExcludedLabels();
+  vtkIdType GetNumberOfExcludedLabels() const;
+  vtkTypeInt64 GetExcludedLabel(vtkIdType i) const;
+  ///@}
 
   vtkTypeBool ProcessRequest(
     vtkInformation* request, vtkInformationVector** in, vtkInformationVector* out) override;
@@ -39,6 +66,14 @@ protected:
 
   int FillOutputPortInformation(int port, vtkInformation* info) override;
   int FillInputPortInformation(int port, vtkInformation* info) override;
+
+#ifndef __VTK_WRAP__
+  /** The builder's options from BackgroundLabel and the excluded labels. */
+  svdag::BuildOptions GetBuildOptions() const;
+#endif
+
+  vtkTypeInt64 BackgroundLabel = 0;
+  std::vector<vtkTypeInt64> ExcludedLabels;
 
 private:
   vtkSegmentationSVDAGAlgorithm(const vtkSegmentationSVDAGAlgorithm&) = delete;
