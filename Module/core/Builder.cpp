@@ -43,7 +43,9 @@ public:
   template <class Hash, class Equal, class Insert>
   uint32_t intern(uint64_t hash, const Equal& equalsId, const Insert& insert, const Hash& hashOfId)
   {
-    if ((count + 1) * 2 > slots.size())
+    // Linear probing stays short up to a 3/4 load with a well-mixed hash; the table is a
+    // large share of the builder's transient memory, so it is not kept sparser than that.
+    if ((count + 1) * 4 > slots.size() * 3)
     {
       grow(hashOfId);
     }
@@ -106,7 +108,9 @@ public:
         return w[0] == header && std::equal(refs, refs + n, w + 1);
       },
       [&]() {
-        starts.push_back(uint64_t(words.size()));
+        if (words.size() > UINT32_MAX - 9)
+          throw std::length_error("SVDAG too large: a node pool exceeds 2^32 words");
+        starts.push_back(uint32_t(words.size()));
         words.push_back(header);
         words.insert(words.end(), refs, refs + n);
         return uint32_t(starts.size() - 1);
@@ -116,11 +120,13 @@ public:
   size_t size() const { return starts.size(); }
   uint32_t header(uint32_t id) const { return words[starts[id]]; }
   const uint32_t* refs(uint32_t id) const { return words.data() + starts[id] + 1; }
+  // Lookups end when the pool is complete; packing only reads nodes.
+  void releaseTable() { table.clear(); }
   void release()
   {
     table.clear();
     std::vector<uint32_t>().swap(words);
-    std::vector<uint64_t>().swap(starts);
+    std::vector<uint32_t>().swap(starts);
   }
 
 private:
@@ -135,7 +141,7 @@ private:
   }
   IdTable table;
   std::vector<uint32_t> words;
-  std::vector<uint64_t> starts;
+  std::vector<uint32_t> starts;
 };
 
 class LeafPool
@@ -501,6 +507,9 @@ Volume Builder::finish()
     throw std::logic_error("missing slabs: next expected z0 = " + std::to_string(m.nextZ));
   std::vector<CellResult>().swap(m.cellResults);
   m.leaves.releaseTable();
+  m.mids.releaseTable();
+  m.roots.releaseTable();
+  m.labelTable.clear();
 
   Volume v;
   v.geometry = m.geometry;
