@@ -10,11 +10,14 @@
 #include "vtkSmartPointer.h"
 #include "vtkUnsignedCharArray.h"
 
+#include <svdag_render/ImageFiles.h>
 #include <svdag_render/Renderer.h>
 
 #include <cstring>
 #include <exception>
+#include <map>
 #include <set>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -25,8 +28,23 @@ struct vtkSegmentationSVDAGRenderer::Internals
   // The volume the renderer holds (uploaded), to re-upload only when the input's volume changes.
   std::shared_ptr<const svdag::Volume> Uploaded;
   std::set<vtkIdType> Hidden;
+  // Edited materials by label index (the others keep the renderer's defaults); after
+  // ResetLabelMaterials the next Render() returns every label to its default first.
+  std::map<vtkIdType, svdag::render::Material> Materials;
+  bool MaterialsReset = false;
   vtkNew<vtkImageData> Output;
   bool CameraSet = false;
+
+  svdag::render::Material& edit(vtkIdType index)
+  {
+    auto it = this->Materials.find(index);
+    if (it == this->Materials.end())
+    {
+      const uint32_t defaultIndex = index >= 0 && index <= vtkIdType(UINT32_MAX) ? uint32_t(index) : 0;
+      it = this->Materials.emplace(index, svdag::render::Renderer::defaultMaterial(defaultIndex)).first;
+    }
+    return it->second;
+  }
 };
 
 vtkStandardNewMacro(vtkSegmentationSVDAGRenderer);
@@ -36,7 +54,72 @@ vtkSegmentationSVDAGRenderer::vtkSegmentationSVDAGRenderer()
 {
 }
 
-vtkSegmentationSVDAGRenderer::~vtkSegmentationSVDAGRenderer() = default;
+vtkSegmentationSVDAGRenderer::~vtkSegmentationSVDAGRenderer()
+{
+  this->SetEnvironmentMap(nullptr);
+}
+
+void vtkSegmentationSVDAGRenderer::SetLabelColor(vtkIdType index, double r, double g, double b)
+{
+  glm::vec4& c = this->Internal->edit(index).baseColorVisibility;
+  c = glm::vec4(float(r), float(g), float(b), c.a);
+  this->Modified();
+}
+
+void vtkSegmentationSVDAGRenderer::SetLabelRoughness(vtkIdType index, double roughness)
+{
+  this->Internal->edit(index).params.x = float(roughness);
+  this->Modified();
+}
+
+void vtkSegmentationSVDAGRenderer::SetLabelMetallic(vtkIdType index, double metallic)
+{
+  this->Internal->edit(index).params.y = float(metallic);
+  this->Modified();
+}
+
+void vtkSegmentationSVDAGRenderer::SetLabelTransmission(vtkIdType index, double transmission)
+{
+  this->Internal->edit(index).params.z = float(transmission);
+  this->Modified();
+}
+
+void vtkSegmentationSVDAGRenderer::SetLabelIOR(vtkIdType index, double ior)
+{
+  this->Internal->edit(index).params.w = float(ior);
+  this->Modified();
+}
+
+void vtkSegmentationSVDAGRenderer::SetLabelSpecular(vtkIdType index, double specular)
+{
+  this->Internal->edit(index).extra.x = float(specular);
+  this->Modified();
+}
+
+void vtkSegmentationSVDAGRenderer::SetLabelEmission(vtkIdType index, double r, double g, double b)
+{
+  this->Internal->edit(index).emission = glm::vec4(float(r), float(g), float(b), 0.0f);
+  this->Modified();
+}
+
+void vtkSegmentationSVDAGRenderer::SetLabelVisibility(vtkIdType index, bool visible)
+{
+  this->Internal->edit(index).baseColorVisibility.a = visible ? 1.0f : 0.0f;
+  this->Modified();
+}
+
+void vtkSegmentationSVDAGRenderer::ResetLabelMaterials()
+{
+  this->Internal->Materials.clear();
+  this->Internal->MaterialsReset = true;
+  this->Modified();
+}
+
+void vtkSegmentationSVDAGRenderer::ResetAccumulation()
+{
+  if (this->Internal->Renderer)
+    this->Internal->Renderer->resetAccumulation();
+}
 
 void vtkSegmentationSVDAGRenderer::SetInputData(vtkSegmentationSVDAG* volume)
 {
@@ -190,6 +273,39 @@ int vtkSegmentationSVDAGRenderer::Render()
     r.setAutoLodPixels(float(this->AutoLODPixels));
     r.setBackground({ { float(this->Background[0]), float(this->Background[1]),
       float(this->Background[2]), float(this->Background[3]) } });
+    r.setSamplesPerPixel(uint32_t(this->SamplesPerPixel));
+    r.setMaxBounces(uint32_t(this->MaximumBounces));
+    r.setSeed(this->Seed);
+    r.setNextEventEstimation(this->NextEventEstimation);
+    r.setExposure(float(this->Exposure));
+    r.setEnvironmentColor({ { float(this->EnvironmentColor[0]), float(this->EnvironmentColor[1]),
+      float(this->EnvironmentColor[2]) } });
+    r.setEnvironmentMap(this->EnvironmentMap ? this->EnvironmentMap : "");
+    svdag::render::SunLight sun;
+    sun.on = this->Sun;
+    for (int a = 0; a < 3; ++a)
+    {
+      sun.direction[a] = this->SunDirection[a];
+      sun.irradiance[a] = float(this->SunIrradiance[a]);
+    }
+    sun.angularRadiusDegrees = this->SunAngularRadius;
+    r.setSun(sun);
+    if (in.MaterialsReset)
+    {
+      for (size_t i = 0; i < r.materialCount(); ++i)
+        r.setMaterial(uint32_t(i), svdag::render::Renderer::defaultMaterial(uint32_t(i)));
+      in.MaterialsReset = false;
+    }
+    for (const auto& entry : in.Materials)
+    {
+      if (entry.first < 0 || uint64_t(entry.first) >= r.materialCount())
+      {
+        throw std::invalid_argument("a material is set for label index " +
+          std::to_string(entry.first) + ", outside the volume's label table (" +
+          std::to_string(r.materialCount()) + " labels)");
+      }
+      r.setMaterial(uint32_t(entry.first), entry.second);
+    }
     r.render();
   }
   catch (const std::exception& e)
@@ -234,6 +350,58 @@ int vtkSegmentationSVDAGRenderer::Render()
   pd->AddArray(floats("Normal", 3, image.normal));
   in.Output->ShallowCopy(output);
   return 1;
+}
+
+int vtkSegmentationSVDAGRenderer::WriteImage(const char* path)
+{
+  const std::string name = path ? path : "";
+  auto endsWith = [&name](const char* suffix) {
+    const size_t n = std::strlen(suffix);
+    return name.size() >= n && name.compare(name.size() - n, n, suffix) == 0;
+  };
+  if (!endsWith(".png") && !endsWith(".exr"))
+  {
+    vtkErrorMacro("WriteImage: the file name must end in .png or .exr, got '" << name << "'");
+    return 0;
+  }
+  if (!this->Internal->Renderer || this->Internal->Renderer->image().width == 0)
+  {
+    vtkErrorMacro("WriteImage: nothing rendered yet (call Render first)");
+    return 0;
+  }
+  try
+  {
+    if (endsWith(".png"))
+      svdag::render::writePng(this->Internal->Renderer->image(), name);
+    else
+      svdag::render::writeExr(this->Internal->Renderer->image(), name);
+  }
+  catch (const std::exception& e)
+  {
+    vtkErrorMacro("WriteImage: " << e.what());
+    return 0;
+  }
+  return 1;
+}
+
+int vtkSegmentationSVDAGRenderer::GetAccumulatedSamples() const
+{
+  return this->Internal->Renderer ? int(this->Internal->Renderer->accumulatedSamples()) : 0;
+}
+
+double vtkSegmentationSVDAGRenderer::GetRenderSeconds() const
+{
+  return this->Internal->Renderer ? this->Internal->Renderer->renderSeconds() : 0.0;
+}
+
+vtkTypeInt64 vtkSegmentationSVDAGRenderer::GetNumberOfBVHBuilds() const
+{
+  return this->Internal->Renderer ? vtkTypeInt64(this->Internal->Renderer->bvhBuilds()) : 0;
+}
+
+vtkTypeInt64 vtkSegmentationSVDAGRenderer::GetNumberOfPipelineBuilds() const
+{
+  return this->Internal->Renderer ? vtkTypeInt64(this->Internal->Renderer->pipelineBuilds()) : 0;
 }
 
 vtkImageData* vtkSegmentationSVDAGRenderer::GetOutput()
@@ -299,4 +467,24 @@ void vtkSegmentationSVDAGRenderer::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "TLASBytes: " << this->GetTLASBytes() << "\n";
   os << indent << "MaximumBlocksPerBLAS: " << this->MaximumBlocksPerBLAS << "\n";
   os << indent << "NumberOfBLAS: " << this->GetNumberOfBLAS() << "\n";
+  os << indent << "SamplesPerPixel: " << this->SamplesPerPixel << "\n";
+  os << indent << "MaximumBounces: " << this->MaximumBounces << "\n";
+  os << indent << "Seed: " << this->Seed << "\n";
+  os << indent << "NextEventEstimation: " << this->NextEventEstimation << "\n";
+  os << indent << "Exposure: " << this->Exposure << "\n";
+  os << indent << "EnvironmentColor: " << this->EnvironmentColor[0] << " "
+     << this->EnvironmentColor[1] << " " << this->EnvironmentColor[2] << "\n";
+  os << indent << "EnvironmentMap: " << (this->EnvironmentMap ? this->EnvironmentMap : "(none)")
+     << "\n";
+  os << indent << "Sun: " << this->Sun << "\n";
+  os << indent << "SunDirection: " << this->SunDirection[0] << " " << this->SunDirection[1] << " "
+     << this->SunDirection[2] << "\n";
+  os << indent << "SunIrradiance: " << this->SunIrradiance[0] << " " << this->SunIrradiance[1]
+     << " " << this->SunIrradiance[2] << "\n";
+  os << indent << "SunAngularRadius: " << this->SunAngularRadius << "\n";
+  os << indent << "EditedLabelMaterials: " << this->Internal->Materials.size() << "\n";
+  os << indent << "AccumulatedSamples: " << this->GetAccumulatedSamples() << "\n";
+  os << indent << "RenderSeconds: " << this->GetRenderSeconds() << "\n";
+  os << indent << "NumberOfBVHBuilds: " << this->GetNumberOfBVHBuilds() << "\n";
+  os << indent << "NumberOfPipelineBuilds: " << this->GetNumberOfPipelineBuilds() << "\n";
 }

@@ -1,21 +1,36 @@
 /**
  * @class   vtkSegmentationSVDAGRenderer
- * @brief   renders a vtkSegmentationSVDAG with Vulkan ray tracing into an image (primary hits)
+ * @brief   path-traces a vtkSegmentationSVDAG with Vulkan ray tracing into an image
  *
- * One ray per pixel through the volume's blocks (a BLAS of block boxes; a custom intersection
- * shader walks each block's DAG with the same traversal code as the CPU ray caster). The output
- * is a vtkImageData of Width x Height points with the point-data arrays
- *   "Color"  4 x unsigned char  sRGB RGBA of a simple headlight shading (label color from a hash
- *                               of the label index), the background color where nothing is hit
- *   "HDR"    4 x float          the same color, linear
+ * Rays find blocks through a BLAS of block boxes; a custom intersection shader walks each
+ * block's DAG with the same traversal code as the CPU ray caster. Every Render() adds
+ * SamplesPerPixel path-traced samples per pixel to a progressive accumulation, which restarts
+ * whenever anything that changes the image changes (camera, size, LOD, materials, visibility,
+ * lighting, bounces, NEE, seed, background; ResetAccumulation() forces it). The output is a
+ * vtkImageData of Width x Height points with the point-data arrays
+ *   "Color"  4 x unsigned char  display color: per channel x = Exposure * HDR, Reinhard's curve
+ *                               x / (1 + x), then sRGB; alpha = HDR alpha
+ *   "HDR"    4 x float          linear RGBA, the mean of the accumulated samples; a camera sample
+ *                               that hits nothing counts as the Background color (the
+ *                               environment lights the scene, the camera does not see it)
  *   "Depth"  float              world distance from the camera along the ray; FLT_MAX on a miss
  *   "Label"  int                label index + 1 (0: background)
  *   "Normal" 3 x float          world-space unit normal of the face entered (0 on a miss and
  *                               where the camera is inside the hit voxel)
- * Pixel (x, y), y = 0 the bottom row, is the point x + Width * y. Its ray starts at the camera
+ * Depth, Label and Normal come from the un-jittered pixel-center ray: pixel (x, y), y = 0 the
+ * bottom row, is the point x + Width * y. Its ray starts at the camera
  * position with the direction normalize(F + u * tan(a/2) * Width/Height * R + v * tan(a/2) * U),
  * u = 2 (x + 0.5) / Width - 1, v = 2 (y + 0.5) / Height - 1, F the unit direction to the focal
  * point, R = normalize(F x ViewUp), U = R x F and a the vertical view angle (VTK camera semantics).
+ * Samples jitter the point uniformly inside the pixel.
+ *
+ * Path tracing: per-label materials (by label INDEX; defaults: base color from a hash of the
+ * index, roughness 0.6, metallic 0, transmission 0, IOR 1.5, specular 0.5, visible), a constant
+ * or equirectangular OpenEXR environment, an optional sun (a disk light), next-event estimation
+ * with multiple importance sampling (or the plain estimator), Russian roulette. A fixed Seed gives
+ * the same image. A material edit is a buffer upload; visibility 0 removes the label's blocks from
+ * the BVH. Known limitation: a ray starting inside a solid has no exit point in the traversal, so
+ * refracted paths end at the surface (transmission darkens instead of showing the inside).
  *
  * The camera is set with SetCameraPosition/FocalPoint/ViewUp/ViewAngle, or framed around the
  * whole volume with ResetCamera(azimuth, elevation, zoom); a camera never set is reset on the
@@ -129,8 +144,78 @@ public:
   vtkGetVector4Macro(Background, double);
   ///@}
 
-  /** Renders one frame into the output. Returns 1 on success, 0 on failure (vtkErrorMacro). */
+  ///@{
+  /** Samples per pixel each Render() adds (default 1). */
+  vtkSetClampMacro(SamplesPerPixel, int, 1, 65536);
+  vtkGetMacro(SamplesPerPixel, int);
+  /** Scattering events per path (default 4; 0 shows only what emits light). */
+  vtkSetClampMacro(MaximumBounces, int, 0, 64);
+  vtkGetMacro(MaximumBounces, int);
+  /** Random seed (default 0): the same seed and settings give the same image. */
+  vtkSetMacro(Seed, vtkTypeUInt32);
+  vtkGetMacro(Seed, vtkTypeUInt32);
+  /** Next-event estimation with multiple importance sampling (default on); off is the estimator
+   * that finds light only when a path escapes (slower to converge, same mean). */
+  vtkSetMacro(NextEventEstimation, bool);
+  vtkGetMacro(NextEventEstimation, bool);
+  vtkBooleanMacro(NextEventEstimation, bool);
+  /** Scale of the linear color before the tone curve of the Color output (default 1). */
+  vtkSetClampMacro(Exposure, double, 1e-6, 1e6);
+  vtkGetMacro(Exposure, double);
+  ///@}
+
+  ///@{
+  /** Environment: constant linear radiance (default 1, 1, 1), or the scale of the map. */
+  vtkSetVector3Macro(EnvironmentColor, double);
+  vtkGetVector3Macro(EnvironmentColor, double);
+  /** An equirectangular OpenEXR environment map (longitude along x from +x towards +y, +z up);
+   * nullptr or "" for the constant environment. Read on the next Render() (errors there). */
+  vtkSetStringMacro(EnvironmentMap);
+  vtkGetStringMacro(EnvironmentMap);
+  ///@}
+
+  ///@{
+  /** The sun: a disk light of the given angular radius (degrees, 0: a point-like delta light)
+   * in SunDirection (towards the sun, world), with SunIrradiance (linear RGB at normal incidence).
+   * Off by default. */
+  vtkSetMacro(Sun, bool);
+  vtkGetMacro(Sun, bool);
+  vtkBooleanMacro(Sun, bool);
+  vtkSetVector3Macro(SunDirection, double);
+  vtkGetVector3Macro(SunDirection, double);
+  vtkSetVector3Macro(SunIrradiance, double);
+  vtkGetVector3Macro(SunIrradiance, double);
+  vtkSetClampMacro(SunAngularRadius, double, 0.0, 89.0);
+  vtkGetMacro(SunAngularRadius, double);
+  ///@}
+
+  ///@{
+  /** Material of a label, by its INDEX in the volume's label table (an index outside the table
+   * is an error at Render()). Colors are linear RGB; roughness, metallic, transmission and
+   * specular are in [0, 1] (specular 0.5: 4% reflectance at normal incidence, 0: none); IOR > 0;
+   * visibility false removes the label from the image. */
+  void SetLabelColor(vtkIdType index, double r, double g, double b);
+  void SetLabelRoughness(vtkIdType index, double roughness);
+  void SetLabelMetallic(vtkIdType index, double metallic);
+  void SetLabelTransmission(vtkIdType index, double transmission);
+  void SetLabelIOR(vtkIdType index, double ior);
+  void SetLabelSpecular(vtkIdType index, double specular);
+  void SetLabelEmission(vtkIdType index, double r, double g, double b);
+  void SetLabelVisibility(vtkIdType index, bool visible);
+  /** Every label back to its default material. */
+  void ResetLabelMaterials();
+  ///@}
+
+  /** Renders one pass (SamplesPerPixel samples per pixel, added to the accumulation) into the
+   * output. Returns 1 on success, 0 on failure (vtkErrorMacro). */
   int Render();
+
+  /** Starts a new accumulation on the next Render(). */
+  void ResetAccumulation();
+
+  /** Writes the current image: the Color output as PNG (".png") or linear HDR, depth (Z) and
+   * label as OpenEXR (".exr"). Returns 1 on success, 0 on failure (vtkErrorMacro). */
+  int WriteImage(const char* path);
 
   /** The image of the last successful Render() (empty before). */
   vtkImageData* GetOutput();
@@ -143,6 +228,16 @@ public:
   double GetLastFrameMilliseconds() const;
   vtkTypeInt64 GetBLASBytes() const;
   vtkTypeInt64 GetTLASBytes() const;
+  ///@}
+
+  ///@{
+  /** Samples per pixel in the current image, and the seconds of tracing that produced it. */
+  int GetAccumulatedSamples() const;
+  double GetRenderSeconds() const;
+  /** BVH builds (volume uploads and visibility changes) and ray tracing pipeline builds (feature
+   * changes) since the device was created: material edits rebuild neither. */
+  vtkTypeInt64 GetNumberOfBVHBuilds() const;
+  vtkTypeInt64 GetNumberOfPipelineBuilds() const;
   ///@}
 
 protected:
@@ -159,6 +254,17 @@ protected:
   double CameraViewUp[3] = { 0, 1, 0 };
   double CameraViewAngle = 30;
   double Background[4] = { 0.1, 0.1, 0.12, 1 };
+  int SamplesPerPixel = 1;
+  int MaximumBounces = 4;
+  vtkTypeUInt32 Seed = 0;
+  bool NextEventEstimation = true;
+  double Exposure = 1;
+  double EnvironmentColor[3] = { 1, 1, 1 };
+  char* EnvironmentMap = nullptr;
+  bool Sun = false;
+  double SunDirection[3] = { 0.3, 0.4, 0.866 };
+  double SunIrradiance[3] = { 3, 3, 3 };
+  double SunAngularRadius = 0.27;
 
 private:
   vtkSegmentationSVDAGRenderer(const vtkSegmentationSVDAGRenderer&) = delete;

@@ -1,4 +1,4 @@
-#include "ImageFiles.h"
+#include "svdag_render/ImageFiles.h"
 
 #include <ImfChannelList.h>
 #include <ImfFrameBuffer.h>

@@ -9,10 +9,11 @@
 
 // SPIR-V of the shaders, generated at build time by glslangValidator --vn (Rendering/core/
 // CMakeLists.txt): const uint32_t arrays named svdagShader_<stage>.
-#include "primary.rgen.h"
-#include "primary.rmiss.h"
 #include "block.rchit.h"
 #include "block.rint.h"
+#include "camera.rgen.h"
+#include "closest.rmiss.h"
+#include "shadow.rmiss.h"
 
 namespace svdag
 {
@@ -23,10 +24,12 @@ namespace
 enum Group : uint32_t
 {
   RaygenGroup = 0,
-  MissGroup = 1,
-  HitGroup = 2,
-  GroupCount = 3
+  MissGroup = 1, // SVDAG_MISS_CLOSEST
+  ShadowMissGroup = 2, // SVDAG_MISS_SHADOW
+  HitGroup = 3,
+  GroupCount = 4
 };
+static_assert(ShadowMissGroup - MissGroup == SVDAG_MISS_SHADOW, "miss shader order");
 
 VkDeviceSize alignUp(VkDeviceSize value, VkDeviceSize alignment)
 {
@@ -44,8 +47,9 @@ VkShaderModule createModule(VkDevice device, const uint32_t* code, size_t bytes)
 }
 } // namespace
 
-Pipeline::Pipeline(Context& context)
+Pipeline::Pipeline(Context& context, const ShaderFeatures& features)
   : Ctx(context)
+  , Features(features)
 {
   try
   {
@@ -65,17 +69,33 @@ Pipeline::~Pipeline()
   this->destroy();
 }
 
+bool Pipeline::setFeatures(const ShaderFeatures& features)
+{
+  if (features == this->Features && this->Handle)
+    return false;
+  this->destroyPipeline();
+  this->Features = features;
+  this->createPipeline();
+  this->createShaderBindingTable();
+  return true;
+}
+
+void Pipeline::destroyPipeline()
+{
+  this->Table.reset();
+  if (this->Handle)
+    vkDestroyPipeline(this->Ctx.device(), this->Handle, nullptr);
+  this->Handle = VK_NULL_HANDLE;
+}
+
 void Pipeline::destroy()
 {
   VkDevice device = this->Ctx.device();
-  this->Table.reset();
-  if (this->Handle)
-    vkDestroyPipeline(device, this->Handle, nullptr);
+  this->destroyPipeline();
   if (this->Layout)
     vkDestroyPipelineLayout(device, this->Layout, nullptr);
   if (this->SetLayout)
     vkDestroyDescriptorSetLayout(device, this->SetLayout, nullptr);
-  this->Handle = VK_NULL_HANDLE;
   this->Layout = VK_NULL_HANDLE;
   this->SetLayout = VK_NULL_HANDLE;
 }
@@ -114,12 +134,29 @@ void Pipeline::createPipeline()
     const uint32_t* code;
     size_t bytes;
   };
+  // Stage order = the shader indices the groups below name.
   const StageCode codes[] = {
-    { VK_SHADER_STAGE_RAYGEN_BIT_KHR, svdagShader_rgen, sizeof(svdagShader_rgen) },
-    { VK_SHADER_STAGE_MISS_BIT_KHR, svdagShader_rmiss, sizeof(svdagShader_rmiss) },
-    { VK_SHADER_STAGE_CLOSEST_HIT_BIT_KHR, svdagShader_rchit, sizeof(svdagShader_rchit) },
-    { VK_SHADER_STAGE_INTERSECTION_BIT_KHR, svdagShader_rint, sizeof(svdagShader_rint) },
+    { VK_SHADER_STAGE_RAYGEN_BIT_KHR, svdagShader_camera_rgen, sizeof(svdagShader_camera_rgen) },
+    { VK_SHADER_STAGE_MISS_BIT_KHR, svdagShader_closest_rmiss,
+      sizeof(svdagShader_closest_rmiss) },
+    { VK_SHADER_STAGE_MISS_BIT_KHR, svdagShader_shadow_rmiss, sizeof(svdagShader_shadow_rmiss) },
+    { VK_SHADER_STAGE_CLOSEST_HIT_BIT_KHR, svdagShader_block_rchit,
+      sizeof(svdagShader_block_rchit) },
+    { VK_SHADER_STAGE_INTERSECTION_BIT_KHR, svdagShader_block_rint,
+      sizeof(svdagShader_block_rint) },
   };
+  // The raygen shader's feature switches (GpuLayout.h's SVDAG_CONSTANT_* ids).
+  VkBool32 constants[SVDAG_CONSTANT_COUNT] = {};
+  constants[SVDAG_CONSTANT_NEE] = this->Features.nextEventEstimation;
+  constants[SVDAG_CONSTANT_ENV_MAP] = this->Features.environmentMap;
+  constants[SVDAG_CONSTANT_SUN] = this->Features.sun;
+  constants[SVDAG_CONSTANT_EMISSION] = this->Features.emission;
+  constants[SVDAG_CONSTANT_TRANSMISSION] = this->Features.transmission;
+  VkSpecializationMapEntry entries[SVDAG_CONSTANT_COUNT];
+  for (uint32_t i = 0; i < SVDAG_CONSTANT_COUNT; ++i)
+    entries[i] = { i, uint32_t(i * sizeof(VkBool32)), sizeof(VkBool32) };
+  VkSpecializationInfo specialization{ SVDAG_CONSTANT_COUNT, entries, sizeof(constants),
+    constants };
   std::vector<VkPipelineShaderStageCreateInfo> stages;
   // Shader modules are only needed until the pipeline exists; destroyed on every path.
   struct Modules
@@ -139,6 +176,8 @@ void Pipeline::createPipeline()
     stage.stage = c.stage;
     stage.module = modules.list.back();
     stage.pName = "main";
+    if (c.stage == VK_SHADER_STAGE_RAYGEN_BIT_KHR)
+      stage.pSpecializationInfo = &specialization;
     stages.push_back(stage);
   }
   VkRayTracingShaderGroupCreateInfoKHR groups[GroupCount];
@@ -156,20 +195,23 @@ void Pipeline::createPipeline()
   groups[RaygenGroup].generalShader = 0;
   groups[MissGroup].type = VK_RAY_TRACING_SHADER_GROUP_TYPE_GENERAL_KHR;
   groups[MissGroup].generalShader = 1;
+  groups[ShadowMissGroup].type = VK_RAY_TRACING_SHADER_GROUP_TYPE_GENERAL_KHR;
+  groups[ShadowMissGroup].generalShader = 2;
   groups[HitGroup].type = VK_RAY_TRACING_SHADER_GROUP_TYPE_PROCEDURAL_HIT_GROUP_KHR;
-  groups[HitGroup].closestHitShader = 2;
-  groups[HitGroup].intersectionShader = 3;
+  groups[HitGroup].closestHitShader = 3;
+  groups[HitGroup].intersectionShader = 4;
 
   VkRayTracingPipelineCreateInfoKHR info{ VK_STRUCTURE_TYPE_RAY_TRACING_PIPELINE_CREATE_INFO_KHR };
   info.stageCount = uint32_t(stages.size());
   info.pStages = stages.data();
   info.groupCount = GroupCount;
   info.pGroups = groups;
-  info.maxPipelineRayRecursionDepth = 1; // primary rays only, traced from raygen
+  info.maxPipelineRayRecursionDepth = 1; // every ray is traced from raygen
   info.layout = this->Layout;
   check(this->Ctx.fn().createRayTracingPipelines(
           device, VK_NULL_HANDLE, VK_NULL_HANDLE, 1, &info, nullptr, &this->Handle),
     "vkCreateRayTracingPipelinesKHR");
+  ++this->Builds;
 }
 
 void Pipeline::createShaderBindingTable()
@@ -182,10 +224,15 @@ void Pipeline::createShaderBindingTable()
   check(this->Ctx.fn().getRayTracingShaderGroupHandles(this->Ctx.device(), this->Handle, 0,
           GroupCount, handles.size(), handles.data()),
     "vkGetRayTracingShaderGroupHandlesKHR");
-  // One record per region, each region starting at a multiple of shaderGroupBaseAlignment.
-  std::vector<uint8_t> table(GroupCount * regionSize, 0);
+  // Regions start at multiples of shaderGroupBaseAlignment: raygen (one record), miss (the two
+  // miss records, `stride` apart), hit (one record).
+  const VkDeviceSize missOffset = regionSize;
+  const VkDeviceSize hitOffset =
+    alignUp(missOffset + 2 * stride, limits.shaderGroupBaseAlignment);
+  const VkDeviceSize recordOffsets[GroupCount] = { 0, missOffset, missOffset + stride, hitOffset };
+  std::vector<uint8_t> table(hitOffset + regionSize, 0);
   for (uint32_t g = 0; g < GroupCount; ++g)
-    std::memcpy(table.data() + g * regionSize, handles.data() + g * handleSize, handleSize);
+    std::memcpy(table.data() + recordOffsets[g], handles.data() + g * handleSize, handleSize);
   // The table's base address must itself be aligned to shaderGroupBaseAlignment; over-allocate.
   const VkDeviceSize base = limits.shaderGroupBaseAlignment;
   this->Table = Buffer(this->Ctx, table.size() + base, VK_BUFFER_USAGE_SHADER_BINDING_TABLE_BIT_KHR,
@@ -193,9 +240,9 @@ void Pipeline::createShaderBindingTable()
   const VkDeviceAddress start = alignUp(this->Table.address(), base);
   std::memcpy(static_cast<uint8_t*>(this->Table.mapped()) + (start - this->Table.address()),
     table.data(), table.size());
-  this->Raygen = { start + RaygenGroup * regionSize, regionSize, regionSize };
-  this->Miss = { start + MissGroup * regionSize, stride, stride };
-  this->Hit = { start + HitGroup * regionSize, stride, stride };
+  this->Raygen = { start, regionSize, regionSize };
+  this->Miss = { start + missOffset, stride, 2 * stride };
+  this->Hit = { start + hitOffset, stride, stride };
   this->Callable = { 0, 0, 0 };
 }
 

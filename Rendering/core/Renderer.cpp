@@ -2,6 +2,7 @@
 
 #include "svdag_render/Buffer.h"
 #include "svdag_render/Context.h"
+#include "svdag_render/EnvironmentMap.h"
 #include "svdag_render/GpuLayout.h"
 #include "svdag_render/Pipeline.h"
 #include "svdag_render/Scene.h"
@@ -28,6 +29,37 @@ glm::uvec4 addresses(VkDeviceAddress a, VkDeviceAddress b)
 glm::vec4 vec(const std::array<double, 3>& v)
 {
   return glm::vec4(float(v[0]), float(v[1]), float(v[2]), 0.0f);
+}
+
+bool finite(const glm::vec4& v)
+{
+  return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z) && std::isfinite(v.w);
+}
+
+bool visible(const Material& m)
+{
+  return m.baseColorVisibility.a != 0.0f;
+}
+
+// Transmission the shader samples (Shading.h's transmissionProbability, without its header).
+bool transmissive(const Material& m)
+{
+  return std::min(std::max(m.params.z, 0.0f), 1.0f) * (1.0f - std::min(std::max(m.params.y, 0.0f), 1.0f)) > 0.0f;
+}
+
+bool emissive(const Material& m)
+{
+  return m.emission.x > 0.0f || m.emission.y > 0.0f || m.emission.z > 0.0f;
+}
+
+// A device-local storage buffer holding `values` (at least one element, so an address exists).
+template <typename T>
+Buffer storageBuffer(Context& context, const std::vector<T>& values)
+{
+  const std::vector<T> one(1);
+  const std::vector<T>& data = values.empty() ? one : values;
+  return uploadBuffer(context, data.data(), data.size() * sizeof(T),
+    VK_BUFFER_USAGE_STORAGE_BUFFER_BIT);
 }
 } // namespace
 
@@ -64,9 +96,14 @@ struct Renderer::Gpu
   VkDescriptorSet set = VK_NULL_HANDLE;
   Buffer uniforms{ context, sizeof(gpu::FrameUniforms), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT,
     MemoryUse::Upload };
-  // Outputs, sized for the current image: label, depth, normal, hdr, color.
-  Buffer label, depth, normal, hdr, color;
+  // Outputs, sized for the current image: label, depth, normal, hdr, color; and the per-pixel
+  // sums of the accumulation (device memory: only the shader reads it).
+  Buffer label, depth, normal, hdr, color, accumulation;
   uint32_t outputPixels = 0;
+  // Per-label materials (host-visible: an edit is a memcpy) and the environment's tables.
+  Buffer materials;
+  Buffer envMarginal, envConditional, envTexels;
+  glm::uvec2 envSize{ 1, 1 };
 
   Gpu()
   {
@@ -107,6 +144,7 @@ struct Renderer::Gpu
     normal = Buffer(context, pixels * 3 * sizeof(float), usage, MemoryUse::Readback);
     hdr = Buffer(context, pixels * 4 * sizeof(float), usage, MemoryUse::Readback);
     color = Buffer(context, pixels * sizeof(uint32_t), usage, MemoryUse::Readback);
+    accumulation = Buffer(context, pixels * 4 * sizeof(float), usage, MemoryUse::Device);
     outputPixels = pixels;
   }
 
@@ -140,6 +178,15 @@ Renderer::Renderer()
 {
 }
 
+void Renderer::timeSetup(bool rebuilt, double seconds)
+{
+  if (!rebuilt)
+    return;
+  this->SetupSeconds = seconds;
+  ++this->BvhBuilds;
+  ++this->SceneGeneration;
+}
+
 Renderer::~Renderer() = default;
 
 const std::string& Renderer::deviceName() const
@@ -151,25 +198,47 @@ void Renderer::setVolume(std::shared_ptr<const Volume> volume)
 {
   if (!volume)
     throw std::invalid_argument("setVolume needs a volume");
-  std::vector<uint32_t> hidden;
-  if (this->Device->scene)
-    hidden = this->Device->scene->hiddenLabels();
   this->Device->scene.reset();
+  this->Materials.clear();
   const auto start = Clock::now();
   this->Device->scene = std::make_unique<Scene>(this->Device->context, std::move(volume));
-  // Both rebuild the BVH only if they differ from the defaults (all visible, no cap).
+  // Rebuilds the BVH only if it differs from the default (no cap).
   this->Device->scene->setPrimitivesPerBlasLimit(this->BlasLimit);
-  this->Device->scene->setHiddenLabels(hidden);
-  this->SetupSeconds = std::chrono::duration<double>(Clock::now() - start).count();
+  // Every label starts with its default material; the explicitly hidden labels stay hidden.
+  const size_t labels = this->Device->scene->volume().labels.size();
+  this->Materials.reserve(labels);
+  for (size_t i = 0; i < labels; ++i)
+    this->Materials.push_back(defaultMaterial(uint32_t(i)));
+  this->Device->materials = Buffer(this->Device->context,
+    std::max<size_t>(labels, 1) * sizeof(Material), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+    MemoryUse::Upload);
+  this->MaterialsDirty = true;
+  this->Device->scene->setHiddenLabels(this->ExplicitHidden);
+  this->timeSetup(true, std::chrono::duration<double>(Clock::now() - start).count());
 }
 
 void Renderer::setHiddenLabels(const std::vector<uint32_t>& labelIndices)
 {
   if (!this->Device->scene)
     throw std::runtime_error("setHiddenLabels needs a volume first (setVolume)");
+  this->ExplicitHidden = labelIndices;
+  this->applyVisibility();
+}
+
+// The BVH leaves out the explicitly hidden labels and those whose material is invisible.
+void Renderer::applyVisibility()
+{
+  std::vector<uint32_t> hidden = this->ExplicitHidden;
+  for (size_t i = 0; i < this->Materials.size(); ++i)
+  {
+    if (!visible(this->Materials[i]))
+      hidden.push_back(uint32_t(i));
+  }
+  std::sort(hidden.begin(), hidden.end());
+  hidden.erase(std::unique(hidden.begin(), hidden.end()), hidden.end());
   const auto start = Clock::now();
-  if (this->Device->scene->setHiddenLabels(labelIndices))
-    this->SetupSeconds = std::chrono::duration<double>(Clock::now() - start).count();
+  const bool rebuilt = this->Device->scene->setHiddenLabels(hidden);
+  this->timeSetup(rebuilt, std::chrono::duration<double>(Clock::now() - start).count());
 }
 
 void Renderer::setPrimitivesPerBlasLimit(uint32_t limit)
@@ -178,8 +247,8 @@ void Renderer::setPrimitivesPerBlasLimit(uint32_t limit)
   if (!this->Device->scene)
     return;
   const auto start = Clock::now();
-  if (this->Device->scene->setPrimitivesPerBlasLimit(limit))
-    this->SetupSeconds = std::chrono::duration<double>(Clock::now() - start).count();
+  const bool rebuilt = this->Device->scene->setPrimitivesPerBlasLimit(limit);
+  this->timeSetup(rebuilt, std::chrono::duration<double>(Clock::now() - start).count());
 }
 
 size_t Renderer::blasCount() const
@@ -206,6 +275,142 @@ void Renderer::setAutoLodPixels(float pixels)
   if (!(pixels > 0) || !std::isfinite(pixels))
     throw std::invalid_argument("auto LOD pixels must be a finite value > 0");
   this->AutoLodPixels = pixels;
+}
+
+void Renderer::setSamplesPerPixel(uint32_t samples)
+{
+  if (samples < 1 || samples > 65536)
+    throw std::invalid_argument("samples per pixel must be in 1 .. 65536");
+  this->SamplesPerPixel = samples;
+}
+
+void Renderer::setMaxBounces(uint32_t bounces)
+{
+  if (bounces > 64)
+    throw std::invalid_argument("max bounces must be in 0 .. 64");
+  this->MaxBounces = bounces;
+}
+
+void Renderer::setExposure(float exposure)
+{
+  if (!(exposure > 0) || !std::isfinite(exposure))
+    throw std::invalid_argument("exposure must be a finite value > 0");
+  this->Exposure = exposure;
+}
+
+void Renderer::setEnvironmentColor(const std::array<float, 3>& radiance)
+{
+  for (float c : radiance)
+  {
+    if (!(c >= 0) || !std::isfinite(c))
+      throw std::invalid_argument("environment radiance must be finite and >= 0");
+  }
+  this->EnvironmentColor = radiance;
+}
+
+void Renderer::setEnvironmentMap(const std::string& exrPath)
+{
+  if (exrPath == this->EnvironmentPath && !this->EnvironmentDirty)
+    return;
+  Gpu& g = *this->Device;
+  // Read and upload first: a failure leaves the previous environment in place.
+  const EnvironmentMap map =
+    exrPath.empty() ? EnvironmentMap::constant(glm::vec3(1.0f)) : EnvironmentMap::fromEXR(exrPath);
+  std::vector<glm::vec4> texels;
+  texels.reserve(map.texels.size());
+  for (const glm::vec3& t : map.texels)
+    texels.emplace_back(t, 0.0f); // vec4 per texel: std430 arrays of vec3 have a 16-byte stride
+  Buffer marginal = storageBuffer(g.context, map.marginal);
+  Buffer conditional = storageBuffer(g.context, map.conditional);
+  Buffer texelBuffer = storageBuffer(g.context, texels);
+  g.envMarginal = std::move(marginal);
+  g.envConditional = std::move(conditional);
+  g.envTexels = std::move(texelBuffer);
+  g.envSize = glm::uvec2(map.width, map.height);
+  this->EnvironmentPath = exrPath;
+  this->EnvironmentDirty = false;
+  ++this->EnvironmentGeneration;
+}
+
+void Renderer::setSun(const SunLight& sun)
+{
+  const auto& d = sun.direction;
+  const double length = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+  if (!(length > 0) || !std::isfinite(length))
+    throw std::invalid_argument("the sun direction must be a finite, non-zero vector");
+  for (float e : sun.irradiance)
+  {
+    if (!(e >= 0) || !std::isfinite(e))
+      throw std::invalid_argument("the sun irradiance must be finite and >= 0");
+  }
+  if (!(sun.angularRadiusDegrees >= 0 && sun.angularRadiusDegrees < 90))
+    throw std::invalid_argument("the sun's angular radius must be in [0, 90) degrees");
+  this->Sun = sun;
+}
+
+Material Renderer::defaultMaterial(uint32_t labelIndex)
+{
+  Material m;
+  m.baseColorVisibility = glm::vec4(gpu::svdagLabelColor(labelIndex), 1.0f);
+  m.emission = glm::vec4(0.0f);
+  m.params = glm::vec4(0.6f, 0.0f, 0.0f, 1.5f); // roughness, metallic, transmission, ior
+  m.extra = glm::vec4(0.5f, 0.0f, 0.0f, 0.0f);  // specular
+  return m;
+}
+
+void Renderer::setMaterial(uint32_t labelIndex, const Material& material)
+{
+  if (labelIndex >= this->Materials.size())
+    throw std::invalid_argument("label index " + std::to_string(labelIndex) +
+      " is outside the volume's label table (" + std::to_string(this->Materials.size()) +
+      " labels)");
+  if (!finite(material.baseColorVisibility) || !finite(material.emission) ||
+    !finite(material.params) || !finite(material.extra))
+    throw std::invalid_argument("material values must be finite");
+  const glm::vec4& c = material.baseColorVisibility;
+  const glm::vec4& e = material.emission;
+  if (c.x < 0 || c.y < 0 || c.z < 0 || e.x < 0 || e.y < 0 || e.z < 0 || material.params.w <= 0)
+    throw std::invalid_argument("material colors and emission must be >= 0 and the IOR > 0");
+  Material& current = this->Materials[labelIndex];
+  if (std::memcmp(&current, &material, sizeof(Material)) == 0)
+    return;
+  const bool visibilityChanged = visible(current) != visible(material);
+  current = material;
+  this->MaterialsDirty = true;
+  if (visibilityChanged)
+    this->applyVisibility();
+}
+
+const Material& Renderer::material(uint32_t labelIndex) const
+{
+  if (labelIndex >= this->Materials.size())
+    throw std::invalid_argument("label index " + std::to_string(labelIndex) +
+      " is outside the volume's label table");
+  return this->Materials[labelIndex];
+}
+
+ShaderFeatures Renderer::shaderFeatures() const
+{
+  ShaderFeatures f;
+  f.nextEventEstimation = this->Nee;
+  f.environmentMap = !this->EnvironmentPath.empty();
+  f.sun = this->Sun.on &&
+    (this->Sun.irradiance[0] > 0 || this->Sun.irradiance[1] > 0 || this->Sun.irradiance[2] > 0);
+  f.emission = false;
+  f.transmission = false;
+  for (const Material& m : this->Materials)
+  {
+    if (!visible(m))
+      continue;
+    f.emission = f.emission || emissive(m);
+    f.transmission = f.transmission || transmissive(m);
+  }
+  return f;
+}
+
+uint64_t Renderer::pipelineBuilds() const
+{
+  return this->Device->pipeline.builds();
 }
 
 uint64_t Renderer::blasBytes() const
@@ -250,7 +455,7 @@ const Image& Renderer::render()
   u.cameraUp = vec(basis.up);
   u.background = glm::vec4(
     this->Background[0], this->Background[1], this->Background[2], this->Background[3]);
-  u.shading = glm::vec4(0.25f, 0.75f, 0.0f, 0.0f);
+  u.display = glm::vec4(this->Exposure, 0.0f, 0.0f, 0.0f);
   u.autoLod = glm::vec4(
     float(std::min({ s[0], s[1], s[2] }) / pixelAngle), this->AutoLodPixels, 0.0f, 0.0f);
   u.image = glm::uvec4(this->Width, this->Height, uint32_t(this->Detail), 0u);
@@ -262,6 +467,66 @@ const Image& Renderer::render()
   u.sceneOutputs = addresses(g.scene->primitiveBlocksAddress(), g.label.address());
   u.outputs = addresses(g.depth.address(), g.normal.address());
   u.outputs2 = addresses(g.hdr.address(), g.color.address());
+
+  // Lighting (PathTracerParams). The sun direction is normalised in double.
+  if (this->EnvironmentDirty)
+    this->setEnvironmentMap(this->EnvironmentPath);
+  const ShaderFeatures features = this->shaderFeatures();
+  const auto& sd = this->Sun.direction;
+  const double sunLength = std::sqrt(sd[0] * sd[0] + sd[1] * sd[1] + sd[2] * sd[2]);
+  u.sunDirection = glm::vec4(float(sd[0] / sunLength), float(sd[1] / sunLength),
+    float(sd[2] / sunLength),
+    float(std::cos(this->Sun.angularRadiusDegrees * 3.14159265358979323846 / 180)));
+  u.sunRadiance = glm::vec4(this->Sun.irradiance[0], this->Sun.irradiance[1],
+    this->Sun.irradiance[2], features.sun ? 1.0f : 0.0f);
+  // Ray epsilon: a thousandth of the smallest voxel side, but never below the float rounding of
+  // positions (relative to the reference point: camera distance plus the volume's extent).
+  const auto bounds = worldBounds(volume.geometry);
+  double extent = 0, cameraDistance = 0;
+  for (int a = 0; a < 3; ++a)
+  {
+    extent = std::max(extent, bounds[2 * a + 1] - bounds[2 * a]);
+    cameraDistance = std::max(cameraDistance, std::abs(this->View.position[a] - reference[a]));
+  }
+  const double epsilon =
+    std::max(1e-3 * std::min({ s[0], s[1], s[2] }), 4e-6 * (extent + cameraDistance));
+  u.environment = glm::vec4(this->EnvironmentColor[0], this->EnvironmentColor[1],
+    this->EnvironmentColor[2], float(epsilon));
+  u.lighting = glm::uvec4(g.envSize.x, g.envSize.y, this->MaxBounces,
+    this->Nee ? 1u : 0u /* FLAG_NEE */);
+  u.materials = addresses(g.materials.address(), g.accumulation.address());
+  u.environmentMap = addresses(g.envMarginal.address(), g.envConditional.address());
+  u.environmentMap2 = addresses(g.envTexels.address(), 0);
+  u.sampling = glm::uvec4(0u, this->SamplesPerPixel, this->Seed, uint32_t(this->Materials.size()));
+
+  if (this->MaterialsDirty)
+  {
+    // The GPU is idle between frames (every frame waits), so the host may write in place.
+    std::memcpy(g.materials.mapped(), this->Materials.data(), this->Materials.size() * sizeof(Material));
+    this->MaterialsDirty = false;
+    ++this->MaterialGeneration;
+  }
+  g.pipeline.setFeatures(features);
+
+  // Everything that changes the image, besides the per-pass fields (samples, exposure): a
+  // difference from the last pass starts a new accumulation.
+  gpu::FrameUniforms key = u;
+  key.sampling.y = 0;
+  key.display = glm::vec4(0.0f);
+  const uint64_t generations[3] = { this->SceneGeneration, this->MaterialGeneration,
+    this->EnvironmentGeneration };
+  std::vector<unsigned char> state(sizeof(key) + sizeof(generations));
+  std::memcpy(state.data(), &key, sizeof(key));
+  std::memcpy(state.data() + sizeof(key), generations, sizeof(generations));
+  if (!this->AccumulationValid || state != this->AccumulatedState ||
+    uint64_t(this->Accumulated) + this->SamplesPerPixel > UINT32_MAX)
+  {
+    this->Accumulated = 0;
+    this->RenderSeconds = 0;
+    this->AccumulatedState = std::move(state);
+  }
+  this->AccumulationValid = false; // valid again only once this pass succeeded
+  u.sampling.x = this->Accumulated;
   std::memcpy(g.uniforms.mapped(), &u, sizeof(u));
   g.updateDescriptors();
 
@@ -281,6 +546,9 @@ const Image& Renderer::render()
   });
   this->FrameMilliseconds =
     std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+  this->RenderSeconds += this->FrameMilliseconds / 1000;
+  this->Accumulated += this->SamplesPerPixel;
+  this->AccumulationValid = true;
 
   Image& out = this->Output;
   out.width = this->Width;

@@ -30,6 +30,20 @@ layout(buffer_reference, std430, buffer_reference_align = 16) writeonly buffer S
   vec4 v[];
 };
 
+layout(buffer_reference, std430, buffer_reference_align = 4) readonly buffer SvdagFloats
+{
+  float v[];
+};
+layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer SvdagVec4s
+{
+  vec4 v[];
+};
+// Read and written by the same invocation only (one pixel's accumulated sums).
+layout(buffer_reference, std430, buffer_reference_align = 16) buffer SvdagVec4Accumulation
+{
+  vec4 v[];
+};
+
 // Closest-hit -> raygen. label: label index + 1 (0: miss); t: world distance; normal: world.
 struct SvdagPayload
 {

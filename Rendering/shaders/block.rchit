@@ -4,7 +4,7 @@
 #extension GL_GOOGLE_include_directive : require
 #include "Common.glsl"
 
-layout(location = 0) rayPayloadInEXT SvdagPayload payload;
+layout(location = SVDAG_PAYLOAD_CLOSEST) rayPayloadInEXT SvdagPayload payload;
 hitAttributeEXT SvdagHitAttributes attributes;
 
 void main()

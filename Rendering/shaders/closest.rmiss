@@ -1,10 +1,10 @@
 #version 460
-// A primary ray that hits no block: background (label 0).
+// A closest-hit query (camera ray or path segment) that hits no block: background (label 0).
 #extension GL_EXT_ray_tracing : require
 #extension GL_GOOGLE_include_directive : require
 #include "Common.glsl"
 
-layout(location = 0) rayPayloadInEXT SvdagPayload payload;
+layout(location = SVDAG_PAYLOAD_CLOSEST) rayPayloadInEXT SvdagPayload payload;
 
 void main()
 {

@@ -11,7 +11,7 @@
 // the mean time of all but the first (which includes the driver's shader compilation) when more
 // than one is rendered. Exit status: 0 on success, 1 on bad arguments, 2 on a rendering or file
 // error (message on stderr).
-#include "ImageFiles.h"
+#include "svdag_render/ImageFiles.h"
 
 #include <svdag/File.h>
 #include <svdag_render/Renderer.h>

@@ -26,12 +26,19 @@
  *                   label == 0. Never NaN or inf.
  *   normal  3 float world-space unit normal of the entry face; (0, 0, 0) on a miss and where the
  *                   camera is inside the hit voxel/box (no entry face)
- *   hdr     4 float linear RGBA of the simple shading below
- *   color   RGBA8   sRGB-encoded hdr, R in the lowest byte (bytes R, G, B, A in memory)
+ *   hdr     4 float linear RGBA: the mean of all samples accumulated since the last reset (below)
+ *   color   RGBA8   the tone-mapped display color, R in the lowest byte (bytes R, G, B, A in memory):
+ *                   per channel x = exposure * hdr, then Reinhard's curve x / (1 + x), then the
+ *                   sRGB transfer function; alpha = hdr.a
  *
- * Simple deterministic shading (milestone 1, before the path tracer): a label's base color comes
- * from a hash of its label index; color = base * (ambient + diffuse * |dot(normal, -direction)|)
- * (a headlight at the camera), alpha 1; the background color is a constant (alpha included).
+ * Path tracing (camera.rgen, Shading.h, PathTracer.h): every pass adds sampling.y samples per
+ * pixel, each a camera path through a uniformly jittered point of the pixel. A sample whose camera
+ * ray hits nothing is the background (frame.background, alpha included): the environment lights
+ * the scene but is not what the camera sees behind it, like VTK's renderer background. A hit
+ * counts alpha 1. The sums live in the accumulation buffer (rgb + alpha sum per pixel); sampling.x
+ * samples were accumulated before this pass (0: overwrite). Label, depth and normal come from the
+ * un-jittered pixel-center ray (traced when sampling.x == 0; the image does not change while
+ * samples accumulate). Random numbers: pcgHash of (pixel, global sample index, seed) per sample.
  */
 #ifndef SVDAG_RENDER_GPU_LAYOUT_H
 #define SVDAG_RENDER_GPU_LAYOUT_H
@@ -61,6 +68,20 @@ typedef uint32_t uint;
 #define SVDAG_UNIFORMS_END(instance) } instance;
 #endif
 
+/* Miss shaders (index into the miss region) and ray payload locations. */
+#define SVDAG_MISS_CLOSEST 0
+#define SVDAG_MISS_SHADOW 1
+#define SVDAG_PAYLOAD_CLOSEST 0
+#define SVDAG_PAYLOAD_SHADOW 1
+
+/* Specialization constant ids of the path tracer's feature switches (PathTracer.h). */
+#define SVDAG_CONSTANT_NEE 0
+#define SVDAG_CONSTANT_ENV_MAP 1
+#define SVDAG_CONSTANT_SUN 2
+#define SVDAG_CONSTANT_EMISSION 3
+#define SVDAG_CONSTANT_TRANSMISSION 4
+#define SVDAG_CONSTANT_COUNT 5
+
 /* Descriptor set 0. */
 #define SVDAG_BINDING_TLAS 0
 #define SVDAG_BINDING_FRAME 1
@@ -81,8 +102,8 @@ SVDAG_UNIFORMS_BEGIN(FrameUniforms)
   vec4 cameraForward;  // xyz: unit forward F; w unused
   vec4 cameraRight;    // xyz: R * tan(viewAngle / 2) * aspect; w unused
   vec4 cameraUp;       // xyz: U * tan(viewAngle / 2); w unused
-  vec4 background;     // linear RGBA written where a ray misses
-  vec4 shading;        // x: ambient, y: diffuse (headlight Lambert); z, w unused
+  vec4 background;     // linear RGBA of camera samples that hit nothing
+  vec4 display;        // x: exposure (color output, see above); y, z, w unused
   vec4 autoLod;        // x: world size of one voxel / angle of one pixel (radians): a voxel at
                        //    distance d covers x / d pixels; y: pixels a leaf (4 voxels) or block
                        //    (16 voxels) may cover to be drawn at that coarser level; z, w unused
@@ -97,7 +118,25 @@ SVDAG_UNIFORMS_BEGIN(FrameUniforms)
   uvec4 sceneOutputs;  // addresses: xy primitive -> block index (uint32), zw label output
   uvec4 outputs;       // addresses: xy depth, zw normal (3 floats per pixel)
   uvec4 outputs2;      // addresses: xy hdr (vec4 per pixel), zw color (RGBA8 per pixel)
+  // The path tracer's PathTracerParams (Shading.h), member by member:
+  vec4 sunDirection;   // xyz: unit direction towards the sun (world), w: cos(angular radius)
+  vec4 sunRadiance;    // rgb: irradiance at normal incidence, a: 1 = on
+  vec4 environment;    // rgb: constant radiance or the map's scale; a: ray epsilon (world units)
+  uvec4 lighting;      // x, y: environment map size (1 x 1 = constant), z: max bounces, w: flags
+  uvec4 sampling;      // x: samples accumulated before this pass, y: samples per pixel this pass,
+                       // z: seed, w: number of label materials (label index bound)
+  uvec4 materials;     // addresses: xy materials (Material, 64 bytes per label index),
+                       // zw accumulation (vec4 per pixel: rgb sum, alpha sum)
+  uvec4 environmentMap; // addresses: xy marginal CDF (float), zw conditional CDFs (float)
+  uvec4 environmentMap2; // addresses: xy texels (vec4 per texel, rgb radiance); z, w unused
 SVDAG_UNIFORMS_END(frame)
+
+/* Reinhard's tone curve on exposure-scaled linear radiance (the color output). */
+SVDAG_GPU_FN vec3 svdagToneMap(vec3 linear, float exposure)
+{
+  vec3 x = max(linear * exposure, vec3(0.0f));
+  return x / (vec3(1.0f) + x);
+}
 
 /* Base color of a label index: a hash to a well-spread hue-like RGB in [0.15, 0.95]. */
 SVDAG_GPU_FN uint svdagHashLabel(uint x)
@@ -118,7 +157,7 @@ SVDAG_GPU_FN vec3 svdagLabelColor(uint labelIndex)
 }
 
 #ifdef __cplusplus
-static_assert(sizeof(FrameUniforms) == 16 * 16, "FrameUniforms must stay a list of 16-byte members");
+static_assert(sizeof(FrameUniforms) == 24 * 16, "FrameUniforms must stay a list of 16-byte members");
 } // namespace gpu
 } // namespace render
 } // namespace svdag

@@ -1,8 +1,11 @@
-// The ray tracing pipeline of the primary-hit renderer and its shader binding table.
+// The ray tracing pipeline of the path tracer and its shader binding table.
 //
-// Shaders (compiled to SPIR-V at build time and embedded): primary.rgen (one ray per pixel),
-// primary.rmiss, and one procedural hit group: block.rint (per-block DAG traversal) with
-// block.rchit. Descriptor set 0: the TLAS (SVDAG_BINDING_TLAS) and the frame uniforms
+// Shaders (compiled to SPIR-V at build time and embedded): camera.rgen (primary outputs and
+// camera paths), two miss shaders (closest.rmiss for closest-hit queries, shadow.rmiss for
+// occlusion rays, at miss indices SVDAG_MISS_CLOSEST / SVDAG_MISS_SHADOW) and one procedural hit
+// group: block.rint (per-block DAG traversal) with block.rchit. The path tracer's feature
+// switches are specialization constants of camera.rgen (ShaderFeatures); setFeatures rebuilds
+// the pipeline, keeping the layouts (descriptor sets stay valid). Descriptor set 0: the TLAS (SVDAG_BINDING_TLAS) and the frame uniforms
 // (SVDAG_BINDING_FRAME), see GpuLayout.h. The SBT's handle size and alignments are read from
 // the driver.
 #pragma once
@@ -15,13 +18,37 @@ namespace svdag
 namespace render
 {
 
+// The path tracer's feature switches (PathTracer.h's SVDAG_FEATURE_*). A feature a scene does not
+// use is compiled out.
+struct ShaderFeatures
+{
+  bool nextEventEstimation = true;
+  bool environmentMap = false;
+  bool sun = false;
+  bool emission = false;
+  bool transmission = false;
+  bool operator==(const ShaderFeatures& o) const
+  {
+    return nextEventEstimation == o.nextEventEstimation && environmentMap == o.environmentMap &&
+      sun == o.sun && emission == o.emission && transmission == o.transmission;
+  }
+  bool operator!=(const ShaderFeatures& o) const { return !(*this == o); }
+};
+
 class Pipeline
 {
 public:
-  explicit Pipeline(Context& context);
+  explicit Pipeline(Context& context, const ShaderFeatures& features = ShaderFeatures());
   ~Pipeline();
   Pipeline(const Pipeline&) = delete;
   Pipeline& operator=(const Pipeline&) = delete;
+
+  // Rebuilds the pipeline and its shader binding table if the features differ; returns whether
+  // it rebuilt. Call only while no frame is in flight (the renderer waits for every frame).
+  bool setFeatures(const ShaderFeatures& features);
+  const ShaderFeatures& features() const { return this->Features; }
+  // Pipelines built so far (the constructor's included): a test sees rebuilds.
+  uint64_t builds() const { return this->Builds; }
 
   VkPipeline handle() const { return this->Handle; }
   VkPipelineLayout layout() const { return this->Layout; }
@@ -36,9 +63,12 @@ private:
   void createLayouts();
   void createPipeline();
   void createShaderBindingTable();
+  void destroyPipeline();
   void destroy();
 
   Context& Ctx;
+  ShaderFeatures Features;
+  uint64_t Builds = 0;
   VkDescriptorSetLayout SetLayout = VK_NULL_HANDLE;
   VkPipelineLayout Layout = VK_NULL_HANDLE;
   VkPipeline Handle = VK_NULL_HANDLE;

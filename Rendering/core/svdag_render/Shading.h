@@ -18,6 +18,8 @@
 #ifndef SVDAG_RENDER_SHADING_H
 #define SVDAG_RENDER_SHADING_H
 
+#include "svdag_render/Material.h"
+
 #ifdef __cplusplus
 #include <cstdint>
 #include <glm/glm.hpp>
@@ -42,14 +44,8 @@ SHADING_CONST float PI = 3.14159265358979f;
 SHADING_CONST float INV_PI = 0.31830988618379f;
 SHADING_CONST float MIN_ROUGHNESS = 0.02f; // below, GGX is numerically a mirror: keep it finite
 
-/* Per-label material, std430 layout (64 bytes). The one definition used by host and shaders. */
-struct Material
-{
-  vec4 baseColorVisibility; // rgb base color (linear), a = visibility (0 hidden, 1 visible)
-  vec4 emission;            // rgb emitted radiance, a unused
-  vec4 params;              // x roughness, y metallic, z transmission weight, w index of refraction
-  vec4 extra;               // x specular (dielectric reflectance scale, 0.5 -> F0 = 0.04), yzw unused
-};
+/* Per-label material (std430, 64 bytes): svdag_render/Material.h, included above the
+ * namespace. */
 
 /* ---- random numbers: PCG hash (O'Neill), 32-bit state ---------------------------------------- */
 SHADING_FN uint pcgHash(uint v)
