@@ -1,0 +1,339 @@
+"""The path tracer of vtkSegmentationSVDAGRenderer on the GPU (lavapipe here): physics checks
+(white furnace, NEE against the plain estimator), determinism, robustness under extreme settings,
+hidden labels, progressive accumulation and what an edit rebuilds.
+
+Images are small (48 x 32) so that many samples per pixel stay cheap on a CPU device.
+"""
+import numpy as np
+import pytest
+from vtkmodules.util.numpy_support import numpy_to_vtk, vtk_to_numpy
+from vtkmodules.vtkCommonDataModel import vtkImageData
+
+from vtksvdag.vtkSVDAGCore import vtkImageDataToSegmentationSVDAG
+from vtksvdag.vtkSVDAGRendering import vtkSegmentationSVDAGRenderer
+
+WIDTH, HEIGHT = 48, 32
+VALUES = (3, 5, 9)  # label values; their indices in the label table are 0, 1, 2
+
+
+def build(labels, excluded=()):
+    image = vtkImageData()
+    image.SetDimensions(labels.shape[2], labels.shape[1], labels.shape[0])
+    image.GetPointData().SetScalars(numpy_to_vtk(np.ascontiguousarray(labels).ravel(), deep=True))
+    builder = vtkImageDataToSegmentationSVDAG()
+    builder.SetInputData(image)
+    for value in excluded:
+        builder.AddExcludedLabel(int(value))
+    builder.Update()
+    return builder.GetOutput()
+
+
+@pytest.fixture(scope="module")
+def labels():
+    """A porous block of three labels: cavities and overhangs, so paths bounce many times."""
+    rng = np.random.default_rng(7)
+    labels = np.zeros((28, 28, 28), np.uint16)
+    labels[4:24, 4:24, 4:24] = rng.choice(VALUES, size=(20, 20, 20))
+    labels[rng.random(labels.shape) < 0.35] = 0
+    labels[2:4, 2:26, 2:26] = VALUES[0]  # a floor slab
+    return labels
+
+
+@pytest.fixture(scope="module")
+def volume(labels):
+    return build(labels)
+
+
+def make_renderer(volume, azimuth=30, elevation=25):
+    r = vtkSegmentationSVDAGRenderer()
+    r.SetInputData(volume)
+    r.SetWidth(WIDTH)
+    r.SetHeight(HEIGHT)
+    assert r.ResetCamera(azimuth, elevation, 1.1) == 1
+    return r
+
+
+def render(r):
+    assert r.Render() == 1
+    data = r.GetOutput().GetPointData()
+    return {name: vtk_to_numpy(data.GetArray(name)).copy()
+            for name in ("Color", "HDR", "Depth", "Label", "Normal")}
+
+
+def white_lambertian(r, count=len(VALUES)):
+    for index in range(count):
+        r.SetLabelColor(index, 1, 1, 1)
+        r.SetLabelSpecular(index, 0)
+        r.SetLabelMetallic(index, 0)
+
+
+def test_white_furnace(volume):
+    """Exactly Lambertian white surfaces under a constant environment of radiance 1 reflect all
+    light: every pixel that sees a voxel has radiance 1 (up to noise and path truncation)."""
+    r = make_renderer(volume)
+    white_lambertian(r)
+    r.SetEnvironmentColor(1, 1, 1)
+    r.SetBackground(1, 1, 1, 1)  # jittered camera samples that miss also see radiance 1
+    r.SetMaximumBounces(64)
+    r.SetSamplesPerPixel(128)
+    for nee in (True, False):
+        r.SetNextEventEstimation(nee)
+        out = render(r)
+        out = render(r)  # accumulates: 256 samples
+        assert r.GetAccumulatedSamples() == 256
+        hit = out["Label"] > 0
+        assert hit.sum() > 0.2 * WIDTH * HEIGHT
+        rgb = out["HDR"][hit, :3]
+        assert abs(rgb.mean() - 1) < 0.01, (nee, rgb.mean())
+        assert rgb.min() > 0.6 and rgb.max() < 1.5, (nee, rgb.min(), rgb.max())
+
+
+def test_white_furnace_fails_for_a_grey_material(volume):
+    """The furnace check can fail: a 50% grey albedo must give a clearly darker mean."""
+    r = make_renderer(volume)
+    white_lambertian(r)
+    for index in range(len(VALUES)):
+        r.SetLabelColor(index, 0.5, 0.5, 0.5)
+    r.SetMaximumBounces(64)
+    r.SetSamplesPerPixel(64)
+    out = render(r)
+    hit = out["Label"] > 0
+    assert out["HDR"][hit, :3].mean() < 0.85
+
+
+def test_seed_determinism(volume):
+    r = make_renderer(volume)
+    r.SetSamplesPerPixel(4)
+    r.SetSeed(11)
+    first = render(r)
+    r.ResetAccumulation()
+    again = render(r)
+    for name in first:
+        assert np.array_equal(first[name], again[name]), name
+    # Another renderer (another device context) with the same settings: the same bytes.
+    other = make_renderer(volume)
+    other.SetSamplesPerPixel(4)
+    other.SetSeed(11)
+    assert np.array_equal(render(other)["HDR"], first["HDR"])
+    other.SetSeed(12)
+    different = render(other)
+    assert other.GetAccumulatedSamples() == 4  # a new seed restarts the accumulation
+    assert not np.array_equal(different["HDR"], first["HDR"])
+    # The primary outputs do not depend on the seed.
+    for name in ("Label", "Depth", "Normal"):
+        assert np.array_equal(different[name], first[name]), name
+
+
+def test_progressive_accumulation(volume):
+    r = make_renderer(volume)
+    r.SetSamplesPerPixel(2)
+    one = render(r)
+    assert r.GetAccumulatedSamples() == 2
+    two = render(r)
+    assert r.GetAccumulatedSamples() == 4
+    assert r.GetRenderSeconds() > 0
+    # The mean of 4 samples: samples 0-1 are the first image's, so the second image is the
+    # average of the first and of the new samples 2-3 (which a fresh accumulation cannot give).
+    assert not np.array_equal(one["HDR"], two["HDR"])
+    # Exposure only changes the display color, not the accumulation.
+    r.SetExposure(2.0)
+    brighter = render(r)
+    assert r.GetAccumulatedSamples() == 6
+    hit = brighter["Label"] > 0
+    assert brighter["Color"][hit, :3].astype(int).sum() > two["Color"][hit, :3].astype(int).sum()
+    # A camera change restarts it.
+    r.ResetCamera(40, 25, 1.1)
+    render(r)
+    assert r.GetAccumulatedSamples() == 2
+    # More samples reduce the noise: the variance between two independent 32-sample images is
+    # well below that of two 2-sample images.
+    def noise(spp):
+        images = []
+        for seed in (1, 2):
+            r.SetSeed(seed)
+            r.SetSamplesPerPixel(spp)
+            images.append(render(r)["HDR"][:, :3])
+        return np.mean((images[0] - images[1]) ** 2)
+    assert noise(32) < 0.3 * noise(2)
+
+
+EXTREMES = {
+    "huge emission": lambda r, i: r.SetLabelEmission(i, 1e30, 1e30, 1e30),
+    "mirror": lambda r, i: (r.SetLabelRoughness(i, 0), r.SetLabelMetallic(i, 1)),
+    "glass ior 1": lambda r, i: (r.SetLabelTransmission(i, 1), r.SetLabelIOR(i, 1),
+                                 r.SetLabelRoughness(i, 0)),
+    "glass": lambda r, i: (r.SetLabelTransmission(i, 1), r.SetLabelIOR(i, 2.4)),
+    "black": lambda r, i: r.SetLabelColor(i, 0, 0, 0),
+    "overbright": lambda r, i: (r.SetLabelColor(i, 50, 50, 50), r.SetLabelSpecular(i, 1)),
+}
+
+
+@pytest.mark.parametrize("sun", ["delta", "huge disk", "grazing"])
+def test_no_nan_or_inf_under_extremes(volume, sun):
+    r = make_renderer(volume)
+    for index, setup in zip(range(len(VALUES)), EXTREMES.values()):
+        setup(r, index)
+    r.SunOn()
+    if sun == "delta":
+        r.SetSunAngularRadius(0)
+        r.SetSunIrradiance(1e20, 1e20, 1e20)
+    elif sun == "huge disk":
+        r.SetSunAngularRadius(89)
+        r.SetSunIrradiance(1e6, 0, 1e6)
+    else:
+        r.SetSunDirection(1, 0, 1e-7)
+        r.SetSunIrradiance(5, 5, 5)
+    r.SetMaximumBounces(64)
+    r.SetSamplesPerPixel(8)
+    out = render(r)
+    for name in ("HDR", "Depth", "Normal"):
+        assert np.all(np.isfinite(out[name])), name
+    assert np.all(out["HDR"] >= 0)
+    # And the remaining extremes on the other labels.
+    r2 = make_renderer(volume)
+    for index, setup in zip(range(len(VALUES)), list(EXTREMES.values())[3:]):
+        setup(r2, index)
+    r2.SetEnvironmentColor(1e10, 0, 1e-10)
+    r2.SetSamplesPerPixel(8)
+    out = render(r2)
+    assert np.all(np.isfinite(out["HDR"])) and np.all(out["HDR"] >= 0)
+
+
+def test_emission_is_the_only_light_in_the_dark(volume):
+    """Under a black environment without sun, only emission lights the scene: an emissive label
+    glows in its color (with 1 px ~ 1 voxel, jittered samples also see its neighbours, so the
+    check is on means), and without emission the image is exactly black."""
+    r = make_renderer(volume)
+    r.SetEnvironmentColor(0, 0, 0)
+    r.SetBackground(0, 0, 0, 1)
+    r.SetLabelEmission(1, 4, 2, 1)
+    r.SetSamplesPerPixel(8)
+    out = render(r)
+    emitter = out["Label"] == 2
+    others = (out["Label"] > 0) & ~emitter
+    assert emitter.any() and others.any()
+    rgb = out["HDR"][emitter, :3].mean(axis=0)
+    assert rgb[0] > 2 and rgb[0] > rgb[1] > rgb[2] > 0
+    assert out["HDR"][others, 0].mean() < rgb[0]
+    r.SetLabelEmission(1, 0, 0, 0)
+    dark = render(r)
+    assert np.all(dark["HDR"][:, :3] == 0)
+
+
+def test_hidden_labels_vanish(labels, volume):
+    """A label with visibility 0 leaves the Label output and the image: the image equals that of
+    a volume built without it (same materials per label value, same seed)."""
+    hidden_value = VALUES[1]
+    r = make_renderer(volume)
+    r.SetLabelVisibility(1, False)
+    r.SetLabelColor(0, 0.8, 0.3, 0.2)
+    r.SetLabelColor(2, 0.2, 0.4, 0.9)
+    r.SetSamplesPerPixel(16)
+    r.SetSeed(3)
+    out = render(r)
+    assert not np.any(out["Label"] == 2)
+
+    without = build(labels, excluded=(hidden_value,))  # label table: VALUES[0], VALUES[2]
+    ref = make_renderer(without)
+    ref.SetLabelColor(0, 0.8, 0.3, 0.2)
+    ref.SetLabelColor(1, 0.2, 0.4, 0.9)
+    ref.SetSamplesPerPixel(16)
+    ref.SetSeed(3)
+    expected = render(ref)
+    # Label indices differ (index 2 there is index 1 here); hits and depths are equal.
+    remap = np.array([0, 1, 3], np.int64)
+    assert np.array_equal(remap[expected["Label"]], out["Label"])
+    assert np.array_equal(expected["Depth"], out["Depth"])
+    assert np.allclose(expected["HDR"], out["HDR"], atol=1e-4)
+    # Shown again: the label returns (and the BVH was rebuilt for both changes).
+    builds = r.GetNumberOfBVHBuilds()
+    r.SetLabelVisibility(1, True)
+    assert np.any(render(r)["Label"] == 2)
+    assert r.GetNumberOfBVHBuilds() == builds + 1
+
+
+def test_nee_and_plain_estimator_agree(volume):
+    """Both estimators are unbiased: under a disk sun plus a dim environment their means over the
+    image agree within a few percent (the plain one needs many more samples)."""
+    means = {}
+    for nee in (True, False):
+        r = make_renderer(volume, azimuth=20, elevation=35)
+        r.SunOn()
+        r.SetSunDirection(0.4, 0.5, 0.77)
+        r.SetSunAngularRadius(8)  # large enough that escaping paths find it
+        r.SetSunIrradiance(3, 3, 3)
+        r.SetEnvironmentColor(0.2, 0.25, 0.3)
+        r.SetMaximumBounces(4)
+        r.SetNextEventEstimation(nee)
+        r.SetSamplesPerPixel(512)
+        r.SetSeed(5)
+        for _ in range(1 if nee else 8):  # the plain estimator's noise is ~0.5% at 4096 spp
+            out = render(r)
+        hit = out["Label"] > 0
+        means[nee] = out["HDR"][hit, :3].mean(axis=0)
+    assert np.all(means[True] > 0.05)
+    assert np.allclose(means[True], means[False], rtol=0.03), means
+
+
+def test_material_edit_does_not_rebuild(volume):
+    r = make_renderer(volume)
+    r.SetSamplesPerPixel(2)
+    first = render(r)
+    builds = r.GetNumberOfBVHBuilds()
+    setup = r.GetSetupSeconds()
+    pipelines = r.GetNumberOfPipelineBuilds()
+    assert builds >= 1 and pipelines >= 1
+    render(r)
+    assert r.GetAccumulatedSamples() == 4
+    r.SetLabelColor(0, 0.9, 0.1, 0.1)
+    r.SetLabelRoughness(1, 0.1)
+    edited = render(r)
+    assert r.GetAccumulatedSamples() == 2  # the edit restarted the accumulation
+    assert r.GetNumberOfBVHBuilds() == builds and r.GetSetupSeconds() == setup
+    assert r.GetNumberOfPipelineBuilds() == pipelines  # no feature changed
+    hit0 = first["Label"] == 1
+    assert not np.allclose(edited["HDR"][hit0], first["HDR"][hit0])
+    # Emission is a feature compiled in only when used: the pipeline is rebuilt, the BVH not.
+    r.SetLabelEmission(2, 1, 1, 1)
+    render(r)
+    assert r.GetNumberOfPipelineBuilds() == pipelines + 1
+    assert r.GetNumberOfBVHBuilds() == builds
+    # Visibility is a BVH change.
+    r.SetLabelVisibility(2, False)
+    render(r)
+    assert r.GetNumberOfBVHBuilds() == builds + 1
+
+
+def test_bad_settings_fail_cleanly(volume, tmp_path):
+    r = make_renderer(volume)
+    r.SetLabelColor(7, 1, 1, 1)  # only 3 labels
+    assert r.Render() == 0
+    r.ResetLabelMaterials()
+    assert r.Render() == 1
+    r.SetEnvironmentMap(str(tmp_path / "missing.exr"))
+    assert r.Render() == 0
+    r.SetEnvironmentMap(None)
+    r.SunOn()
+    r.SetSunDirection(0, 0, 0)
+    assert r.Render() == 0
+    r.SetSunDirection(0, 0, 1)
+    assert r.Render() == 1
+    assert r.WriteImage(str(tmp_path / "image.bmp")) == 0
+
+
+def test_environment_map_and_write_image(volume, tmp_path):
+    """An equirectangular EXR lights the scene: the renderer's own EXR output serves as a map.
+    PNG and EXR outputs are written."""
+    r = make_renderer(volume)
+    r.SetSamplesPerPixel(4)
+    out = render(r)
+    assert r.WriteImage(str(tmp_path / "image.png")) == 1
+    assert r.WriteImage(str(tmp_path / "map.exr")) == 1
+    assert (tmp_path / "image.png").stat().st_size > 0
+    pipelines = r.GetNumberOfPipelineBuilds()
+    r.SetEnvironmentMap(str(tmp_path / "map.exr"))
+    lit = render(r)
+    assert r.GetNumberOfPipelineBuilds() == pipelines + 1  # the map feature is compiled in
+    assert np.all(np.isfinite(lit["HDR"]))
+    hit = lit["Label"] > 0
+    assert not np.allclose(lit["HDR"][hit], out["HDR"][hit])
