@@ -7,11 +7,11 @@ import argparse
 import sys
 
 from . import __version__
-from .commands import compress, decompress, info
+from .commands import compress, decompress, info, render
 
 #: Every subcommand, in the order ``--help`` lists them. A new command is a module in
 #: ``vtksvdag/commands/`` plus one entry here.
-COMMANDS = [compress, decompress, info]
+COMMANDS = [compress, decompress, info, render]
 
 PROG = "vtksvdag"
 

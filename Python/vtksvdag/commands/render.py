@@ -1,0 +1,169 @@
+"""``vtksvdag render INPUT -o OUT.png|OUT.exr``: path-trace a segmentation volume to an image.
+
+The camera frames the whole volume (like VTK's ResetCamera, then an orbit by --azimuth and
+--elevation and a dolly by --zoom). The image accumulates --spp passes of one sample per pixel;
+``ms_per_frame`` is the mean time of one such pass (without the first, which includes the
+driver's shader compilation, when there are several). PNG holds the tone-mapped color, EXR the
+linear color with depth (Z) and label channels.
+"""
+import math
+import sys
+import time
+
+import numpy as np
+from vtkmodules.util.misc import calldata_type
+from vtkmodules.util.vtkConstants import VTK_STRING
+
+from ._common import add_input_options, load, print_json, print_table
+
+NAME = "render"
+HELP = "path-trace a label volume or .svdag file to a PNG or EXR image (Vulkan ray tracing)"
+
+LODS = ("block", "leaf", "voxel", "auto")
+
+
+def _positive_int(text):
+    value = int(text)
+    if value < 1:
+        raise ValueError(text)
+    return value
+
+
+_positive_int.__name__ = "positive integer"
+
+
+def add_arguments(parser):
+    parser.add_argument("input", metavar="INPUT", help="label volume file or .svdag file")
+    parser.add_argument("-o", "--output", required=True, metavar="OUT.png|OUT.exr",
+                        help="output image")
+    add_input_options(parser)
+    parser.add_argument("--width", type=_positive_int, default=512, help="pixels (default: 512)")
+    parser.add_argument("--height", type=_positive_int, default=512, help="pixels (default: 512)")
+    parser.add_argument("--spp", type=_positive_int, default=16,
+                        help="samples per pixel, one per pass (default: 16)")
+    parser.add_argument("--bounces", type=int, default=4, help="maximum bounces, 0-64 (default: 4)")
+    parser.add_argument("--lod", choices=LODS, default="voxel", help="level of detail (default: voxel)")
+    parser.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
+    parser.add_argument("--azimuth", type=float, default=30.0, help="camera orbit, degrees (default: 30)")
+    parser.add_argument("--elevation", type=float, default=20.0,
+                        help="camera orbit, degrees (default: 20)")
+    parser.add_argument("--zoom", type=float, default=1.0, help="dolly factor > 0 (default: 1)")
+    parser.add_argument("--hide", type=int, nargs="+", default=[], metavar="LABEL",
+                        help="label VALUES left out of the image")
+    parser.add_argument("--no-nee", action="store_true",
+                        help="no next-event estimation (light only where paths escape)")
+    parser.add_argument("--environment", metavar="EXR", help="equirectangular OpenEXR environment map")
+    parser.add_argument("--sun", type=float, nargs=2, metavar=("AZ", "EL"),
+                        help="a sun at azimuth AZ (degrees from +x towards +y) and elevation EL "
+                             "(degrees above the xy plane, +z up)")
+    parser.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
+    parser.add_argument("--no-progress", action="store_true", help="(no progress bar is shown)")
+
+
+def _fail(message):
+    """One line for the command line's error format."""
+    return " ".join(message.split())
+
+
+def run(args):
+    # Imported here: the other commands must work where the rendering module cannot load.
+    from ..vtkSVDAGRendering import vtkSegmentationSVDAGRenderer
+
+    if not args.output.lower().endswith((".png", ".exr")):
+        raise ValueError(f"the output file must end in .png or .exr, got '{args.output}'")
+    if not 0 <= args.bounces <= 64:
+        raise ValueError(f"--bounces must be in 0..64, got {args.bounces}")
+    if not 0 <= args.seed < 2 ** 32:
+        raise ValueError(f"--seed must be in 0..{2 ** 32 - 1}, got {args.seed}")
+    if not (args.zoom > 0 and math.isfinite(args.zoom)):
+        raise ValueError(f"--zoom must be a finite number > 0, got {args.zoom}")
+
+    volume = load(args, args.input)
+    values = list(volume.labels)
+    hidden = []
+    for value in args.hide:
+        if value not in values:
+            raise ValueError(f"--hide: label {value} is not in the volume")
+        hidden.append(values.index(value))
+
+    renderer = vtkSegmentationSVDAGRenderer()
+    errors = []
+
+    @calldata_type(VTK_STRING)
+    def on_error(_obj, _event, message):
+        errors.append(message)
+
+    renderer.AddObserver("ErrorEvent", on_error)
+
+    def check(ok, what):
+        if not ok:
+            detail = errors[-1] if errors else "unknown error"
+            # VTK's error text starts with "ERROR: In FILE, line N\nCLASS (ADDRESS): ".
+            detail = detail.split("): ", 1)[-1]
+            if "devices found" in detail or "Vulkan" in detail:
+                detail = "no Vulkan ray-tracing device: " + detail
+            raise RuntimeError(_fail(f"{what}: {detail}"))
+
+    renderer.SetInputData(volume.dataobject)
+    renderer.SetWidth(args.width)
+    renderer.SetHeight(args.height)
+    renderer.SetLOD(LODS.index(args.lod))
+    renderer.SetMaximumBounces(args.bounces)
+    renderer.SetSeed(args.seed)
+    renderer.SetNextEventEstimation(not args.no_nee)
+    renderer.SetSamplesPerPixel(1)
+    if args.environment:
+        renderer.SetEnvironmentMap(args.environment)
+    if args.sun:
+        az, el = (math.radians(a) for a in args.sun)
+        renderer.SunOn()
+        renderer.SetSunDirection(math.cos(el) * math.cos(az), math.cos(el) * math.sin(az), math.sin(el))
+    for index in hidden:
+        renderer.SetLabelVisibility(index, False)
+    try:
+        check(renderer.ResetCamera(args.azimuth, args.elevation, args.zoom), "camera")
+        start = time.perf_counter()
+        pass_ms = []
+        for _ in range(args.spp):
+            check(renderer.Render(), "render")
+            pass_ms.append(renderer.GetLastFrameMilliseconds())
+        wall = time.perf_counter() - start
+        check(renderer.WriteImage(args.output), "write")
+    except RuntimeError as error:
+        print(f"vtksvdag: error: {error}", file=sys.stderr)
+        return 1
+
+    timed = pass_ms[1:] if len(pass_ms) > 1 else pass_ms
+    result = {
+        "input": args.input,
+        "output": args.output,
+        "device": renderer.GetDeviceName(),
+        "width": args.width,
+        "height": args.height,
+        "spp": renderer.GetAccumulatedSamples(),
+        "bounces": args.bounces,
+        "nee": not args.no_nee,
+        "seed": args.seed,
+        "lod": args.lod,
+        "setup_seconds": renderer.GetSetupSeconds(),
+        "render_seconds": renderer.GetRenderSeconds(),
+        "wall_seconds": wall,
+        "ms_per_frame": float(np.mean(timed)),
+        "bytes_blas": renderer.GetBLASBytes(),
+        "bytes_tlas": renderer.GetTLASBytes(),
+        "hidden_labels": args.hide,
+    }
+    if args.json:
+        print_json(result)
+    else:
+        print_table([
+            ("input", args.input),
+            ("device", result["device"]),
+            ("image", f"{args.width} x {args.height}, {result['spp']} spp, LOD {args.lod}, "
+                      f"{args.bounces} bounces, NEE {'on' if result['nee'] else 'off'}"),
+            ("setup", f"{result['setup_seconds']:.3f} s (upload + BVH)"),
+            ("render", f"{result['render_seconds']:.3f} s ({result['ms_per_frame']:.1f} ms per pass)"),
+            ("BVH bytes", f"BLAS {result['bytes_blas']:,}, TLAS {result['bytes_tlas']:,}"),
+            ("output", args.output),
+        ])
+    return 0

@@ -1,0 +1,109 @@
+"""``vtksvdag render``, run as a separate process on small images (lavapipe here)."""
+import json
+import os
+import subprocess
+import sys
+
+import nrrd
+import numpy as np
+import pytest
+from PIL import Image
+
+WIDTH, HEIGHT = 40, 24
+JSON_KEYS = {"device", "width", "height", "spp", "lod", "setup_seconds", "render_seconds",
+             "ms_per_frame", "bytes_blas", "bytes_tlas"}
+
+
+def run_cli(*args, env=None):
+    return subprocess.run([sys.executable, "-m", "vtksvdag"] + [str(a) for a in args],
+                          capture_output=True, text=True, timeout=120, check=False,
+                          env=env)
+
+
+def assert_one_line_error(result, match):
+    assert result.returncode == 1, (result.stdout, result.stderr)
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1, result.stderr
+    assert lines[0].startswith("vtksvdag: error: ") and match in lines[0], lines[0]
+
+
+@pytest.fixture(scope="module")
+def volume_file(tmp_path_factory):
+    rng = np.random.default_rng(3)
+    labels = np.zeros((20, 20, 20), np.uint16)
+    labels[3:17, 3:17, 3:17] = rng.choice([4, 8, 15], size=(14, 14, 14))
+    labels[rng.random(labels.shape) < 0.3] = 0
+    path = tmp_path_factory.mktemp("cli_render") / "small.nrrd"
+    nrrd.write(str(path), labels, index_order="C")
+    return path
+
+
+def render(volume_file, output, *options):
+    result = run_cli("render", volume_file, "-o", output, "--width", WIDTH, "--height", HEIGHT,
+                     "--json", *options)
+    assert result.returncode == 0, result.stderr
+    return json.loads(result.stdout)
+
+
+def test_render_png_and_json(volume_file, tmp_path):
+    out = tmp_path / "a.png"
+    info = render(volume_file, out, "--spp", 3, "--lod", "leaf", "--bounces", 2)
+    assert JSON_KEYS <= set(info)
+    assert (info["width"], info["height"], info["spp"], info["lod"]) == (WIDTH, HEIGHT, 3, "leaf")
+    assert info["device"] and info["bytes_blas"] > 0 and info["bytes_tlas"] > 0
+    assert info["ms_per_frame"] > 0 and info["render_seconds"] > 0
+    image = np.asarray(Image.open(out))
+    assert image.shape == (HEIGHT, WIDTH, 4)
+    assert len(np.unique(image.reshape(-1, 4), axis=0)) > 10  # not a blank image
+
+
+def test_seed_and_options(volume_file, tmp_path):
+    a = tmp_path / "a.png"
+    b = tmp_path / "b.png"
+    c = tmp_path / "c.png"
+    render(volume_file, a, "--spp", 2, "--seed", 9)
+    render(volume_file, b, "--spp", 2, "--seed", 9)
+    render(volume_file, c, "--spp", 2, "--seed", 10)
+    assert a.read_bytes() == b.read_bytes()
+    assert a.read_bytes() != c.read_bytes()
+    # Sun, plain estimator, another view: a different image.
+    d = tmp_path / "d.png"
+    info = render(volume_file, d, "--spp", 2, "--seed", 9, "--sun", 45, 60, "--no-nee",
+                  "--azimuth", 100, "--elevation", -10, "--zoom", 1.5)
+    assert info["nee"] is False
+    assert a.read_bytes() != d.read_bytes()
+
+
+def test_hide_and_exr_and_svdag_input(volume_file, tmp_path):
+    svdag = tmp_path / "small.svdag"
+    assert run_cli("compress", volume_file, "-o", svdag).returncode == 0
+    exr = tmp_path / "all.exr"
+    render(svdag, exr, "--spp", 1)
+    assert exr.stat().st_size > 0
+    # Hiding two of the three label values leaves fewer lit pixels in the PNG's alpha-1 area.
+    full = tmp_path / "full.png"
+    part = tmp_path / "part.png"
+    render(svdag, full, "--spp", 1)
+    info = render(svdag, part, "--spp", 1, "--hide", 4, 8)
+    assert info["hidden_labels"] == [4, 8]
+    assert Image.open(full).tobytes() != Image.open(part).tobytes()
+    # The EXR of the first run is an equirectangular map like any other.
+    lit = tmp_path / "lit.png"
+    render(svdag, lit, "--spp", 1, "--environment", exr)
+    assert Image.open(lit).tobytes() != Image.open(full).tobytes()
+
+
+def test_errors(volume_file, tmp_path):
+    assert_one_line_error(run_cli("render", volume_file, "-o", tmp_path / "x.jpg"), ".png or .exr")
+    assert_one_line_error(run_cli("render", volume_file, "-o", tmp_path / "x.png", "--hide", 99),
+                          "label 99")
+    assert_one_line_error(run_cli("render", volume_file, "-o", tmp_path / "x.png", "--bounces", 99),
+                          "--bounces")
+    assert_one_line_error(run_cli("render", volume_file, "-o", tmp_path / "x.png",
+                                  "--environment", tmp_path / "missing.exr", "--width", 8,
+                                  "--height", 8), "missing.exr")
+    env = dict(os.environ, SVDAG_VK_DEVICE="nonexistent")
+    result = run_cli("render", volume_file, "-o", tmp_path / "x.png", "--width", 8, "--height", 8,
+                     env=env)
+    assert_one_line_error(result, "no Vulkan ray-tracing device")
+    assert not (tmp_path / "x.png").exists()
