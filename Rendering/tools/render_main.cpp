@@ -4,7 +4,12 @@
 //
 //   vtksvdag-render INPUT.svdag OUTPUT.png|OUTPUT.exr [--width 512] [--height 512]
 //     [--lod block|leaf|voxel|auto] [--azimuth 30] [--elevation 20] [--zoom 1]
-//     [--view-angle 30] [--hide 0,5,7] [--frames 1]
+//     [--view-angle 30] [--hide 0,5,7] [--frames 1] [--spp 1] [--bounces 4] [--seed 0]
+//     [--no-nee] [--environment MAP.exr] [--sun AZ,EL]
+//
+// Every frame adds --spp path-traced samples per pixel to the accumulated image. --sun places a
+// disk sun (the renderer's default size and irradiance) at azimuth AZ (degrees from +x towards
+// +y) and elevation EL (degrees above the xy plane).
 //
 // The camera frames the whole volume (svdag::render::frameVolume). --hide takes label INDICES
 // (positions in the volume's sorted label table). --frames renders several frames and reports
@@ -16,6 +21,7 @@
 #include <svdag/File.h>
 #include <svdag_render/Renderer.h>
 
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
@@ -35,6 +41,11 @@ struct Options
   double azimuth = 30, elevation = 20, zoom = 1, viewAngle = 30;
   std::vector<uint32_t> hidden;
   int frames = 1;
+  uint32_t spp = 1, bounces = 4, seed = 0;
+  bool nee = true;
+  std::string environment;
+  bool sun = false;
+  double sunAzimuth = 0, sunElevation = 0;
 };
 
 struct UsageError : std::invalid_argument
@@ -80,6 +91,11 @@ Options parse(int argc, char** argv)
       positional.push_back(arg);
       continue;
     }
+    if (arg == "--no-nee")
+    {
+      o.nee = false;
+      continue;
+    }
     if (i + 1 >= argc)
       throw UsageError(arg + " needs a value");
     const std::string value = argv[++i];
@@ -99,6 +115,23 @@ Options parse(int argc, char** argv)
       o.viewAngle = number(arg, value);
     else if (arg == "--frames")
       o.frames = int(count(arg, value, 1, 1000));
+    else if (arg == "--spp")
+      o.spp = count(arg, value, 1, 65536);
+    else if (arg == "--bounces")
+      o.bounces = count(arg, value, 0, 64);
+    else if (arg == "--seed")
+      o.seed = count(arg, value, 0, 4294967295.0);
+    else if (arg == "--environment")
+      o.environment = value;
+    else if (arg == "--sun")
+    {
+      const size_t comma = value.find(',');
+      if (comma == std::string::npos)
+        throw UsageError("--sun needs AZ,EL in degrees, got '" + value + "'");
+      o.sun = true;
+      o.sunAzimuth = number(arg, value.substr(0, comma));
+      o.sunElevation = number(arg, value.substr(comma + 1));
+    }
     else if (arg == "--hide")
     {
       std::stringstream list(value);
@@ -150,7 +183,8 @@ int main(int argc, char** argv)
     std::cerr << "vtksvdag-render: " << e.what() << "\nusage: vtksvdag-render INPUT.svdag "
               << "OUTPUT.png|OUTPUT.exr [--width N] [--height N] [--lod block|leaf|voxel|auto] "
               << "[--azimuth DEG] [--elevation DEG] [--zoom F] [--view-angle DEG] "
-              << "[--hide I,J,...] [--frames N]\n";
+              << "[--hide I,J,...] [--frames N] [--spp N] [--bounces N] [--seed N] [--no-nee] "
+              << "[--environment MAP.exr] [--sun AZ,EL]\n";
     return 1;
   }
   try
@@ -164,6 +198,22 @@ int main(int argc, char** argv)
     renderer.setLod(o.lod);
     renderer.setCamera(
       svdag::render::frameVolume(volume->geometry, o.azimuth, o.elevation, o.zoom, o.viewAngle));
+    renderer.setSamplesPerPixel(o.spp);
+    renderer.setMaxBounces(o.bounces);
+    renderer.setSeed(o.seed);
+    renderer.setNextEventEstimation(o.nee);
+    if (!o.environment.empty())
+      renderer.setEnvironmentMap(o.environment);
+    if (o.sun)
+    {
+      const double degree = 3.14159265358979323846 / 180;
+      svdag::render::SunLight sun;
+      sun.on = true;
+      sun.direction = { { std::cos(o.sunElevation * degree) * std::cos(o.sunAzimuth * degree),
+        std::cos(o.sunElevation * degree) * std::sin(o.sunAzimuth * degree),
+        std::sin(o.sunElevation * degree) } };
+      renderer.setSun(sun);
+    }
     double total = 0;
     for (int f = 0; f < o.frames; ++f)
     {
@@ -177,10 +227,12 @@ int main(int argc, char** argv)
     else
       svdag::render::writeExr(renderer.image(), o.output);
     std::printf("{\"device\": %s, \"width\": %u, \"height\": %u, \"lod\": \"%s\", "
-                "\"setup_seconds\": %.6f, \"ms_per_frame\": %.3f, \"bytes_blas\": %llu, "
+                "\"spp\": %u, \"bounces\": %u, \"nee\": %s, \"setup_seconds\": %.6f, "
+                "\"render_seconds\": %.6f, \"ms_per_frame\": %.3f, \"bytes_blas\": %llu, "
                 "\"bytes_tlas\": %llu, \"visible_blocks\": %llu}\n",
       jsonString(renderer.deviceName()).c_str(), o.width, o.height, svdag::render::lodName(o.lod),
-      renderer.setupSeconds(), msPerFrame, (unsigned long long)renderer.blasBytes(),
+      renderer.accumulatedSamples(), o.bounces, o.nee ? "true" : "false", renderer.setupSeconds(),
+      renderer.renderSeconds(), msPerFrame, (unsigned long long)renderer.blasBytes(),
       (unsigned long long)renderer.tlasBytes(), (unsigned long long)renderer.visibleBlocks());
     return 0;
   }
