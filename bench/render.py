@@ -9,7 +9,10 @@ Run from the repository root:
    elevation 20), milliseconds per 1-sample-per-pixel frame at 256x256, 512x512 and 1024x1024
    for LOD voxel with 1 and 4 bounces and LOD block with 1 bounce, NEE off (the paper's
    estimator, so the work per frame matches the paper code's) and on: the median of --frames
-   frames after one warm-up frame (the first frame compiles the shaders).
+   frames after one warm-up frame (the first frame compiles the shaders). `ms_median` is a frame
+   that adds to an accumulation (one camera path per pixel, what the paper code's frames do);
+   `ms_restart_median` a frame that starts one (after any change), which also traces the
+   pixel-center ray for label, depth and normal.
 2. Error against run time: on the same volume and view at --error-size pixels, lit by a disk sun
    (8 degrees radius) plus a constant sky, a reference image per LOD from the same renderer with
    NEE and --reference-spp samples per pixel (seed 1); then, per LOD, with NEE and without, one
@@ -39,8 +42,8 @@ SHARED_DATA = REPO.parent / "shared" / "data"
 
 COLUMNS = [
     "kind", "volume", "device", "width", "height", "lod", "bounces", "nee", "spp", "frames",
-    "ms_median", "ms_min", "seconds", "rmse", "mean_rel_error", "setup_seconds", "bytes_blas",
-    "bytes_tlas",
+    "ms_median", "ms_min", "ms_restart_median", "seconds", "rmse", "mean_rel_error",
+    "setup_seconds", "bytes_blas", "bytes_tlas",
 ]
 LODS = {"block": 0, "leaf": 1, "voxel": 2}
 # The paper code on lavapipe, 256x256, 1 spp, voronoi256 (ranges over days; anchors.md).
@@ -88,19 +91,24 @@ def frame_times(volume, name, sizes, frames):
             for nee in (False, True):
                 r = make_renderer(volume, size, lod, bounces, nee)
                 render(r)  # warm-up: shader compilation
-                times = []
+                times, restart = [], []
+                for _ in range(frames):
+                    render(r)
+                    times.append(r.GetLastFrameMilliseconds())
                 for _ in range(frames):
                     r.ResetAccumulation()
                     render(r)
-                    times.append(r.GetLastFrameMilliseconds())
+                    restart.append(r.GetLastFrameMilliseconds())
                 rows.append(dict(
                     kind="frame", volume=name, device=r.GetDeviceName(), width=size, height=size,
                     lod=lod, bounces=bounces, nee=int(nee), spp=1, frames=frames,
                     ms_median=round(statistics.median(times), 3), ms_min=round(min(times), 3),
+                    ms_restart_median=round(statistics.median(restart), 3),
                     setup_seconds=round(r.GetSetupSeconds(), 6), bytes_blas=r.GetBLASBytes(),
                     bytes_tlas=r.GetTLASBytes()))
                 print(f"  {size:>5} {lod:>6} {bounces:>2} bounces NEE {'on ' if nee else 'off'}: "
-                      f"{rows[-1]['ms_median']:9.1f} ms (min {rows[-1]['ms_min']:.1f})", flush=True)
+                      f"{rows[-1]['ms_median']:9.1f} ms (min {rows[-1]['ms_min']:.1f}, restarting "
+                      f"{rows[-1]['ms_restart_median']:.1f})", flush=True)
     return rows
 
 
@@ -185,7 +193,8 @@ def plot(rows, path):
 
 
 def print_frame_table(rows):
-    print("\nFrame time, 1 spp, median (ms)      [paper code on lavapipe: reported, not measured here]")
+    print("\nFrame time, 1 spp, median (ms), accumulating frames   "
+          "[paper code on lavapipe: reported, not measured here]")
     print(f"{'size':>9} {'LOD':>6} {'bounces':>7} {'NEE off':>9} {'NEE on':>9}   paper (256x256)")
     keys = sorted({(r["width"], r["lod"], r["bounces"]) for r in rows},
                   key=lambda k: (k[0], k[1] != "voxel", k[2]))

@@ -12,8 +12,8 @@ REPO = pathlib.Path(__file__).resolve().parents[2]
 SCRIPT = REPO / "bench" / "render.py"
 COLUMNS = [
     "kind", "volume", "device", "width", "height", "lod", "bounces", "nee", "spp", "frames",
-    "ms_median", "ms_min", "seconds", "rmse", "mean_rel_error", "setup_seconds", "bytes_blas",
-    "bytes_tlas",
+    "ms_median", "ms_min", "ms_restart_median", "seconds", "rmse", "mean_rel_error",
+    "setup_seconds", "bytes_blas", "bytes_tlas",
 ]
 
 
@@ -41,6 +41,7 @@ def test_csv_columns_and_rows(quick_run):
         (lod, b, n) for lod, b in (("voxel", "1"), ("voxel", "4"), ("block", "1")) for n in "01"}
     for r in frames:
         assert float(r["ms_median"]) > 0 and float(r["ms_min"]) <= float(r["ms_median"])
+        assert float(r["ms_restart_median"]) > 0
         assert int(r["bytes_blas"]) > 0 and r["device"]
     # Error curves per LOD and estimator at 1, 2, 4, 8 spp, time growing with the samples.
     for lod in ("voxel", "block"):
