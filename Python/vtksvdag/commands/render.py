@@ -56,6 +56,9 @@ def add_arguments(parser):
     parser.add_argument("--sun", type=float, nargs=2, metavar=("AZ", "EL"),
                         help="a sun at azimuth AZ (degrees from +x towards +y) and elevation EL "
                              "(degrees above the xy plane, +z up)")
+    parser.add_argument("--sky", type=float, nargs=3, metavar=("R", "G", "B"),
+                        help="constant environment radiance (default: 1 1 1, or a dim 0.25 0.27 0.3 "
+                             "sky with --sun so that the sun shapes the image)")
     parser.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
     parser.add_argument("--no-progress", action="store_true", help="(no progress bar is shown)")
 
@@ -114,6 +117,10 @@ def run(args):
     renderer.SetSamplesPerPixel(1)
     if args.environment:
         renderer.SetEnvironmentMap(args.environment)
+    sky = args.sky if args.sky else ((0.25, 0.27, 0.3) if args.sun else (1.0, 1.0, 1.0))
+    if min(sky) < 0 or not all(math.isfinite(c) for c in sky):
+        raise ValueError(f"--sky must be three finite values >= 0, got {sky}")
+    renderer.SetEnvironmentColor(*sky)
     if args.sun:
         az, el = (math.radians(a) for a in args.sun)
         renderer.SunOn()
