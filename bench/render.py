@@ -5,7 +5,8 @@ Run from the repository root:
 
     .venv/bin/python bench/render.py [--quick] [--out bench/out]
 
-1. Frame time: on ../shared/data/voronoi256.nrrd (camera framing the volume, azimuth 30,
+1. Frame time: on ../shared/data/voronoi256.nrrd (and, at 256x256, on every other volume there;
+   camera framing the volume, azimuth 30,
    elevation 20), milliseconds per 1-sample-per-pixel frame at 256x256, 512x512 and 1024x1024
    for LOD voxel with 1 and 4 bounces and LOD block with 1 bounce, NEE off (the paper's
    estimator, so the work per frame matches the paper code's) and on: the median of --frames
@@ -192,16 +193,18 @@ def plot(rows, path):
     plt.close(fig)
 
 
-def print_frame_table(rows):
-    print("\nFrame time, 1 spp, median (ms), accumulating frames   "
-          "[paper code on lavapipe: reported, not measured here]")
+def print_frame_table(rows, name):
+    rows = [r for r in rows if r["kind"] == "frame" and r["volume"] == name]
+    anchored = name == "voronoi256"
+    print(f"\nFrame time on {name}, 1 spp, median (ms), accumulating frames"
+          + ("   [paper code on lavapipe: reported, not measured here]" if anchored else ""))
     print(f"{'size':>9} {'LOD':>6} {'bounces':>7} {'NEE off':>9} {'NEE on':>9}   paper (256x256)")
     keys = sorted({(r["width"], r["lod"], r["bounces"]) for r in rows},
                   key=lambda k: (k[0], k[1] != "voxel", k[2]))
     for size, lod, bounces in keys:
         ms = {r["nee"]: r["ms_median"] for r in rows
               if (r["width"], r["lod"], r["bounces"]) == (size, lod, bounces)}
-        anchor = ANCHORS_MS.get((lod, bounces), "") if size == 256 else ""
+        anchor = ANCHORS_MS.get((lod, bounces), "") if size == 256 and anchored else ""
         print(f"{size:>4}x{size:<4} {lod:>6} {bounces:>7} {ms.get(0, float('nan')):9.1f} "
               f"{ms.get(1, float('nan')):9.1f}   {anchor}")
 
@@ -235,7 +238,18 @@ def main(argv=None) -> int:
           f"{len(volume.labels)} labels (loaded in {time.perf_counter() - start:.1f} s)")
     print("Frame times:")
     rows = frame_times(volume, name, sizes, args.frames)
-    print_frame_table(rows)
+    print_frame_table(rows, name)
+    if not args.quick:
+        # The real volumes too, at the anchors' size.
+        for path in sorted(SHARED_DATA.glob("*.nrrd")):
+            other = path.name[: -len(".nrrd")]
+            if other == name:
+                continue
+            from vtksvdag import read
+
+            print(f"Frame times, {other}:")
+            rows += frame_times(read(str(path)), other, [256], args.frames)
+            print_frame_table(rows, other)
     print(f"\nError against run time ({args.error_size}x{args.error_size}, 4 bounces):")
     rows += error_curves(volume, name, args.error_size, lods, args.reference_spp, args.max_spp)
 
