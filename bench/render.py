@@ -196,8 +196,8 @@ def plot(rows, path):
 def print_frame_table(rows, name):
     rows = [r for r in rows if r["kind"] == "frame" and r["volume"] == name]
     anchored = name == "voronoi256"
-    print(f"\nFrame time on {name}, 1 spp, median (ms), accumulating frames"
-          + ("   [paper code on lavapipe: reported, not measured here]" if anchored else ""))
+    print(f"\nFrame time on {name}, 1 spp, median (ms), accumulating frames   "
+          "[paper code on lavapipe, voronoi256 only: reported, not measured here]")
     print(f"{'size':>9} {'LOD':>6} {'bounces':>7} {'NEE off':>9} {'NEE on':>9}   paper (256x256)")
     keys = sorted({(r["width"], r["lod"], r["bounces"]) for r in rows},
                   key=lambda k: (k[0], k[1] != "voxel", k[2]))
