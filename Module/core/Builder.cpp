@@ -1,5 +1,7 @@
 #include "svdag/Builder.h"
 
+#include "BuildPools.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -14,135 +16,11 @@ namespace
 constexpr uint32_t S = layout::CELL_SIZE; // 16
 constexpr uint32_t LeavesPerCell = 64;    // 4^3 leaves of 4^3 voxels
 
-uint32_t bitWidth(uint64_t v)
-{
-  uint32_t n = 0;
-  while (v)
-  {
-    ++n;
-    v >>= 1;
-  }
-  return n;
-}
-
-uint64_t mix64(uint64_t x)
-{
-  x ^= x >> 30;
-  x *= 0xbf58476d1ce4e5b9ULL;
-  x ^= x >> 27;
-  x *= 0x94d049bb133111ebULL;
-  x ^= x >> 31;
-  return x;
-}
-
-// Open-addressing hash set of 32-bit ids whose keys live elsewhere (in a pool). Keys are compared
-// exactly through the pool, so a hash collision never merges two different nodes.
-class IdTable
-{
-public:
-  template <class Hash, class Equal, class Insert>
-  uint32_t intern(uint64_t hash, const Equal& equalsId, const Insert& insert, const Hash& hashOfId)
-  {
-    // Linear probing stays short up to a 3/4 load with a well-mixed hash; the table is a
-    // large share of the builder's transient memory, so it is not kept sparser than that.
-    if ((count + 1) * 4 > slots.size() * 3)
-    {
-      grow(hashOfId);
-    }
-    const size_t mask = slots.size() - 1;
-    for (size_t i = size_t(hash) & mask;; i = (i + 1) & mask)
-    {
-      const uint32_t id = slots[i];
-      if (id == Empty)
-      {
-        slots[i] = insert();
-        ++count;
-        return slots[i];
-      }
-      if (equalsId(id))
-      {
-        return id;
-      }
-    }
-  }
-  void clear() { std::vector<uint32_t>().swap(slots); count = 0; }
-
-private:
-  static constexpr uint32_t Empty = 0xFFFFFFFFu;
-  template <class Hash>
-  void grow(const Hash& hashOfId)
-  {
-    std::vector<uint32_t> old(std::max<size_t>(1024, slots.size() * 2), Empty);
-    old.swap(slots);
-    const size_t mask = slots.size() - 1;
-    for (uint32_t id : old)
-    {
-      if (id == Empty)
-        continue;
-      size_t i = size_t(hashOfId(id)) & mask;
-      while (slots[i] != Empty)
-        i = (i + 1) & mask;
-      slots[i] = id;
-    }
-  }
-  std::vector<uint32_t> slots;
-  size_t count = 0;
-};
-
-// Unpacked node pool used while building: [header][child refs...] per node, ids in first-seen order.
-// Child references hold ids (not yet bit offsets) until finish() packs the stream.
-class NodePool
-{
-public:
-  // Returns the id of the node (header, refs), inserting it if new.
-  uint32_t intern(uint32_t header, const uint32_t* refs)
-  {
-    const uint32_t n = layout::bitCount(layout::nodeMixedMask(header));
-    uint64_t h = mix64(header);
-    for (uint32_t r = 0; r < n; ++r)
-      h = mix64(h ^ refs[r]);
-    return table.intern(
-      h,
-      [&](uint32_t id) {
-        const uint32_t* w = words.data() + starts[id];
-        return w[0] == header && std::equal(refs, refs + n, w + 1);
-      },
-      [&]() {
-        if (words.size() > UINT32_MAX - 9)
-          throw std::length_error("SVDAG too large: a node pool exceeds 2^32 words");
-        starts.push_back(uint32_t(words.size()));
-        words.push_back(header);
-        words.insert(words.end(), refs, refs + n);
-        return uint32_t(starts.size() - 1);
-      },
-      [&](uint32_t id) { return hashOf(id); });
-  }
-  size_t size() const { return starts.size(); }
-  uint32_t header(uint32_t id) const { return words[starts[id]]; }
-  const uint32_t* refs(uint32_t id) const { return words.data() + starts[id] + 1; }
-  // Lookups end when the pool is complete; packing only reads nodes.
-  void releaseTable() { table.clear(); }
-  void release()
-  {
-    table.clear();
-    std::vector<uint32_t>().swap(words);
-    std::vector<uint32_t>().swap(starts);
-  }
-
-private:
-  uint64_t hashOf(uint32_t id) const
-  {
-    const uint32_t* w = words.data() + starts[id];
-    const uint32_t n = layout::bitCount(layout::nodeMixedMask(w[0]));
-    uint64_t h = mix64(w[0]);
-    for (uint32_t r = 0; r < n; ++r)
-      h = mix64(h ^ w[1 + r]);
-    return h;
-  }
-  IdTable table;
-  std::vector<uint32_t> words;
-  std::vector<uint32_t> starts;
-};
+using build::bitWidth;
+using build::mix64;
+using build::GrowArray;
+using build::IdTable;
+using build::PackedNodePool;
 
 class LeafPool
 {
@@ -152,15 +30,21 @@ public:
     return table.intern(
       mix64(mask), [&](uint32_t id) { return masks[id] == mask; },
       [&]() {
+        if (masks.size() >= 0x7FFFFFFFu)
+          throw std::length_error("SVDAG too large: more than 2^31 leaves");
         masks.push_back(mask);
         return uint32_t(masks.size() - 1);
       },
       [&](uint32_t id) { return mix64(masks[id]); });
   }
-  std::vector<uint64_t> masks;
+  size_t size() const { return masks.size(); }
+  // Width of a reference (id << 1 | complement) to any leaf so far.
+  uint32_t refBits() const { return bitWidth(masks.empty() ? 0 : masks.size() - 1) + 1; }
   void releaseTable() { table.clear(); }
+  std::vector<uint64_t> take() { return masks.takeVector(); }
 
 private:
+  GrowArray<uint64_t> masks;
   IdTable table;
 };
 
@@ -283,10 +167,11 @@ void leafBounds(const uint64_t* masks, std::array<uint8_t, 3>& lo, std::array<ui
   }
 }
 
+// A block until finish() knows the final field widths: 16 bytes.
 struct PendingBlock
 {
   uint32_t cell;
-  std::array<uint8_t, 3> lo, hi;
+  uint32_t box;   // lo x, y, z then hi x, y, z, 4 bits each (the record's bounds field)
   uint32_t label; // build-time label id
   uint32_t root;  // root id << 1 | complement
 };
@@ -336,11 +221,12 @@ struct Builder::Impl
   std::array<int32_t, 3> cells;
   int32_t nextZ = 0;
 
-  std::vector<CellResult> cellResults;
+  // Scan results of one row of cells: a whole slab's would be a large share of the state.
+  std::vector<CellResult> rowResults;
   LeafPool leaves;
-  NodePool mids;
-  NodePool roots;
-  std::vector<PendingBlock> blocks;
+  PackedNodePool mids;  // child refs: leaf ids, already the final stream
+  PackedNodePool roots; // child refs: mid ids (finish() turns them into mid stream offsets)
+  GrowArray<PendingBlock> blocks;
   std::vector<LabelInfo> labels; // build-time ids, first-seen order
   // Label value -> build-time id, through the same exact-compare hash table.
   IdTable labelTable;
@@ -364,7 +250,11 @@ struct Builder::Impl
   {
     PendingBlock b;
     b.cell = cell;
-    leafBounds(cl.masks, b.lo, b.hi);
+    std::array<uint8_t, 3> lo, hi;
+    leafBounds(cl.masks, lo, hi);
+    b.box = 0;
+    for (int a = 0; a < 3; ++a)
+      b.box |= (uint32_t(lo[a]) << (4 * a)) | (uint32_t(hi[a]) << (12 + 4 * a));
     uint64_t voxels = 0;
     uint32_t rootMixed = 0, rootFull = 0, rootRefs[8];
     for (uint32_t o = 0; o < 8; ++o)
@@ -398,18 +288,20 @@ struct Builder::Impl
         continue;
       }
       const uint32_t complement = canonicalize(mixed, full, refs) ? 1u : 0u;
+      mids.widenTo(leaves.refBits());
       rootRefs[layout::bitCount(rootMixed)] = (mids.intern(mixed | (full << 8), refs) << 1) | complement;
       rootMixed |= 1u << o;
     }
     const uint32_t complement = canonicalize(rootMixed, rootFull, rootRefs) ? 1u : 0u;
+    roots.widenTo(bitWidth(mids.size() ? mids.size() - 1 : 0) + 1);
     b.root = (roots.intern(rootMixed | (rootFull << 8), rootRefs) << 1) | complement;
     b.label = labelId(cl.value);
     LabelInfo& info = labels[b.label];
     info.voxels += voxels;
     for (int a = 0; a < 3; ++a)
     {
-      info.bounds[2 * a] = std::min(info.bounds[2 * a], cellOrigin[a] + int32_t(b.lo[a]));
-      info.bounds[2 * a + 1] = std::max(info.bounds[2 * a + 1], cellOrigin[a] + int32_t(b.hi[a]));
+      info.bounds[2 * a] = std::min(info.bounds[2 * a], cellOrigin[a] + int32_t(lo[a]));
+      info.bounds[2 * a + 1] = std::max(info.bounds[2 * a + 1], cellOrigin[a] + int32_t(hi[a]));
     }
     blocks.push_back(b);
   }
@@ -439,7 +331,7 @@ Builder::Builder(
   ex.erase(std::unique(ex.begin(), ex.end()), ex.end());
   impl->parallel = parallel ? parallel : ParallelFor(sequentialFor);
   impl->cells = geometry.cellCounts();
-  impl->cellResults.resize(size_t(impl->cells[0]) * size_t(impl->cells[1]));
+  impl->rowResults.resize(size_t(impl->cells[0]));
 }
 
 Builder::~Builder() = default;
@@ -460,42 +352,44 @@ void Builder::addSlab(int32_t z0, int32_t nz, const void* data)
   const ScalarType type = m.type;
   const uint64_t background = m.options.background;
   const auto& excluded = m.options.excluded;
-  auto& results = m.cellResults;
-  m.parallel(0, results.size(), 1, [&](uint64_t begin, uint64_t end) {
-    for (uint64_t c = begin; c < end; ++c)
-    {
-      const uint32_t cx = uint32_t(c % ncx), cy = uint32_t(c / ncx);
-      const uint32_t nx = std::min<uint32_t>(S, uint32_t(d[0]) - cx * S);
-      const uint32_t ny = std::min<uint32_t>(S, uint32_t(d[1]) - cy * S);
-      const size_t origin = size_t(cx) * S + size_t(cy) * S * size_t(rowStride);
-      switch (type)
+  auto& results = m.rowResults;
+  const uint32_t cz = uint32_t(z0) / S;
+  // One row of cells at a time: scanned in parallel, then merged in cell order so that ids and
+  // block order depend on the data only.
+  for (uint32_t cy = 0; cy < uint32_t(m.cells[1]); ++cy)
+  {
+    const uint32_t ny = std::min<uint32_t>(S, uint32_t(d[1]) - cy * S);
+    m.parallel(0, ncx, 1, [&](uint64_t begin, uint64_t end) {
+      for (uint64_t cx = begin; cx < end; ++cx)
       {
+        const uint32_t nx = std::min<uint32_t>(S, uint32_t(d[0]) - uint32_t(cx) * S);
+        const size_t origin = size_t(cx) * S + size_t(cy) * S * size_t(rowStride);
+        switch (type)
+        {
 #define SVDAG_SCAN(Enum, T)                                                                        \
   case ScalarType::Enum:                                                                           \
     scanCell<T>(static_cast<const T*>(data) + origin, rowStride, sliceStride, nx, ny,              \
-      uint32_t(nz), T(background), excluded, results[c]);                                          \
+      uint32_t(nz), T(background), excluded, results[cx]);                                         \
     break;
-        SVDAG_SCAN(Int8, int8_t)
-        SVDAG_SCAN(UInt8, uint8_t)
-        SVDAG_SCAN(Int16, int16_t)
-        SVDAG_SCAN(UInt16, uint16_t)
-        SVDAG_SCAN(Int32, int32_t)
-        SVDAG_SCAN(UInt32, uint32_t)
-        SVDAG_SCAN(Int64, int64_t)
-        SVDAG_SCAN(UInt64, uint64_t)
+          SVDAG_SCAN(Int8, int8_t)
+          SVDAG_SCAN(UInt8, uint8_t)
+          SVDAG_SCAN(Int16, int16_t)
+          SVDAG_SCAN(UInt16, uint16_t)
+          SVDAG_SCAN(Int32, int32_t)
+          SVDAG_SCAN(UInt32, uint32_t)
+          SVDAG_SCAN(Int64, int64_t)
+          SVDAG_SCAN(UInt64, uint64_t)
 #undef SVDAG_SCAN
+        }
       }
+    });
+    for (uint32_t cx = 0; cx < ncx; ++cx)
+    {
+      const uint32_t cell = cx + ncx * (cy + uint32_t(m.cells[1]) * cz);
+      const std::array<int32_t, 3> origin{ { int32_t(cx * S), int32_t(cy * S), int32_t(cz * S) } };
+      for (const CellLabel& cl : results[cx].labels)
+        m.addBlock(cell, origin, cl);
     }
-  });
-  // Merge in cell order: ids and block order depend on the data only.
-  const uint32_t cz = uint32_t(z0) / S;
-  for (size_t c = 0; c < results.size(); ++c)
-  {
-    const uint32_t cx = uint32_t(c % ncx), cy = uint32_t(c / ncx);
-    const uint32_t cell = uint32_t(c + results.size() * cz);
-    const std::array<int32_t, 3> origin{ { int32_t(cx * S), int32_t(cy * S), int32_t(cz * S) } };
-    for (const CellLabel& cl : results[c].labels)
-      m.addBlock(cell, origin, cl);
   }
   m.nextZ = z0 + nz;
 }
@@ -505,7 +399,8 @@ Volume Builder::finish()
   Impl& m = *impl;
   if (m.nextZ != m.geometry.dims[2])
     throw std::logic_error("missing slabs: next expected z0 = " + std::to_string(m.nextZ));
-  std::vector<CellResult>().swap(m.cellResults);
+  // Lookups are over: free every table before the packed output is assembled.
+  std::vector<CellResult>().swap(m.rowResults);
   m.leaves.releaseTable();
   m.mids.releaseTable();
   m.roots.releaseTable();
@@ -523,47 +418,51 @@ Volume Builder::finish()
     return bits;
   };
   // Leaves keep their ids. A reference is (id << 1) | complement.
-  v.leaves = std::move(m.leaves.masks);
-  w.leafRefBits = checkWidth(bitWidth(v.leaves.empty() ? 0 : v.leaves.size() - 1) + 1, "leaf references");
+  w.leafRefBits = checkWidth(m.leaves.refBits(), "leaf references");
+  v.leaves = m.leaves.take();
 
-  // Packs a node pool whose child references are ids into a bit stream whose child references
-  // are (childOffset[id] << 1 | complement), returning each node's bit offset.
-  auto pack = [](const NodePool& pool, const std::vector<uint64_t>* childOffsets, uint32_t refBits,
-                std::vector<uint32_t>& stream) {
-    std::vector<uint64_t> offsets(pool.size());
+  // The mid pool already is the final stream: its references are leaf ids at the final width.
+  m.mids.widenTo(w.leafRefBits);
+  v.midCount = m.mids.size();
+  const uint64_t lastMid = m.mids.size() ? m.mids.offsets()[m.mids.size() - 1] : 0;
+  w.midRefBits = checkWidth(bitWidth(lastMid) + 1, "mid references");
+
+  // Roots refer to mid ids; the output refers to mid bit offsets, at the final width.
+  v.rootCount = m.roots.size();
+  GrowArray<uint32_t> rootOffsets;
+  {
     uint64_t bits = 0;
-    for (uint32_t id = 0; id < pool.size(); ++id)
+    for (uint32_t id = 0; id < m.roots.size(); ++id)
     {
-      offsets[id] = bits;
+      rootOffsets.push_back(uint32_t(bits));
+      uint32_t refs[8];
+      const uint32_t header = m.roots.read(id, refs);
       bits += layout::NODE_HEADER_BITS +
-        uint64_t(layout::bitCount(layout::nodeMixedMask(pool.header(id)))) * refBits;
+        uint64_t(layout::bitCount(layout::nodeMixedMask(header))) * w.midRefBits;
+      if (bits > 0xFFFFFFFFull)
+        throw std::length_error("SVDAG too large: the root stream exceeds 2^32 bits");
     }
-    stream.assign((bits + 31) / 32 + 1, 0u);
-    for (uint32_t id = 0; id < pool.size(); ++id)
+    v.roots.assign(size_t((bits + 31) / 32 + 1), 0u);
+    const GrowArray<uint32_t>& midOffsets = m.mids.offsets();
+    for (uint32_t id = 0; id < m.roots.size(); ++id)
     {
-      const uint32_t header = pool.header(id);
-      uint64_t at = offsets[id];
-      writeBits(stream, at, layout::NODE_HEADER_BITS, header);
+      uint32_t refs[8];
+      const uint32_t header = m.roots.read(id, refs);
+      uint64_t at = rootOffsets[id];
+      writeBits(v.roots, at, layout::NODE_HEADER_BITS, header);
       at += layout::NODE_HEADER_BITS;
-      const uint32_t* refs = pool.refs(id);
-      for (uint32_t r = 0; r < layout::bitCount(layout::nodeMixedMask(header)); ++r, at += refBits)
+      for (uint32_t r = 0; r < layout::bitCount(layout::nodeMixedMask(header)); ++r, at += w.midRefBits)
       {
-        const uint64_t target = childOffsets ? (*childOffsets)[refs[r] >> 1] : (refs[r] >> 1);
-        writeBits(stream, at, refBits, uint32_t((target << 1) | (refs[r] & 1u)));
+        const uint64_t target = midOffsets[refs[r] >> 1];
+        writeBits(v.roots, at, w.midRefBits, uint32_t((target << 1) | (refs[r] & 1u)));
       }
     }
-    return offsets;
-  };
-
-  v.midCount = m.mids.size();
-  const std::vector<uint64_t> midOffsets = pack(m.mids, nullptr, w.leafRefBits, v.mids);
-  m.mids.release();
-  w.midRefBits = checkWidth(bitWidth(midOffsets.empty() ? 0 : midOffsets.back()) + 1, "mid references");
-
-  v.rootCount = m.roots.size();
-  const std::vector<uint64_t> rootOffsets = pack(m.roots, &midOffsets, w.midRefBits, v.roots);
+  }
   m.roots.release();
-  w.rootRefBits = checkWidth(bitWidth(rootOffsets.empty() ? 0 : rootOffsets.back()) + 1, "root references");
+  v.mids = m.mids.takeStream();
+  m.mids.release();
+  const uint64_t lastRoot = rootOffsets.empty() ? 0 : rootOffsets.back();
+  w.rootRefBits = checkWidth(bitWidth(lastRoot) + 1, "root references");
 
   // Label table sorted by value; blocks refer to the sorted index.
   std::vector<uint32_t> order(m.labels.size());
@@ -579,6 +478,7 @@ Volume Builder::finish()
     rank[order[i]] = i;
     v.labels[i] = m.labels[order[i]];
   }
+  std::vector<LabelInfo>().swap(m.labels);
   w.labelBits = bitWidth(v.labels.empty() ? 0 : v.labels.size() - 1);
   w.cellBits = bitWidth(m.geometry.cellCount() - 1);
 
@@ -590,16 +490,13 @@ Volume Builder::finish()
     const PendingBlock& b = m.blocks[i];
     const uint64_t base = i * recordBits;
     writeBits(v.blocks, base, w.cellBits, b.cell);
-    uint32_t box = 0;
-    for (int a = 0; a < 3; ++a)
-      box |= (uint32_t(b.lo[a]) << (4 * a)) | (uint32_t(b.hi[a]) << (12 + 4 * a));
-    writeBits(v.blocks, base + layout::blockBoundsOffset(w.cellBits), layout::BLOCK_BOUNDS_BITS, box);
+    writeBits(v.blocks, base + layout::blockBoundsOffset(w.cellBits), layout::BLOCK_BOUNDS_BITS, b.box);
     writeBits(v.blocks, base + layout::blockLabelOffset(w.cellBits), w.labelBits, rank[b.label]);
-    const uint64_t root = (rootOffsets[b.root >> 1] << 1) | (b.root & 1u);
+    const uint64_t root = (uint64_t(rootOffsets[b.root >> 1]) << 1) | (b.root & 1u);
     writeBits(v.blocks, base + layout::blockRootOffset(w.cellBits, w.labelBits), w.rootRefBits,
       uint32_t(root));
   }
-  std::vector<PendingBlock>().swap(m.blocks);
+  m.blocks.release();
   return v;
 }
 
