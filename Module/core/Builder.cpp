@@ -35,7 +35,10 @@ public:
         masks.push_back(mask);
         return uint32_t(masks.size() - 1);
       },
-      [&](uint32_t id) { return mix64(masks[id]); });
+      [&](const auto& place) {
+        for (uint32_t id = 0; id < masks.size(); ++id)
+          place(id, mix64(masks[id]));
+      });
   }
   size_t size() const { return masks.size(); }
   // Width of a reference (id << 1 | complement) to any leaf so far.
@@ -63,7 +66,7 @@ bool canonicalize(uint32_t& mixed, uint32_t& full, uint32_t* refs)
   if (!firstSolid)
     return false;
   full = ~(mixed | full) & 0xFFu;
-  for (uint32_t r = 0; r < layout::bitCount(mixed); ++r)
+  for (uint32_t r = 0; r < build::popcount8(mixed); ++r)
     refs[r] ^= 1u;
   return true;
 }
@@ -96,9 +99,14 @@ void scanCell(const T* slab, int64_t rowStride, int64_t sliceStride, uint32_t nx
       const T* row = slab + z * sliceStride + y * rowStride;
       const uint32_t leafYZ = 4 * (y >> 2) + 16 * (z >> 2);
       const uint32_t bitYZ = 4 * (y & 3) + 16 * (z & 3);
-      for (uint32_t x = 0; x < nx; ++x)
+      // Runs of one value are set a row of up to 16 bits at a time: labels come in runs, and a
+      // per-voxel lookup and bit set were most of the build time.
+      for (uint32_t x = 0; x < nx;)
       {
         const T v = row[x];
+        uint32_t end = x + 1;
+        while (end < nx && row[end] == v)
+          ++end;
         if (v != cachedValue)
         {
           cachedValue = v;
@@ -129,9 +137,13 @@ void scanCell(const T* slab, int64_t rowStride, int64_t sliceStride, uint32_t nx
         }
         if (cachedSlot >= 0)
         {
-          out.labels[size_t(cachedSlot)].masks[(x >> 2) + leafYZ] |= uint64_t(1)
-            << ((x & 3) + bitYZ);
+          // Bits x .. end-1 of the cell row, four per leaf column.
+          const uint32_t run = ((1u << end) - 1u) & ~((1u << x) - 1u);
+          uint64_t* masks = out.labels[size_t(cachedSlot)].masks + leafYZ;
+          for (uint32_t lx = x >> 2; lx <= (end - 1) >> 2; ++lx)
+            masks[lx] |= uint64_t((run >> (4 * lx)) & 0xFu) << bitYZ;
         }
+        x = end;
       }
     }
   }
@@ -242,7 +254,10 @@ struct Builder::Impl
         labels.push_back(info);
         return uint32_t(labels.size() - 1);
       },
-      [&](uint32_t id) { return mix64(labels[id].value); });
+      [&](const auto& place) {
+        for (uint32_t id = 0; id < labels.size(); ++id)
+          place(id, mix64(labels[id].value));
+      });
   }
 
   // Interns the occupancy of one label in one cell and records the block.
@@ -289,7 +304,7 @@ struct Builder::Impl
       }
       const uint32_t complement = canonicalize(mixed, full, refs) ? 1u : 0u;
       mids.widenTo(leaves.refBits());
-      rootRefs[layout::bitCount(rootMixed)] = (mids.intern(mixed | (full << 8), refs) << 1) | complement;
+      rootRefs[build::popcount8(rootMixed)] = (mids.intern(mixed | (full << 8), refs) << 1) | complement;
       rootMixed |= 1u << o;
     }
     const uint32_t complement = canonicalize(rootMixed, rootFull, rootRefs) ? 1u : 0u;
@@ -424,7 +439,7 @@ Volume Builder::finish()
   // The mid pool already is the final stream: its references are leaf ids at the final width.
   m.mids.widenTo(w.leafRefBits);
   v.midCount = m.mids.size();
-  const uint64_t lastMid = m.mids.size() ? m.mids.offsets()[m.mids.size() - 1] : 0;
+  const uint64_t lastMid = m.mids.size() ? m.mids.offset(uint32_t(m.mids.size() - 1)) : 0;
   w.midRefBits = checkWidth(bitWidth(lastMid) + 1, "mid references");
 
   // Roots refer to mid ids; the output refers to mid bit offsets, at the final width.
@@ -438,12 +453,11 @@ Volume Builder::finish()
       uint32_t refs[8];
       const uint32_t header = m.roots.read(id, refs);
       bits += layout::NODE_HEADER_BITS +
-        uint64_t(layout::bitCount(layout::nodeMixedMask(header))) * w.midRefBits;
+        uint64_t(build::popcount8(layout::nodeMixedMask(header))) * w.midRefBits;
       if (bits > 0xFFFFFFFFull)
         throw std::length_error("SVDAG too large: the root stream exceeds 2^32 bits");
     }
     v.roots.assign(size_t((bits + 31) / 32 + 1), 0u);
-    const GrowArray<uint32_t>& midOffsets = m.mids.offsets();
     for (uint32_t id = 0; id < m.roots.size(); ++id)
     {
       uint32_t refs[8];
@@ -451,9 +465,9 @@ Volume Builder::finish()
       uint64_t at = rootOffsets[id];
       writeBits(v.roots, at, layout::NODE_HEADER_BITS, header);
       at += layout::NODE_HEADER_BITS;
-      for (uint32_t r = 0; r < layout::bitCount(layout::nodeMixedMask(header)); ++r, at += w.midRefBits)
+      for (uint32_t r = 0; r < build::popcount8(layout::nodeMixedMask(header)); ++r, at += w.midRefBits)
       {
-        const uint64_t target = midOffsets[refs[r] >> 1];
+        const uint64_t target = m.mids.offset(refs[r] >> 1);
         writeBits(v.roots, at, w.midRefBits, uint32_t((target << 1) | (refs[r] & 1u)));
       }
     }
