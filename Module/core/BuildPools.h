@@ -14,6 +14,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <algorithm>
+#include <array>
 #include <new>
 #include <stdexcept>
 #include <type_traits>
@@ -97,7 +98,7 @@ private:
   {
     if (n <= capacity)
       return;
-    size_t next = capacity + capacity / 4;
+    size_t next = capacity + capacity / 16;
     if (next < n)
       next = n;
     if (next < 256)
@@ -391,6 +392,71 @@ private:
   uint64_t totalBits = 0;
   uint64_t nodes = 0;
   uint32_t width = 1;
+};
+
+// Fixed-width records of FieldCount bit fields, bit-packed back to back. A field's width can
+// grow (widenTo re-packs every record in place, back to front, like PackedNodePool).
+template <uint32_t FieldCount>
+class PackedRecords
+{
+public:
+  using Record = std::array<uint32_t, FieldCount>;
+
+  size_t size() const { return count; }
+  void push_back(const Record& r)
+  {
+    const uint64_t at = uint64_t(count) * recordBits;
+    words.resize(size_t((at + recordBits + 31) / 32 + 1));
+    writeAt(at, widths, r);
+    ++count;
+  }
+  Record operator[](size_t i) const { return readAt(uint64_t(i) * recordBits, widths); }
+
+  // Makes field f at least `bits` wide (0..32), re-packing the records if it grows.
+  void widenTo(uint32_t f, uint32_t bits)
+  {
+    if (bits <= widths[f])
+      return;
+    Record newWidths = widths;
+    newWidths[f] = bits;
+    const uint32_t newRecordBits = sum(newWidths);
+    words.resize(size_t((uint64_t(count) * newRecordBits + 31) / 32 + 1));
+    // Record i moves from i * recordBits to i * newRecordBits, past the old end of record i - 1.
+    for (size_t i = count; i-- > 0;)
+      writeAt(uint64_t(i) * newRecordBits, newWidths, readAt(uint64_t(i) * recordBits, widths));
+    widths = newWidths;
+    recordBits = newRecordBits;
+  }
+  void release()
+  {
+    words.release();
+    count = 0;
+  }
+
+private:
+  static uint32_t sum(const Record& w)
+  {
+    uint32_t total = 0;
+    for (uint32_t x : w)
+      total += x;
+    return total;
+  }
+  Record readAt(uint64_t at, const Record& w) const
+  {
+    Record r;
+    for (uint32_t f = 0; f < FieldCount; at += w[f], ++f)
+      r[f] = readField(words.data(), at, w[f]);
+    return r;
+  }
+  void writeAt(uint64_t at, const Record& w, const Record& r)
+  {
+    for (uint32_t f = 0; f < FieldCount; at += w[f], ++f)
+      writeField(words.data(), at, w[f], r[f]);
+  }
+  GrowArray<uint32_t> words; // padded by one word
+  Record widths{};
+  uint32_t recordBits = 0;
+  size_t count = 0;
 };
 
 } // namespace build

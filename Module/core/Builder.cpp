@@ -179,14 +179,17 @@ void leafBounds(const uint64_t* masks, std::array<uint8_t, 3>& lo, std::array<ui
   }
 }
 
-// A block until finish() knows the final field widths: 16 bytes.
-struct PendingBlock
+// A block until finish() knows the final field widths: bit-packed fields, the label and root
+// ones as wide as the ids so far need.
+enum PendingField : uint32_t
 {
-  uint32_t cell;
-  uint32_t box;   // lo x, y, z then hi x, y, z, 4 bits each (the record's bounds field)
-  uint32_t label; // build-time label id
-  uint32_t root;  // root id << 1 | complement
+  PendingCell,
+  PendingBox,   // lo x, y, z then hi x, y, z, 4 bits each (the record's bounds field)
+  PendingLabel, // build-time label id
+  PendingRoot,  // root id << 1 | complement
+  PendingFieldCount
 };
+using PendingBlocks = build::PackedRecords<PendingFieldCount>;
 
 void writeBits(std::vector<uint32_t>& stream, uint64_t offset, uint32_t width, uint32_t value)
 {
@@ -238,7 +241,7 @@ struct Builder::Impl
   LeafPool leaves;
   PackedNodePool mids;  // child refs: leaf ids, already the final stream
   PackedNodePool roots; // child refs: mid ids (finish() turns them into mid stream offsets)
-  GrowArray<PendingBlock> blocks;
+  PendingBlocks blocks;
   std::vector<LabelInfo> labels; // build-time ids, first-seen order
   // Label value -> build-time id, through the same exact-compare hash table.
   IdTable labelTable;
@@ -263,13 +266,13 @@ struct Builder::Impl
   // Interns the occupancy of one label in one cell and records the block.
   void addBlock(uint32_t cell, const std::array<int32_t, 3>& cellOrigin, const CellLabel& cl)
   {
-    PendingBlock b;
-    b.cell = cell;
+    PendingBlocks::Record b;
+    b[PendingCell] = cell;
     std::array<uint8_t, 3> lo, hi;
     leafBounds(cl.masks, lo, hi);
-    b.box = 0;
+    b[PendingBox] = 0;
     for (int a = 0; a < 3; ++a)
-      b.box |= (uint32_t(lo[a]) << (4 * a)) | (uint32_t(hi[a]) << (12 + 4 * a));
+      b[PendingBox] |= (uint32_t(lo[a]) << (4 * a)) | (uint32_t(hi[a]) << (12 + 4 * a));
     uint64_t voxels = 0;
     uint32_t rootMixed = 0, rootFull = 0, rootRefs[8];
     for (uint32_t o = 0; o < 8; ++o)
@@ -309,15 +312,17 @@ struct Builder::Impl
     }
     const uint32_t complement = canonicalize(rootMixed, rootFull, rootRefs) ? 1u : 0u;
     roots.widenTo(bitWidth(mids.size() ? mids.size() - 1 : 0) + 1);
-    b.root = (roots.intern(rootMixed | (rootFull << 8), rootRefs) << 1) | complement;
-    b.label = labelId(cl.value);
-    LabelInfo& info = labels[b.label];
+    b[PendingRoot] = (roots.intern(rootMixed | (rootFull << 8), rootRefs) << 1) | complement;
+    b[PendingLabel] = labelId(cl.value);
+    LabelInfo& info = labels[b[PendingLabel]];
     info.voxels += voxels;
     for (int a = 0; a < 3; ++a)
     {
       info.bounds[2 * a] = std::min(info.bounds[2 * a], cellOrigin[a] + int32_t(lo[a]));
       info.bounds[2 * a + 1] = std::max(info.bounds[2 * a + 1], cellOrigin[a] + int32_t(hi[a]));
     }
+    blocks.widenTo(PendingLabel, bitWidth(labels.size() - 1));
+    blocks.widenTo(PendingRoot, bitWidth(roots.size() - 1) + 1);
     blocks.push_back(b);
   }
 };
@@ -347,6 +352,8 @@ Builder::Builder(
   impl->parallel = parallel ? parallel : ParallelFor(sequentialFor);
   impl->cells = geometry.cellCounts();
   impl->rowResults.resize(size_t(impl->cells[0]));
+  impl->blocks.widenTo(PendingCell, bitWidth(geometry.cellCount() - 1));
+  impl->blocks.widenTo(PendingBox, layout::BLOCK_BOUNDS_BITS);
 }
 
 Builder::~Builder() = default;
@@ -501,12 +508,14 @@ Volume Builder::finish()
   v.blocks.assign((v.blockCount * recordBits + 31) / 32 + 1, 0u);
   for (uint64_t i = 0; i < m.blocks.size(); ++i)
   {
-    const PendingBlock& b = m.blocks[i];
+    const PendingBlocks::Record b = m.blocks[i];
     const uint64_t base = i * recordBits;
-    writeBits(v.blocks, base, w.cellBits, b.cell);
-    writeBits(v.blocks, base + layout::blockBoundsOffset(w.cellBits), layout::BLOCK_BOUNDS_BITS, b.box);
-    writeBits(v.blocks, base + layout::blockLabelOffset(w.cellBits), w.labelBits, rank[b.label]);
-    const uint64_t root = (uint64_t(rootOffsets[b.root >> 1]) << 1) | (b.root & 1u);
+    writeBits(v.blocks, base, w.cellBits, b[PendingCell]);
+    writeBits(v.blocks, base + layout::blockBoundsOffset(w.cellBits), layout::BLOCK_BOUNDS_BITS,
+      b[PendingBox]);
+    writeBits(v.blocks, base + layout::blockLabelOffset(w.cellBits), w.labelBits, rank[b[PendingLabel]]);
+    const uint64_t root =
+      (uint64_t(rootOffsets[b[PendingRoot] >> 1]) << 1) | (b[PendingRoot] & 1u);
     writeBits(v.blocks, base + layout::blockRootOffset(w.cellBits, w.labelBits), w.rootRefBits,
       uint32_t(root));
   }
