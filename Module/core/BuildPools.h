@@ -153,11 +153,13 @@ inline uint32_t popcount8(uint32_t mask)
 // elsewhere (in a pool). Keys are compared exactly through the pool, so a hash collision never
 // merges two different nodes. The tables are a large share of the builder's state, so:
 // - a slot holds id + 1 (0 = empty) in just the bits the ids need until the next growth, beside
-//   TagBits of the key's hash, so that most probes of other keys never read the pool;
+//   TagBits of the key's hash, so that most probes of other keys never read the pool (worth
+//   it where comparing a key is costly: bit-packed nodes, not 64-bit leaf masks);
 // - the slot count is not a power of two: a hash maps to a slot by multiply-shift, so the table
 //   grows by 1.45x and stays between 55% and 80% full, where linear probing is still short;
 // - growing frees the old slots first and re-inserts ids 0..count-1 from the pool, which walks
 //   the pool in order (cheap) and needs no second table alive.
+template <uint32_t TagBits>
 class IdTable
 {
 public:
@@ -193,19 +195,21 @@ public:
 private:
   size_t home(uint64_t hash) const { return size_t((unsigned __int128)hash * slotCount >> 64); }
   size_t next(size_t i) const { return i + 1 == slotCount ? 0 : i + 1; }
-  static constexpr uint32_t TagBits = 4;
-  static constexpr uint64_t TagMask = (1u << TagBits) - 1;
+  static constexpr uint64_t TagMask = (uint64_t(1) << TagBits) - 1;
   // A slot is ((id + 1) << TagBits | tag), at most 32 + TagBits bits: read as two fields.
   uint64_t slot(size_t i) const
   {
     const uint64_t at = uint64_t(i) * slotBits;
+    if (slotBits <= 32)
+      return readField(words.data(), at, slotBits);
     return readField(words.data(), at, TagBits) |
       (uint64_t(readField(words.data(), at + TagBits, slotBits - TagBits)) << TagBits);
   }
   void setSlot(size_t i, uint32_t id, uint64_t hash)
   {
     const uint64_t at = uint64_t(i) * slotBits;
-    writeField(words.data(), at, TagBits, uint32_t(hash & TagMask));
+    if (TagBits > 0)
+      writeField(words.data(), at, TagBits, uint32_t(hash & TagMask));
     writeField(words.data(), at + TagBits, slotBits - TagBits, id + 1);
   }
 
@@ -386,7 +390,7 @@ private:
     if (bitsUsed > 0xFFFFFFFFull)
       throw std::length_error("SVDAG too large: a node stream exceeds 2^32 bits");
   }
-  IdTable table;
+  IdTable<4> table;
   GrowArray<uint32_t> words;   // bit stream, padded by at least one zero word
   GrowArray<uint32_t> anchors; // bit offset of nodes 0, AnchorStride, 2 AnchorStride, ...
   uint64_t totalBits = 0;

@@ -19,7 +19,6 @@ constexpr uint32_t LeavesPerCell = 64;    // 4^3 leaves of 4^3 voxels
 using build::bitWidth;
 using build::mix64;
 using build::GrowArray;
-using build::IdTable;
 using build::PackedNodePool;
 
 class LeafPool
@@ -48,7 +47,7 @@ public:
 
 private:
   GrowArray<uint64_t> masks;
-  IdTable table;
+  build::IdTable<0> table;
 };
 
 // Child state while assembling a node: empty, full, or mixed with a reference.
@@ -244,7 +243,7 @@ struct Builder::Impl
   PendingBlocks blocks;
   std::vector<LabelInfo> labels; // build-time ids, first-seen order
   // Label value -> build-time id, through the same exact-compare hash table.
-  IdTable labelTable;
+  build::IdTable<0> labelTable;
 
   uint32_t labelId(uint64_t value)
   {
