@@ -2,10 +2,12 @@
 //
 // The builder's state must stay close to the size of its output (the issue asks for at most one
 // slab plus 1.5x the output plus a constant), so the pools avoid the usual slack:
-// - GrowArray grows by 1/4 through realloc (large blocks are remapped, not copied);
-// - IdTable sizes its slots freely (not a power of two) and keeps them 55-80% full;
+// - GrowArray grows by 1/16 through realloc (large blocks are remapped by the C library, not
+//   copied, so small steps stay cheap);
+// - IdTable packs its slots to the bits the ids need and keeps them 55-80% full;
 // - PackedNodePool keeps nodes bit-packed with the narrowest reference width their children's
-//   pool needs so far, and widens the stream in place when that pool crosses a power of two.
+//   pool needs so far, and widens the stream in place when that pool crosses a power of two;
+//   PackedRecords does the same for the pending block records.
 #pragma once
 
 #include "svdag/Layout.h"
@@ -40,7 +42,7 @@ inline uint64_t mix64(uint64_t x)
   return x;
 }
 
-// A growable array of trivially copyable values with 25% growth slack at most.
+// A growable array of trivially copyable values with 1/16 growth slack at most.
 template <class T>
 class GrowArray
 {
