@@ -2,7 +2,9 @@
 //
 // Each 16^3 cell of a slab is scanned independently (in parallel); the per-cell results are then
 // merged in cell order into the deduplicated pools, so the output does not depend on the thread
-// count. Peak memory is one slab plus the pools.
+// count. The pools are kept bit-packed at the widths their counts need so far (widened in place
+// as they grow), so the builder's own memory stays near 1.5 times the output; the caller holds
+// one slab at a time.
 #pragma once
 
 #include "svdag/Parallel.h"
