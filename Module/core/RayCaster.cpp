@@ -51,6 +51,7 @@ struct RayCaster::UnitRay
   std::array<int, 3> step;
   double length;
   double smin, smax;
+  bool entryOnly;
 };
 
 RayCaster::RayCaster(const Volume& v)
@@ -89,7 +90,7 @@ RayHit RayCaster::castCell(
     const traversal::SvdagBlockHit h = traversal::svdagIntersectBlock(streams,
       glm::uvec3(block.lo[0], block.lo[1], block.lo[2]),
       glm::uvec3(block.hi[0], block.hi[1], block.hi[2]), block.root, volume.widths.midRefBits,
-      volume.widths.leafRefBits, origin, dir, tmin, tmax, uint32_t(lod));
+      volume.widths.leafRefBits, origin, dir, tmin, tmax, uint32_t(lod), ray.entryOnly);
     if (h.hit && (!best.hit || h.t < bestT))
     {
       bestT = h.t;
@@ -129,6 +130,7 @@ RayHit RayCaster::cast(const Ray& input, Lod lod) const
   // s = t * length; infinite bounds stay infinite (and are clamped per cell).
   ray.smin = input.tmin * length;
   ray.smax = input.tmax * length;
+  ray.entryOnly = input.entryOnly;
 
   RayHit miss;
   const auto& dims = volume.geometry.dims;

@@ -11,6 +11,7 @@
 // CMakeLists.txt): const uint32_t arrays named svdagShader_<stage>.
 #include "block.rchit.h"
 #include "block.rint.h"
+#include "block_entry.rint.h"
 #include "camera.rgen.h"
 #include "closest.rmiss.h"
 #include "shadow.rmiss.h"
@@ -26,8 +27,9 @@ enum Group : uint32_t
   RaygenGroup = 0,
   MissGroup = 1, // SVDAG_MISS_CLOSEST
   ShadowMissGroup = 2, // SVDAG_MISS_SHADOW
-  HitGroup = 3,
-  GroupCount = 4
+  HitGroup = 3, // sbtRecordOffset 0: first hits
+  EntryHitGroup = 4, // sbtRecordOffset 1: entry-only hits (rays continuing through a surface)
+  GroupCount = 5
 };
 static_assert(ShadowMissGroup - MissGroup == SVDAG_MISS_SHADOW, "miss shader order");
 
@@ -144,6 +146,8 @@ void Pipeline::createPipeline()
       sizeof(svdagShader_block_rchit) },
     { VK_SHADER_STAGE_INTERSECTION_BIT_KHR, svdagShader_block_rint,
       sizeof(svdagShader_block_rint) },
+    { VK_SHADER_STAGE_INTERSECTION_BIT_KHR, svdagShader_block_entry_rint,
+      sizeof(svdagShader_block_entry_rint) },
   };
   // The raygen shader's feature switches (GpuLayout.h's SVDAG_CONSTANT_* ids).
   VkBool32 constants[SVDAG_CONSTANT_COUNT] = {};
@@ -200,6 +204,9 @@ void Pipeline::createPipeline()
   groups[HitGroup].type = VK_RAY_TRACING_SHADER_GROUP_TYPE_PROCEDURAL_HIT_GROUP_KHR;
   groups[HitGroup].closestHitShader = 3;
   groups[HitGroup].intersectionShader = 4;
+  groups[EntryHitGroup].type = VK_RAY_TRACING_SHADER_GROUP_TYPE_PROCEDURAL_HIT_GROUP_KHR;
+  groups[EntryHitGroup].closestHitShader = 3;
+  groups[EntryHitGroup].intersectionShader = 5;
 
   VkRayTracingPipelineCreateInfoKHR info{ VK_STRUCTURE_TYPE_RAY_TRACING_PIPELINE_CREATE_INFO_KHR };
   info.stageCount = uint32_t(stages.size());
@@ -225,12 +232,14 @@ void Pipeline::createShaderBindingTable()
           GroupCount, handles.size(), handles.data()),
     "vkGetRayTracingShaderGroupHandlesKHR");
   // Regions start at multiples of shaderGroupBaseAlignment: raygen (one record), miss (the two
-  // miss records, `stride` apart), hit (one record).
+  // miss records, `stride` apart), hit (the two hit group records, `stride` apart: a ray's
+  // sbtRecordOffset picks one; sbtRecordStride is 0 and every instance has offset 0).
   const VkDeviceSize missOffset = regionSize;
   const VkDeviceSize hitOffset =
     alignUp(missOffset + 2 * stride, limits.shaderGroupBaseAlignment);
-  const VkDeviceSize recordOffsets[GroupCount] = { 0, missOffset, missOffset + stride, hitOffset };
-  std::vector<uint8_t> table(hitOffset + regionSize, 0);
+  const VkDeviceSize recordOffsets[GroupCount] = { 0, missOffset, missOffset + stride, hitOffset,
+    hitOffset + stride };
+  std::vector<uint8_t> table(hitOffset + 2 * stride, 0);
   for (uint32_t g = 0; g < GroupCount; ++g)
     std::memcpy(table.data() + recordOffsets[g], handles.data() + g * handleSize, handleSize);
   // The table's base address must itself be aligned to shaderGroupBaseAlignment; over-allocate.
@@ -242,7 +251,7 @@ void Pipeline::createShaderBindingTable()
     table.data(), table.size());
   this->Raygen = { start, regionSize, regionSize };
   this->Miss = { start + missOffset, stride, 2 * stride };
-  this->Hit = { start + hitOffset, stride, stride };
+  this->Hit = { start + hitOffset, stride, 2 * stride };
   this->Callable = { 0, 0, 0 };
 }
 

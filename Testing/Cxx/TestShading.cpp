@@ -121,6 +121,40 @@ TEST(Shading, DielectricSplitsEnergyByFresnel)
   EXPECT_NEAR(fresnelDielectric(1.0f, 1.5f), 0.04f, 1e-3f);
 }
 
+TEST(Shading, ThinWalledTransmissionPassesStraightThrough)
+{
+  // Thin-walled dielectric: the transmitted share (1 - Fresnel) continues along -wo unbent, the
+  // rest is the mirror direction; no other direction occurs.
+  const glm::vec3 n(0, 0, 1);
+  const Material glass = material(glm::vec3(0.5f, 1.0f, 0.25f), 0.0f, 0.0f, 1.0f, 1.5f);
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> u(0, 1);
+  for (float c : { 1.0f, 0.6f, 0.2f })
+  {
+    const glm::vec3 wo = direction(c, 0.3f);
+    const int samples = 20000;
+    int transmitted = 0;
+    for (int i = 0; i < samples; ++i)
+    {
+      const BsdfSample s = bsdfSample(glass, n, wo, true, glm::vec3(u(rng), u(rng), u(rng)));
+      ASSERT_TRUE(s.delta);
+      if (s.transmitted)
+      {
+        ++transmitted;
+        ASSERT_NEAR(glm::length(s.direction + wo), 0.0f, 1e-5f) << "bent at cos " << c;
+        ASSERT_EQ(s.weight, glm::vec3(0.5f, 1.0f, 0.25f)); // tinted by the base color
+      }
+      else
+      {
+        const glm::vec3 mirror(-wo.x, -wo.y, wo.z);
+        ASSERT_NEAR(glm::length(s.direction - mirror), 0.0f, 1e-5f);
+      }
+    }
+    const float expected = 1.0f - fresnelDielectric(c, 1.5f);
+    EXPECT_NEAR(float(transmitted) / samples, expected, 0.015f) << "cos " << c;
+  }
+}
+
 TEST(Shading, ExtremeMaterialsStayFinite)
 {
   std::mt19937 rng(3);

@@ -21,7 +21,8 @@ struct CheckRay
 };
 layout(std430, binding = 4) readonly buffer Rays { CheckRay rays[]; };
 layout(std430, binding = 5) writeonly buffer Hits { vec4 hits[]; };
-layout(push_constant) uniform Widths { uint midRefBits; uint leafRefBits; uint lod; } widths;
+// entryOnly: non-zero for the entry-only mode (Traversal.h), as the transmission hit group uses it.
+layout(push_constant) uniform Widths { uint midRefBits; uint leafRefBits; uint lod; uint entryOnly; } widths;
 
 #define SVDAG_WORD(stream, i) stream[i]
 #define SVDAG_ROOT_STREAM rootWords
@@ -36,6 +37,6 @@ void main()
   CheckBlock b = blocks[i];
   CheckRay r = rays[i];
   SvdagBlockHit h = svdagIntersectBlock(b.lo.xyz, b.hi.xyz, b.hi.w, widths.midRefBits,
-    widths.leafRefBits, r.origin.xyz, r.dir.xyz, r.origin.w, r.dir.w, widths.lod);
+    widths.leafRefBits, r.origin.xyz, r.dir.xyz, r.origin.w, r.dir.w, widths.lod, widths.entryOnly != 0u);
   hits[i] = h.hit ? vec4(vec3(h.normal), h.t) : vec4(0.0, 0.0, 0.0, -1.0);
 }

@@ -337,3 +337,106 @@ def test_environment_map_and_write_image(volume, tmp_path):
     assert np.all(np.isfinite(lit["HDR"]))
     hit = lit["Label"] > 0
     assert not np.allclose(lit["HDR"][hit], out["HDR"][hit])
+
+
+def fresnel_dielectric(cos_i, eta):
+    """Unpolarised Fresnel reflectance, written independently of Shading.h."""
+    sin2_t = (1 - cos_i ** 2) / eta ** 2
+    cos_t = np.sqrt(np.maximum(0.0, 1 - sin2_t))
+    rs = (cos_i - eta * cos_t) / (cos_i + eta * cos_t)
+    rp = (eta * cos_i - cos_t) / (eta * cos_i + cos_t)
+    return 0.5 * (rs ** 2 + rp ** 2)
+
+
+@pytest.fixture(scope="module")
+def pane():
+    """A glass pane (value 3, index 0) two voxels thick, inside one 16^3 cell along z, above a
+    floor (value 5, index 1) that covers the whole volume."""
+    labels = np.zeros((16, 32, 32), np.uint16)  # z, y, x
+    labels[0:2, :, :] = 5
+    labels[10:12, 8:24, 8:24] = 3
+    return build(labels)
+
+
+def pane_renderer(pane):
+    r = vtkSegmentationSVDAGRenderer()
+    r.SetInputData(pane)
+    r.SetWidth(WIDTH)
+    r.SetHeight(HEIGHT)
+    r.SetCameraPosition(15.5, 15.5, 60)
+    r.SetCameraFocalPoint(15.5, 15.5, 0)
+    r.SetCameraViewUp(0, 1, 0)
+    r.SetCameraViewAngle(30)
+    r.SetSamplesPerPixel(64)
+    r.SetMaximumBounces(16)
+    return r
+
+
+def pane_pixels(out):
+    """Pixels whose pixel-center ray and all four neighbours' hit the pane (no jittered sample
+    strays off it), and the cosine of their incidence (the pane's normal is +z)."""
+    pane = (out["Label"] == 1).reshape(HEIGHT, WIDTH)
+    inner = pane.copy()
+    inner[1:, :] &= pane[:-1, :]
+    inner[:-1, :] &= pane[1:, :]
+    inner[:, 1:] &= pane[:, :-1]
+    inner[:, :-1] &= pane[:, 1:]
+    inner[0, :] = inner[-1, :] = inner[:, 0] = inner[:, -1] = False
+    return inner.ravel()
+
+
+def test_transmission_shows_what_is_behind(pane):
+    """Thin-walled glass (transmission 1, IOR 1.5, white) in front of an emissive floor under a
+    black sky: the pane's pixels show the floor through it, at the Fresnel-transmitted share of
+    its radiance; opaque white (transmission 0) shows nothing there (it only faces the sky)."""
+    r = pane_renderer(pane)
+    r.SetEnvironmentColor(0, 0, 0)
+    r.SetBackground(0, 0, 0, 1)
+    r.SetLabelColor(0, 1, 1, 1)
+    r.SetLabelTransmission(0, 1)
+    r.SetLabelIOR(0, 1.5)
+    r.SetLabelRoughness(0, 0)
+    r.SetLabelColor(1, 0, 0, 0)
+    r.SetLabelEmission(1, 1, 1, 1)
+    out = render(r)
+    for name in ("HDR", "Depth", "Normal"):
+        assert np.all(np.isfinite(out[name])), name
+    inner = pane_pixels(out)
+    assert inner.sum() >= 20
+    floor = (out["Label"] == 2)
+    assert floor.any() and abs(out["HDR"][floor, 0].mean() - 1) < 0.05  # the floor seen directly
+    # Expected: (1 - F) at each pixel's incidence angle (the camera ray's direction, from the
+    # depth: the pane's top face is at z = 11.5 in world coordinates).
+    normals = out["Normal"].reshape(-1, 3)[inner]
+    assert np.allclose(normals, [0, 0, 1])
+    depth = out["Depth"][inner]
+    cos_i = np.clip((60 - 11.5) / depth, 0, 1)
+    expected = (1 - fresnel_dielectric(cos_i, 1.5)).mean()
+    seen = out["HDR"][inner, :3].mean(axis=0)
+    assert np.all(np.abs(seen - expected) < 0.03), (seen, expected)
+
+    r.SetLabelTransmission(0, 0)
+    opaque = render(r)
+    assert np.all(np.isfinite(opaque["HDR"]))
+    assert opaque["HDR"][pane_pixels(opaque), :3].mean() < 0.02
+
+
+def test_transmissive_white_furnace(pane):
+    """Transmission conserves energy: with every label clear white glass under a constant sky of
+    radiance 1, every pixel has radiance 1."""
+    r = pane_renderer(pane)
+    for index in range(2):
+        r.SetLabelColor(index, 1, 1, 1)
+        r.SetLabelTransmission(index, 1)
+        r.SetLabelIOR(index, 1.5)
+        r.SetLabelRoughness(index, 0)
+    r.SetEnvironmentColor(1, 1, 1)
+    r.SetBackground(1, 1, 1, 1)
+    r.SetMaximumBounces(64)
+    out = render(r)
+    assert np.all(np.isfinite(out["HDR"]))
+    hit = out["Label"] > 0
+    assert hit.sum() > 0.5 * WIDTH * HEIGHT
+    rgb = out["HDR"][hit, :3]
+    assert abs(rgb.mean() - 1) < 0.01, rgb.mean()
+    assert rgb.min() > 0.6 and rgb.max() < 1.5, (rgb.min(), rgb.max())

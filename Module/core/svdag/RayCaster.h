@@ -32,6 +32,10 @@ struct Ray
   std::array<double, 3> direction{ { 0, 0, 1 } }; // need not be unit length
   double tmin = 0;
   double tmax = 1e300;
+  // Entry only: in each block whose solid the ray is inside at tmin, that solid run is skipped and
+  // the next entry into a solid of the block is reported (Traversal.h, "Entry only"). For rays
+  // that continue through a surface they have just crossed; such hits always have a normal.
+  bool entryOnly = false;
 };
 
 struct RayHit
@@ -44,6 +48,7 @@ struct RayHit
   uint64_t block = 0;                   // block index
   std::array<int32_t, 3> voxel{ {} };   // voxel where the ray enters the hit box (Lod::Voxel: the voxel hit)
   std::array<int32_t, 3> normal{ {} };  // entry face, e.g. (-1, 0, 0); zero when starting inside
+                                        // (never for entryOnly rays)
 };
 
 class RayCaster

@@ -35,6 +35,16 @@
  *   - LOD: SVDAG_LOD_BLOCK hits the block's tight bounds box; SVDAG_LOD_LEAF hits the first
  *     non-empty 4^3 region, as the box (leaf cube intersected with the block bounds); SVDAG_LOD_VOXEL
  *     hits the first solid voxel (lossless).
+ *   - Entry only (entryOnly = true): for rays that continue through a surface they have just
+ *     crossed (specular transmission), which start inside a solid. If the ray is inside the block
+ *     box at tmin (a point on a face counts as inside the box it moves into), the solid run it
+ *     starts in (solid voxels, non-empty leaf boxes or, for SVDAG_LOD_BLOCK, the whole block box)
+ *     is skipped: the DDA walks through solid regions until it reaches an empty one and then
+ *     reports the next solid region it enters, with that entry face as the normal. So an
+ *     entry-only hit always has a non-zero normal, and at SVDAG_LOD_BLOCK a ray starting inside the
+ *     box never hits that block. "Solid" is per block, i.e. per (cell, label): voxels of other
+ *     labels are empty here, and the same label in the next cell is another block, whose box the
+ *     ray enters (an entry there). The traversal needs no knowledge of which label the ray is in.
  *
  * Method: a slab test against the block bounds, then a 3D DDA that, at each step, classifies the
  * largest aligned region (8^3 octant, 4^3 leaf or voxel) around the current voxel by descending
@@ -45,7 +55,9 @@
  * Loop bound: the current voxel stays inside the block bounds, each coordinate moves monotonically
  * in the ray's direction, and every non-final step moves the exit axis by at least one voxel. So
  * there are at most 3 * 15 non-final steps plus the final one: SVDAG_MAX_STEPS = 64 is never
- * reached by a valid block (reaching it reports a miss).
+ * reached by a valid block (reaching it reports a miss). Entry-only mode steps through the solid
+ * regions of its initial run exactly as through empty ones (same exit computation, same
+ * monotonic moves), so those steps count against the same 3 * 15 and the bound holds unchanged.
  */
 #ifndef SVDAG_TRAVERSAL_H
 #define SVDAG_TRAVERSAL_H
@@ -198,9 +210,12 @@ SVDAG_FN bool svdagLeafBit(uvec2 mask, uint bit)
  *   midRefBits, leafRefBits   the volume's reference widths (root -> mid, mid -> leaf)
  *   origin, dir  the ray, origin relative to the cell's corner
  *   tmin, tmax   the parameter interval searched
- *   lod          SVDAG_LOD_BLOCK, SVDAG_LOD_LEAF or SVDAG_LOD_VOXEL */
+ *   lod          SVDAG_LOD_BLOCK, SVDAG_LOD_LEAF or SVDAG_LOD_VOXEL
+ *   entryOnly    skip the solid run the ray starts in (see "Entry only" above); false: the
+ *                plain first-hit query */
 SVDAG_FN SvdagBlockHit svdagIntersectBlock(SVDAG_STREAMS_PARAM uvec3 lo, uvec3 hi, uint rootRef,
-  uint midRefBits, uint leafRefBits, vec3 origin, vec3 dir, float tmin, float tmax, uint lod)
+  uint midRefBits, uint leafRefBits, vec3 origin, vec3 dir, float tmin, float tmax, uint lod,
+  bool entryOnly)
 {
   SvdagBlockHit result;
   result.hit = false;
@@ -230,8 +245,13 @@ SVDAG_FN SvdagBlockHit svdagIntersectBlock(SVDAG_STREAMS_PARAM uvec3 lo, uvec3 h
   for (int a = 0; a < 3; ++a)
     voxel[a] = svdagVoxelCoord(origin[a] + t * dir[a], ray.step[a], boxLo[a], boxHi[a]);
 
+  // Entry-only rays that start inside the box skip the solid run they start in; one that starts
+  // outside enters the box, and whatever is solid at the entry is an entry.
+  bool skipping = entryOnly && tEnter <= tmin;
   if (lod == SVDAG_LOD_BLOCK)
   {
+    if (skipping)
+      return result; // the whole box is the solid run
     result.hit = true;
     result.t = t;
     result.normal = normal;
@@ -314,7 +334,9 @@ SVDAG_FN SvdagBlockHit svdagIntersectBlock(SVDAG_STREAMS_PARAM uvec3 lo, uvec3 h
       }
     }
 
-    if (solid)
+    if (!solid)
+      skipping = false; // the initial solid run has ended: the next solid region is an entry
+    else if (!skipping)
     {
       result.hit = true;
       result.t = t;
@@ -323,7 +345,8 @@ SVDAG_FN SvdagBlockHit svdagIntersectBlock(SVDAG_STREAMS_PARAM uvec3 lo, uvec3 h
       return result;
     }
 
-    // Leave the empty region (clipped to the block bounds) through its nearest exit face.
+    // Leave the empty region (or, while skipping, the solid one), clipped to the block bounds,
+    // through its nearest exit face.
     ivec3 regionLo = voxel - (voxel % ivec3(size));
     ivec3 clipLo = max(regionLo, boxLo);
     ivec3 clipHi = min(regionLo + ivec3(size - 1), boxHi);

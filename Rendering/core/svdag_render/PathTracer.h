@@ -12,6 +12,11 @@
  * Its interface types (PathTracerParams, PathHit) are in Shading.h, so that the includer can
  * define its trace functions before including this file. The includer defines:
  *   SVDAG_TRACE_CLOSEST(hit, origin, direction, tmax)  fills a PathHit for the nearest surface
+ *   SVDAG_TRACE_CLOSEST_THROUGH(hit, origin, direction, tmax)  the same for the ray that follows a
+ *       transmission event (used only with SVDAG_FEATURE_TRANSMISSION): it starts just inside the
+ *       solid it passed into, and must skip that solid and report the next surface it ENTERS
+ *       (the renderer's entry-only hit group, Traversal.h "Entry only"); where a trace never
+ *       reports a hit from inside anyway, it may be the plain trace
  *   SVDAG_TRACE_OCCLUDED(result, origin, direction, tmax)  sets result = true if anything is hit
  *   SVDAG_MATERIAL(labelIndex)  the Material of a label
  *   and the environment macros of Shading.h.
@@ -98,10 +103,14 @@ SHADING_FN vec3 tracePath(PathTracerParams p, vec3 origin, vec3 direction, SHADI
   float epsilon = p.environment.w;
   vec3 o = origin;
   vec3 d = direction;
+  bool through = false; // the ray continues through the surface it has just crossed
   for (uint bounce = 0u; bounce <= maxBounces; ++bounce)
   {
     PathHit h;
-    SVDAG_TRACE_CLOSEST(h, o, d, 1e30f);
+    if (SVDAG_FEATURE_TRANSMISSION && through)
+      SVDAG_TRACE_CLOSEST_THROUGH(h, o, d, 1e30f);
+    else
+      SVDAG_TRACE_CLOSEST(h, o, d, 1e30f);
     if (!h.hit)
     {
       bool weighted = nee && !previousDelta;
@@ -167,6 +176,7 @@ SHADING_FN vec3 tracePath(PathTracerParams p, vec3 origin, vec3 direction, SHADI
     previousDelta = s.delta;
     o = s.transmitted ? position - epsilon * n : above;
     d = s.direction;
+    through = s.transmitted;
     if (bounce >= 2u)
     {
       float q = min(max(throughput.x, max(throughput.y, throughput.z)), 0.95f);

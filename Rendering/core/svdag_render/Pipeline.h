@@ -2,8 +2,10 @@
 //
 // Shaders (compiled to SPIR-V at build time and embedded): camera.rgen (primary outputs and
 // camera paths), two miss shaders (closest.rmiss for closest-hit queries, shadow.rmiss for
-// occlusion rays, at miss indices SVDAG_MISS_CLOSEST / SVDAG_MISS_SHADOW) and one procedural hit
-// group: block.rint (per-block DAG traversal) with block.rchit. The path tracer's feature
+// occlusion rays, at miss indices SVDAG_MISS_CLOSEST / SVDAG_MISS_SHADOW) and two procedural hit
+// groups with block.rchit: block.rint (per-block DAG traversal, first hits; sbtRecordOffset 0) and
+// block.rint compiled with SVDAG_ENTRY_ONLY=1 (entry-only hits for rays that continue through a
+// transmissive surface; sbtRecordOffset 1). The path tracer's feature
 // switches are specialization constants of camera.rgen (ShaderFeatures); setFeatures rebuilds
 // the pipeline, keeping the layouts (descriptor sets stay valid). Descriptor set 0: the TLAS (SVDAG_BINDING_TLAS) and the frame uniforms
 // (SVDAG_BINDING_FRAME), see GpuLayout.h. The SBT's handle size and alignments are read from

@@ -5,6 +5,10 @@
  * BSDF model per label: a Lambertian diffuse lobe and a GGX microfacet specular lobe (metallic /
  * dielectric via Schlick's Fresnel with F0 = mix(0.08 * specular, baseColor, metallic)), plus an
  * optional smooth dielectric transmission lobe (delta, exact Fresnel, index of refraction `ior`).
+ * Transmission is a thin-walled dielectric: Fresnel splits the light at the surface, and what is
+ * transmitted passes straight through (no bending), because the traversal cannot follow a ray
+ * through the interior of a label (a transmitted ray skips the solid it starts in and continues to
+ * the next surface it enters).
  * The non-delta lobes are sampled as one mixture, so eval() and pdf() describe the same density that
  * sample() draws from (required for MIS). Directions are world-space unit vectors; `n` is the
  * shading normal facing the incoming side, wo points away from the surface (towards the viewer).
@@ -229,8 +233,8 @@ struct BsdfSample
   bool transmitted;
 };
 
-/* Samples the BSDF; `entering` tells whether wo is outside the object (for the dielectric's eta).
- * A zero weight means the path ends. */
+/* Samples the BSDF; `entering` tells whether wo is outside the object (for the dielectric's eta,
+ * i.e. only for the Fresnel split). A zero weight means the path ends. */
 SHADING_FN BsdfSample bsdfSample(Material m, vec3 n, vec3 woW, bool entering, vec3 u)
 {
   BsdfSample s;
@@ -245,7 +249,8 @@ SHADING_FN BsdfSample bsdfSample(Material m, vec3 n, vec3 woW, bool entering, ve
   float pt = transmissionProbability(m);
   if (u.x < pt)
   {
-    // Smooth dielectric: reflect or refract by Fresnel; the lobe choice cancels the pdf.
+    // Thin-walled smooth dielectric: reflect or pass straight through (-wo), split by Fresnel;
+    // the lobe choice cancels the pdf.
     float ior = max(m.params.w, 1.0001f);
     float eta = entering ? ior : 1.0f / ior;
     float F = fresnelDielectric(wo.z, eta);
@@ -259,10 +264,7 @@ SHADING_FN BsdfSample bsdfSample(Material m, vec3 n, vec3 woW, bool entering, ve
     }
     else
     {
-      float sin2T = (1.0f - wo.z * wo.z) / (eta * eta);
-      float cosT = sqrt(max(0.0f, 1.0f - sin2T));
-      vec3 wt = vec3(-wo.x / eta, -wo.y / eta, -cosT);
-      s.direction = normalize(toWorld(wt, n));
+      s.direction = -woW;
       s.weight = vec3(m.baseColorVisibility); // tinted transmission; radiance scaling omitted
       s.transmitted = true;
     }
