@@ -23,20 +23,6 @@ constexpr size_t MaxHeaderBytes = size_t(1) << 20;
   throw svdagReadError(vtkErrorCode::FileFormatError, message);
 }
 
-std::string trim(const std::string& s)
-{
-  const size_t b = s.find_first_not_of(" \t\r");
-  if (b == std::string::npos)
-    return "";
-  return s.substr(b, s.find_last_not_of(" \t\r") - b + 1);
-}
-
-std::string lower(std::string s)
-{
-  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return std::tolower(c); });
-  return s;
-}
-
 std::vector<double> numbers(const std::string& text, const std::string& key)
 {
   std::vector<double> out;
@@ -60,7 +46,7 @@ std::vector<double> numbers(const std::string& text, const std::string& key)
 
 bool boolean(const std::string& text)
 {
-  const std::string t = lower(text);
+  const std::string t = svdagLower(text);
   return t == "true" || t == "1" || t == "yes";
 }
 
@@ -113,7 +99,7 @@ svdagMetaImageSlabSource::svdagMetaImageSlabSource(const std::string& fileName)
         formatError(fileName + ": MetaImage header longer than 1 MiB");
       }
     }
-    const std::string t = trim(line);
+    const std::string t = svdagTrim(line);
     if (t.empty())
       continue;
     const size_t eq = t.find('=');
@@ -122,8 +108,8 @@ svdagMetaImageSlabSource::svdagMetaImageSlabSource(const std::string& fileName)
       std::fclose(f);
       formatError(fileName + ": malformed MetaImage header line '" + t.substr(0, 80) + "'");
     }
-    const std::string key = lower(trim(t.substr(0, eq)));
-    fields[key] = trim(t.substr(eq + 1));
+    const std::string key = svdagLower(svdagTrim(t.substr(0, eq)));
+    fields[key] = svdagTrim(t.substr(eq + 1));
     dataFileSeen = key == "elementdatafile";
   }
   const uint64_t headerEnd = static_cast<uint64_t>(ftello(f));
@@ -229,9 +215,9 @@ svdagMetaImageSlabSource::svdagMetaImageSlabSource(const std::string& fileName)
   const std::string dataFile = *field("elementdatafile");
   std::string dataFileName = fileName;
   uint64_t offset = headerEnd;
-  if (lower(dataFile) != "local")
+  if (svdagLower(dataFile) != "local")
   {
-    if (dataFile.empty() || lower(dataFile.substr(0, 4)) == "list" ||
+    if (dataFile.empty() || svdagLower(dataFile.substr(0, 4)) == "list" ||
       dataFile.find('%') != std::string::npos)
       formatError(fileName + ": MetaImage data in several files ('" + dataFile +
         "') is not supported");

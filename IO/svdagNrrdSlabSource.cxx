@@ -34,21 +34,6 @@ using FilePtr = std::unique_ptr<std::FILE, FileCloser>;
   throw svdagReadError(vtkErrorCode::FileFormatError, message);
 }
 
-std::string trim(const std::string& s)
-{
-  const size_t b = s.find_first_not_of(" \t\r");
-  if (b == std::string::npos)
-    return "";
-  const size_t e = s.find_last_not_of(" \t\r");
-  return s.substr(b, e - b + 1);
-}
-
-std::string lower(std::string s)
-{
-  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return std::tolower(c); });
-  return s;
-}
-
 std::vector<std::string> words(const std::string& s)
 {
   std::vector<std::string> out;
@@ -70,7 +55,7 @@ std::vector<std::string> words(const std::string& s)
 // A whole string as a number, or an error naming the field.
 double parseReal(const std::string& text, const std::string& field)
 {
-  const std::string t = trim(text);
+  const std::string t = svdagTrim(text);
   char* end = nullptr;
   errno = 0;
   const double v = std::strtod(t.c_str(), &end);
@@ -81,7 +66,7 @@ double parseReal(const std::string& text, const std::string& field)
 
 long long parseInteger(const std::string& text, const std::string& field)
 {
-  const std::string t = trim(text);
+  const std::string t = svdagTrim(text);
   char* end = nullptr;
   errno = 0;
   const long long v = std::strtoll(t.c_str(), &end, 10);
@@ -173,7 +158,7 @@ bool nrrdType(const std::string& spelling, bool& isSigned, int& bytes)
     { "uint64_t", { false, 8 } },
     { "float", { true, 0 } }, { "double", { true, 0 } }, { "block", { true, 0 } },
   };
-  const auto it = types.find(lower(spelling));
+  const auto it = types.find(svdagLower(spelling));
   if (it == types.end())
     return false;
   isSigned = it->second.first;
@@ -199,7 +184,7 @@ bool readLine(std::FILE* f, std::string& line, const std::string& fileName)
 
 bool isSpatialKind(const std::string& kind)
 {
-  const std::string k = lower(kind);
+  const std::string k = svdagLower(kind);
   return k == "domain" || k == "space" || k == "time" || k == "???" || k == "none";
 }
 
@@ -237,7 +222,7 @@ svdagNrrdSlabSource::svdagNrrdSlabSource(const std::string& fileName)
     headerBytes += line.size() + 1;
     if (headerBytes > MaxHeaderBytes)
       formatError(fileName + ": NRRD header longer than 16 MiB");
-    const std::string t = trim(line);
+    const std::string t = svdagTrim(line);
     if (t.empty())
     {
       blankLineSeen = true;
@@ -254,12 +239,12 @@ svdagNrrdSlabSource::svdagNrrdSlabSource(const std::string& fileName)
       // A field with an empty value has no ': ' but ends with ':'.
       if (t.back() == ':')
       {
-        fields[lower(t.substr(0, t.size() - 1))] = "";
+        fields[svdagLower(t.substr(0, t.size() - 1))] = "";
         continue;
       }
       formatError(fileName + ": malformed NRRD header line '" + t.substr(0, 80) + "'");
     }
-    fields[lower(trim(t.substr(0, colon)))] = trim(t.substr(colon + 2));
+    fields[svdagLower(svdagTrim(t.substr(0, colon)))] = svdagTrim(t.substr(colon + 2));
   }
   auto field = [&](const char* name) -> const std::string* {
     const auto it = fields.find(name);
@@ -321,7 +306,7 @@ svdagNrrdSlabSource::svdagNrrdSlabSource(const std::string& fileName)
       formatError(fileName + ": 'space directions' must list 3 vectors");
     for (int a = 0; a < 3; ++a)
     {
-      if (lower(items[a]) == "none")
+      if (svdagLower(items[a]) == "none")
         formatError(fileName + ": axis " + std::to_string(a) +
           " has no space direction (not a spatial axis)");
       const auto v = parseVector(items[a], "space directions");
@@ -358,7 +343,7 @@ svdagNrrdSlabSource::svdagNrrdSlabSource(const std::string& fileName)
   bool bigEndian = false;
   if (bytes > 1)
   {
-    const std::string endian = lower(required("endian"));
+    const std::string endian = svdagLower(required("endian"));
     if (endian != "little" && endian != "big")
       formatError(fileName + ": unknown endian '" + endian + "'");
     bigEndian = endian == "big";
@@ -420,7 +405,7 @@ svdagNrrdSlabSource::svdagNrrdSlabSource(const std::string& fileName)
   const uint64_t here = static_cast<uint64_t>(ftello(data.get()));
   data.reset();
 
-  const std::string encoding = lower(required("encoding"));
+  const std::string encoding = svdagLower(required("encoding"));
   if (encoding == "raw")
   {
     uint64_t offset = here + uint64_t(byteSkip);

@@ -5,6 +5,7 @@
 #include "svdag/Builder.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cstring>
 #include <unistd.h>
 
@@ -75,4 +76,18 @@ bool svdagHostIsLittleEndian()
   uint8_t first = 0;
   std::memcpy(&first, &one, 1);
   return first == 1;
+}
+
+std::string svdagTrim(const std::string& s)
+{
+  const size_t b = s.find_first_not_of(" \t\r");
+  if (b == std::string::npos)
+    return "";
+  return s.substr(b, s.find_last_not_of(" \t\r") - b + 1);
+}
+
+std::string svdagLower(std::string s)
+{
+  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  return s;
 }

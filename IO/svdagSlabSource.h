@@ -68,6 +68,10 @@ protected:
 svdag::ScalarType svdagIntegerScalarType(bool isSigned, int bytes, const std::string& what);
 // "label volumes need integer scalars; FILE has TYPE".
 [[noreturn]] void svdagThrowNotIntegerLabels(const std::string& fileName, const std::string& type);
+// Header-text helpers of the text-header formats (NRRD, MetaImage): `s` without leading and
+// trailing blanks (space, tab, CR), and `s` in lower case (ASCII).
+std::string svdagTrim(const std::string& s);
+std::string svdagLower(std::string s);
 // Reverses the byte order of `count` values of `size` bytes in place.
 void svdagSwapBytes(void* data, size_t count, int size);
 // Bytes of physical memory on this machine (0 if unknown): the bound for any one buffer.

@@ -4,6 +4,10 @@ import pathlib
 
 import numpy as np
 import pytest
+from vtkmodules.util.numpy_support import numpy_to_vtk
+from vtkmodules.vtkCommonDataModel import vtkImageData
+
+from vtksvdag.vtkSVDAGCore import vtkImageDataToSegmentationSVDAG
 
 REPO = pathlib.Path(__file__).resolve().parents[2]
 SHARED_DATA = REPO.parent / "shared" / "data"
@@ -24,3 +28,20 @@ def shared_data():
 @pytest.fixture
 def rng():
     return np.random.default_rng(12345)
+
+
+def compress_zyx(labels, spacing=(1, 1, 1), origin=(0, 0, 0), direction=None, excluded=()):
+    """A vtkSegmentationSVDAG from a (z, y, x) label array, through the VTK filter."""
+    image = vtkImageData()
+    image.SetDimensions(labels.shape[2], labels.shape[1], labels.shape[0])
+    image.SetSpacing(*spacing)
+    image.SetOrigin(*origin)
+    if direction is not None:
+        image.SetDirectionMatrix(*np.asarray(direction, float).ravel())
+    image.GetPointData().SetScalars(numpy_to_vtk(np.ascontiguousarray(labels).ravel(), deep=True))
+    builder = vtkImageDataToSegmentationSVDAG()
+    builder.SetInputData(image)
+    for value in excluded:
+        builder.AddExcludedLabel(int(value))
+    builder.Update()
+    return builder.GetOutput()

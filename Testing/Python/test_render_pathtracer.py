@@ -6,26 +6,13 @@ Images are small (48 x 32) so that many samples per pixel stay cheap on a CPU de
 """
 import numpy as np
 import pytest
-from vtkmodules.util.numpy_support import numpy_to_vtk, vtk_to_numpy
-from vtkmodules.vtkCommonDataModel import vtkImageData
+from conftest import compress_zyx as build
+from vtkmodules.util.numpy_support import vtk_to_numpy
 
-from vtksvdag.vtkSVDAGCore import vtkImageDataToSegmentationSVDAG
 from vtksvdag.vtkSVDAGRendering import vtkSegmentationSVDAGRenderer
 
 WIDTH, HEIGHT = 48, 32
 VALUES = (3, 5, 9)  # label values; their indices in the label table are 0, 1, 2
-
-
-def build(labels, excluded=()):
-    image = vtkImageData()
-    image.SetDimensions(labels.shape[2], labels.shape[1], labels.shape[0])
-    image.GetPointData().SetScalars(numpy_to_vtk(np.ascontiguousarray(labels).ravel(), deep=True))
-    builder = vtkImageDataToSegmentationSVDAG()
-    builder.SetInputData(image)
-    for value in excluded:
-        builder.AddExcludedLabel(int(value))
-    builder.Update()
-    return builder.GetOutput()
 
 
 @pytest.fixture(scope="module")

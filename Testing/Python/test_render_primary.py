@@ -18,14 +18,11 @@ import nrrd
 import numpy as np
 import pytest
 from vtkmodules.util.misc import calldata_type
-from vtkmodules.util.numpy_support import numpy_to_vtk, vtk_to_numpy
+from conftest import compress_zyx as build
+from vtkmodules.util.numpy_support import vtk_to_numpy
 from vtkmodules.util.vtkConstants import VTK_STRING
-from vtkmodules.vtkCommonDataModel import vtkImageData
 
-from vtksvdag.vtkSVDAGCore import (
-    vtkImageDataToSegmentationSVDAG,
-    vtkSegmentationSVDAGRayCaster,
-)
+from vtksvdag.vtkSVDAGCore import vtkSegmentationSVDAGRayCaster
 from vtksvdag.vtkSVDAGRendering import vtkSegmentationSVDAGRenderer
 
 WIDTH, HEIGHT = 64, 48
@@ -35,23 +32,6 @@ LODS = (
     vtkSegmentationSVDAGRenderer.LOD_VOXEL,
 )
 DEPTH_MISS = np.float32(3.402823466e38)
-
-
-def build(labels, spacing=(1, 1, 1), origin=(0, 0, 0), direction=None, excluded=()):
-    """A vtkSegmentationSVDAG from a (z, y, x) label array."""
-    image = vtkImageData()
-    image.SetDimensions(labels.shape[2], labels.shape[1], labels.shape[0])
-    image.SetSpacing(*spacing)
-    image.SetOrigin(*origin)
-    if direction is not None:
-        image.SetDirectionMatrix(*np.asarray(direction, float).ravel())
-    image.GetPointData().SetScalars(numpy_to_vtk(np.ascontiguousarray(labels).ravel(), deep=True))
-    builder = vtkImageDataToSegmentationSVDAG()
-    builder.SetInputData(image)
-    for value in excluded:
-        builder.AddExcludedLabel(int(value))
-    builder.Update()
-    return builder.GetOutput()
 
 
 def rotation(rng):
