@@ -4,7 +4,9 @@ import pathlib
 
 import numpy as np
 import pytest
+from vtkmodules.util.misc import calldata_type
 from vtkmodules.util.numpy_support import numpy_to_vtk
+from vtkmodules.util.vtkConstants import VTK_STRING
 from vtkmodules.vtkCommonDataModel import vtkImageData
 
 from vtksvdag.vtkSVDAGCore import vtkImageDataToSegmentationSVDAG
@@ -45,3 +47,15 @@ def compress_zyx(labels, spacing=(1, 1, 1), origin=(0, 0, 0), direction=None, ex
         builder.AddExcludedLabel(int(value))
     builder.Update()
     return builder.GetOutput()
+
+
+def capture_errors(vtk_object):
+    """A list that collects the messages of vtk_object's ErrorEvents from now on."""
+    messages = []
+
+    @calldata_type(VTK_STRING)
+    def on_error(_obj, _event, message):
+        messages.append(message)
+
+    vtk_object.AddObserver("ErrorEvent", on_error)
+    return messages

@@ -17,10 +17,8 @@ import math
 import nrrd
 import numpy as np
 import pytest
-from vtkmodules.util.misc import calldata_type
-from conftest import compress_zyx as build
+from conftest import capture_errors, compress_zyx as build
 from vtkmodules.util.numpy_support import vtk_to_numpy
-from vtkmodules.util.vtkConstants import VTK_STRING
 
 from vtksvdag.vtkSVDAGCore import vtkSegmentationSVDAGRayCaster
 from vtksvdag.vtkSVDAGRendering import vtkSegmentationSVDAGRenderer
@@ -376,13 +374,7 @@ def test_forced_missing_device_is_a_clear_error(real_volume, monkeypatch):
     device = working.GetDeviceName()
     monkeypatch.setenv("SVDAG_VK_DEVICE", "nonexistent")
     renderer = make_renderer(real_volume[1])
-    messages = []
-
-    @calldata_type(VTK_STRING)
-    def on_error(_obj, _event, message):
-        messages.append(message)
-
-    renderer.AddObserver("ErrorEvent", on_error)
+    messages = capture_errors(renderer)
     assert renderer.Render() == 0
     assert len(messages) == 1
     assert "SVDAG_VK_DEVICE='nonexistent'" in messages[0]
@@ -392,13 +384,7 @@ def test_forced_missing_device_is_a_clear_error(real_volume, monkeypatch):
 
 def test_render_without_input_is_an_error():
     renderer = vtkSegmentationSVDAGRenderer()
-    messages = []
-
-    @calldata_type(VTK_STRING)
-    def on_error(_obj, _event, message):
-        messages.append(message)
-
-    renderer.AddObserver("ErrorEvent", on_error)
+    messages = capture_errors(renderer)
     assert renderer.Render() == 0
     assert messages and "input" in messages[0]
 
@@ -492,13 +478,7 @@ def test_command_line_renders_a_file(real_volume, tmp_path):
 
 def test_degenerate_camera_is_an_error(real_volume):
     renderer = make_renderer(real_volume[1])
-    messages = []
-
-    @calldata_type(VTK_STRING)
-    def on_error(_obj, _event, message):
-        messages.append(message)
-
-    renderer.AddObserver("ErrorEvent", on_error)
+    messages = capture_errors(renderer)
     renderer.SetCameraPosition(1.0, 2.0, 3.0)
     renderer.SetCameraFocalPoint(1.0, 2.0, 3.0)
     assert renderer.Render() == 0
