@@ -1,5 +1,4 @@
 """Shared fixtures for the Python test suites."""
-import os
 import pathlib
 
 import numpy as np

@@ -9,14 +9,11 @@ import math
 import nrrd
 import numpy as np
 import pytest
-from vtkmodules.util.numpy_support import numpy_to_vtk, vtk_to_numpy
+from conftest import compress_zyx
+from vtkmodules.util.numpy_support import vtk_to_numpy
 from vtkmodules.vtkCommonCore import vtkCommand
-from vtkmodules.vtkCommonDataModel import vtkImageData
 
-from vtksvdag.vtkSVDAGCore import (
-    vtkImageDataToSegmentationSVDAG,
-    vtkSegmentationSVDAGRayCaster,
-)
+from vtksvdag.vtkSVDAGCore import vtkSegmentationSVDAGRayCaster
 
 SPACING = (0.8, 1.1, 2.5)
 ORIGIN = (-30.0, 12.0, 5.0)
@@ -27,16 +24,7 @@ DIRECTION = np.array([[0.0, -1.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
 @pytest.fixture(scope="module")
 def segmentation(shared_data):
     labels, _ = nrrd.read(str(shared_data / "totalseg_ct.nrrd"), index_order="C")  # (z, y, x)
-    image = vtkImageData()
-    image.SetDimensions(labels.shape[2], labels.shape[1], labels.shape[0])
-    image.SetSpacing(*SPACING)
-    image.SetOrigin(*ORIGIN)
-    image.SetDirectionMatrix(*DIRECTION.ravel())
-    image.GetPointData().SetScalars(numpy_to_vtk(labels.ravel(), deep=True))
-    build = vtkImageDataToSegmentationSVDAG()
-    build.SetInputData(image)
-    build.Update()
-    return labels, build.GetOutput()
+    return labels, compress_zyx(labels, SPACING, ORIGIN, DIRECTION)
 
 
 def index_to_world_matrix():

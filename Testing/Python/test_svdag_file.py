@@ -8,6 +8,7 @@ import nrrd
 import numpy as np
 import pytest
 import zstandard
+from conftest import compress_zyx
 from vtkmodules.util.numpy_support import numpy_to_vtk, vtk_to_numpy
 from vtkmodules.vtkCommonMisc import vtkErrorCode
 from vtkmodules.vtkCommonDataModel import vtkImageData
@@ -219,16 +220,10 @@ class ErrorCatcher:
 
 def test_writer_errors(tmp_path, rng):
     labels = rng.integers(0, 4, size=(6, 7, 8)).astype(np.uint8)
-    image = vtkImageData()
-    image.SetDimensions(8, 7, 6)
-    image.GetPointData().SetScalars(numpy_to_vtk(labels.ravel(), deep=True))
-    build = vtkImageDataToSegmentationSVDAG()
-    build.SetInputData(image)
-    build.Update()
 
     writer = vtkSegmentationSVDAGWriter()
     errors = ErrorCatcher(writer)
-    writer.SetInputData(build.GetOutput())
+    writer.SetInputData(compress_zyx(labels))
     assert writer.Write() == 0  # no file name
     assert writer.GetErrorCode() == vtkErrorCode.NoFileNameError
 

@@ -1,5 +1,6 @@
 """The wrapped VTK classes import and interoperate with vtkmodules."""
 import numpy as np
+from conftest import compress_zyx
 from vtkmodules.util.numpy_support import numpy_to_vtk, vtk_to_numpy
 from vtkmodules.vtkCommonDataModel import vtkImageData
 
@@ -36,13 +37,7 @@ def test_pipeline_round_trip(rng):
 
 def test_shallow_and_deep_copy(rng):
     labels = rng.integers(0, 3, size=(5, 6, 7)).astype(np.uint8)
-    image = vtkImageData()
-    image.SetDimensions(7, 6, 5)
-    image.GetPointData().SetScalars(numpy_to_vtk(labels.ravel(), deep=True))
-    build = vtkImageDataToSegmentationSVDAG()
-    build.SetInputData(image)
-    build.Update()
-    src = build.GetOutput()
+    src = compress_zyx(labels)
     for copy in ("ShallowCopy", "DeepCopy"):
         dst = vtkSegmentationSVDAG()
         getattr(dst, copy)(src)
