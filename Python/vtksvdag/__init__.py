@@ -23,6 +23,16 @@ __version__ = "0.1.0"
 
 from .build import from_image, from_numpy  # noqa: E402 (needs the extended __path__)
 from .fileio import read  # noqa: E402
+from .plotting import add_segmentation, pick, refine  # noqa: E402
 from .volume import SegmentationVolume  # noqa: E402
 
-__all__ = ["SegmentationVolume", "from_image", "from_numpy", "read", "__version__"]
+__all__ = [
+    "SegmentationVolume",
+    "add_segmentation",
+    "from_image",
+    "from_numpy",
+    "pick",
+    "read",
+    "refine",
+    "__version__",
+]

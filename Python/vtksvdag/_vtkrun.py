@@ -5,6 +5,7 @@ when there is one, otherwise it is printed and the pipeline carries on with an e
 Every call into a VTK pipeline in this package goes through :func:`run_algorithm`, so that a bad
 file or bad input surfaces as one exception carrying VTK's own message.
 """
+import contextlib
 import re
 
 from vtkmodules.util.misc import calldata_type
@@ -40,6 +41,32 @@ def _error_collector(messages):
         messages.append(clean_vtk_message(message))
 
     return on_error
+
+
+@contextlib.contextmanager
+def vtk_errors_raised(objects, error=RuntimeError):
+    """Within the block, ErrorEvents of ``objects`` are collected; on leaving, the first one
+    is raised as ``error`` (VTK would only print it).
+
+    Parameters
+    ----------
+    objects : vtkObject or sequence of vtkObject
+        The objects whose errors count.
+    error : type, default: RuntimeError
+        The exception raised with VTK's message.
+    """
+    if not isinstance(objects, (list, tuple)):
+        objects = [objects]
+    messages = []
+    on_error = _error_collector(messages)
+    tags = [(obj, obj.AddObserver(vtkCommand.ErrorEvent, on_error)) for obj in objects]
+    try:
+        yield messages
+    finally:
+        for obj, tag in tags:
+            obj.RemoveObserver(tag)
+    if messages:
+        raise error(messages[0])
 
 
 def run_algorithm(algorithm, *, action="Update", progress=None, error=ValueError, what=None):

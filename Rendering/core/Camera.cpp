@@ -1,7 +1,8 @@
 #include "svdag_render/Camera.h"
 
-#include "svdag_render/Scene.h"
+#include "svdag_render/WorldFrame.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -62,23 +63,59 @@ RayBasis rayBasis(const Camera& camera, uint32_t width, uint32_t height)
   return b;
 }
 
-std::array<double, 6> worldBounds(const Geometry& g)
+ViewRays viewRays(const Camera& camera, uint32_t width, uint32_t height)
 {
-  // Voxel boxes span index space [0, dims]; transform the 8 corners.
-  const auto m = indexToWorld(g);
-  std::array<double, 6> b{ { INFINITY, -INFINITY, INFINITY, -INFINITY, INFINITY, -INFINITY } };
-  for (int corner = 0; corner < 8; ++corner)
+  const RayBasis b = rayBasis(camera, width, height);
+  ViewRays rays;
+  rays.origin = camera.position;
+  rays.direction = b.forward;
+  rays.directionU = b.right;
+  rays.directionV = b.up;
+  rays.bounded = false;
+  return rays;
+}
+
+ViewRays viewRaysFromClipToWorld(const std::array<double, 16>& m)
+{
+  for (double x : m)
   {
-    const double p[3] = { (corner & 1) ? double(g.dims[0]) : 0.0,
-      (corner & 2) ? double(g.dims[1]) : 0.0, (corner & 4) ? double(g.dims[2]) : 0.0 };
-    for (int r = 0; r < 3; ++r)
-    {
-      const double w = m[4 * r] * p[0] + m[4 * r + 1] * p[1] + m[4 * r + 2] * p[2] + m[4 * r + 3];
-      b[2 * r] = std::min(b[2 * r], w);
-      b[2 * r + 1] = std::max(b[2 * r + 1], w);
-    }
+    if (!std::isfinite(x))
+      throw std::invalid_argument("the clip-to-world matrix has a non-finite entry");
   }
-  return b;
+  // The homogeneous point of clip (u, v, z, 1) is affine in u, v; its w must not depend on u, v
+  // for the rays to be affine (true of every perspective and parallel projection).
+  const double wu = m[12], wv = m[13];
+  const double wScale = std::abs(m[14]) + std::abs(m[15]);
+  if (!(wScale > 0) || std::abs(wu) > 1e-9 * wScale || std::abs(wv) > 1e-9 * wScale)
+    throw std::invalid_argument("the projection's w varies across the image (not supported)");
+  auto unproject = [&m](double u, double v, double z) {
+    double p[4];
+    for (int r = 0; r < 4; ++r)
+      p[r] = m[4 * r] * u + m[4 * r + 1] * v + m[4 * r + 2] * z + m[4 * r + 3];
+    if (!(std::abs(p[3]) > 0))
+      throw std::invalid_argument("the clip-to-world matrix maps a view plane to infinity");
+    return Vec{ p[0] / p[3], p[1] / p[3], p[2] / p[3] };
+  };
+  const Vec n0 = unproject(0, 0, -1), nu = unproject(1, 0, -1), nv = unproject(0, 1, -1);
+  const Vec f0 = unproject(0, 0, 1), fu = unproject(1, 0, 1), fv = unproject(0, 1, 1);
+  ViewRays rays;
+  rays.origin = n0;
+  rays.originU = sub(nu, n0);
+  rays.originV = sub(nv, n0);
+  rays.direction = sub(f0, n0);
+  rays.directionU = sub(sub(fu, f0), rays.originU);
+  rays.directionV = sub(sub(fv, f0), rays.originV);
+  rays.bounded = true;
+  if (!(length(rays.direction) > 0) || !finite(rays.direction))
+    throw std::invalid_argument("the projection's near and far planes coincide");
+  return rays;
+}
+
+PixelFootprint pixelFootprint(const ViewRays& rays, uint32_t height)
+{
+  const double pixel = 2.0 / std::max<uint32_t>(height, 1);
+  const double span = length(rays.direction);
+  return { length(rays.originV) * pixel, span > 0 ? length(rays.directionV) / span * pixel : 0.0 };
 }
 
 Camera frameVolume(

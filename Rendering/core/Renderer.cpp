@@ -63,28 +63,6 @@ Buffer storageBuffer(Context& context, const std::vector<T>& values)
 }
 } // namespace
 
-const char* lodName(Lod lod)
-{
-  switch (lod)
-  {
-    case Lod::Block: return "block";
-    case Lod::Leaf: return "leaf";
-    case Lod::Voxel: return "voxel";
-    case Lod::Auto: return "auto";
-  }
-  return "?";
-}
-
-Lod parseLod(const std::string& name)
-{
-  for (Lod lod : { Lod::Block, Lod::Leaf, Lod::Voxel, Lod::Auto })
-  {
-    if (name == lodName(lod))
-      return lod;
-  }
-  throw std::invalid_argument("unknown LOD '" + name + "' (block, leaf, voxel or auto)");
-}
-
 // Everything that lives on the device. Declaration order is destruction order in reverse:
 // the context goes last.
 struct Renderer::Gpu
@@ -98,7 +76,9 @@ struct Renderer::Gpu
     MemoryUse::Upload };
   // Outputs, sized for the current image: label, depth, normal, hdr, color; and the per-pixel
   // sums of the accumulation (device memory: only the shader reads it).
-  Buffer label, depth, normal, hdr, color, accumulation;
+  Buffer label, depth, normal, hdr, color, variance, accumulation, squares;
+  // The per-pixel ray limits (host-visible, written before each frame that has them).
+  Buffer rayLimits;
   uint32_t outputPixels = 0;
   // Per-label materials (host-visible: an edit is a memcpy) and the environment's tables.
   Buffer materials;
@@ -144,7 +124,10 @@ struct Renderer::Gpu
     normal = Buffer(context, pixels * 3 * sizeof(float), usage, MemoryUse::Readback);
     hdr = Buffer(context, pixels * 4 * sizeof(float), usage, MemoryUse::Readback);
     color = Buffer(context, pixels * sizeof(uint32_t), usage, MemoryUse::Readback);
+    variance = Buffer(context, pixels * sizeof(float), usage, MemoryUse::Readback);
     accumulation = Buffer(context, pixels * 4 * sizeof(float), usage, MemoryUse::Device);
+    squares = Buffer(context, pixels * sizeof(float), usage, MemoryUse::Device);
+    rayLimits = Buffer(context, pixels * sizeof(float), usage, MemoryUse::Upload);
     outputPixels = pixels;
   }
 
@@ -203,7 +186,7 @@ void Renderer::setVolume(std::shared_ptr<const Volume> volume)
   const auto start = Clock::now();
   this->Device->scene = std::make_unique<Scene>(this->Device->context, std::move(volume));
   // Rebuilds the BVH only if it differs from the default (no cap).
-  this->Device->scene->setPrimitivesPerBlasLimit(this->BlasLimit);
+  this->Device->scene->setPrimitivesPerBlasLimit(this->Settings.maximumBlocksPerBlas);
   // Every label starts with its default material; the explicitly hidden labels stay hidden.
   const size_t labels = this->Device->scene->volume().labels.size();
   this->Materials.reserve(labels);
@@ -243,7 +226,7 @@ void Renderer::applyVisibility()
 
 void Renderer::setPrimitivesPerBlasLimit(uint32_t limit)
 {
-  this->BlasLimit = limit;
+  this->Settings.maximumBlocksPerBlas = limit;
   if (!this->Device->scene)
     return;
   const auto start = Clock::now();
@@ -270,47 +253,101 @@ void Renderer::setImageSize(uint32_t width, uint32_t height)
   this->Height = height;
 }
 
+void Renderer::setCamera(const Camera& camera)
+{
+  this->View = camera;
+  this->RaysFromCamera = true;
+}
+
+void Renderer::setViewRays(const ViewRays& rays)
+{
+  this->Rays = rays;
+  this->RaysFromCamera = false;
+}
+
+ViewRays Renderer::viewRays() const
+{
+  return this->RaysFromCamera ? render::viewRays(this->View, this->Width, this->Height) : this->Rays;
+}
+
+void Renderer::setRayLimits(std::vector<float> limits)
+{
+  this->RayLimits = std::move(limits);
+}
+
+void Renderer::setSettings(const RenderSettings& settings)
+{
+  validate(settings);
+  const bool environmentChanged = settings.environmentMap != this->Settings.environmentMap;
+  const uint32_t blasLimit = settings.maximumBlocksPerBlas;
+  const std::string environment = settings.environmentMap;
+  RenderSettings next = settings;
+  // Both may fail or rebuild: apply them through their own setters (the map last, so that a
+  // file that cannot be read leaves the previous map and throws).
+  next.maximumBlocksPerBlas = this->Settings.maximumBlocksPerBlas;
+  next.environmentMap = this->Settings.environmentMap;
+  this->Settings = next;
+  this->setPrimitivesPerBlasLimit(blasLimit);
+  if (environmentChanged)
+    this->setEnvironmentMap(environment);
+}
+
+namespace
+{
+// Applies one edit to a copy of the settings and validates it: the setters share validate()'s
+// checks and messages.
+template <typename Edit>
+RenderSettings edited(const RenderSettings& current, Edit edit)
+{
+  RenderSettings s = current;
+  edit(s);
+  validate(s);
+  return s;
+}
+} // namespace
+
+void Renderer::setLod(Lod lod)
+{
+  this->Settings = edited(this->Settings, [lod](RenderSettings& s) { s.lod = lod; });
+}
+
 void Renderer::setAutoLodPixels(float pixels)
 {
-  if (!(pixels > 0) || !std::isfinite(pixels))
-    throw std::invalid_argument("auto LOD pixels must be a finite value > 0");
-  this->AutoLodPixels = pixels;
+  this->Settings = edited(this->Settings, [pixels](RenderSettings& s) { s.autoLodPixels = pixels; });
+}
+
+void Renderer::setBackground(const std::array<float, 4>& linearRGBA)
+{
+  this->Settings =
+    edited(this->Settings, [&linearRGBA](RenderSettings& s) { s.background = linearRGBA; });
 }
 
 void Renderer::setSamplesPerPixel(uint32_t samples)
 {
-  if (samples < 1 || samples > 65536)
-    throw std::invalid_argument("samples per pixel must be in 1 .. 65536");
-  this->SamplesPerPixel = samples;
+  this->Settings =
+    edited(this->Settings, [samples](RenderSettings& s) { s.samplesPerPixel = samples; });
 }
 
 void Renderer::setMaxBounces(uint32_t bounces)
 {
-  if (bounces > 64)
-    throw std::invalid_argument("max bounces must be in 0 .. 64");
-  this->MaxBounces = bounces;
+  this->Settings =
+    edited(this->Settings, [bounces](RenderSettings& s) { s.maximumBounces = bounces; });
 }
 
 void Renderer::setExposure(float exposure)
 {
-  if (!(exposure > 0) || !std::isfinite(exposure))
-    throw std::invalid_argument("exposure must be a finite value > 0");
-  this->Exposure = exposure;
+  this->Settings = edited(this->Settings, [exposure](RenderSettings& s) { s.exposure = exposure; });
 }
 
 void Renderer::setEnvironmentColor(const std::array<float, 3>& radiance)
 {
-  for (float c : radiance)
-  {
-    if (!(c >= 0) || !std::isfinite(c))
-      throw std::invalid_argument("environment radiance must be finite and >= 0");
-  }
-  this->EnvironmentColor = radiance;
+  this->Settings =
+    edited(this->Settings, [&radiance](RenderSettings& s) { s.environmentColor = radiance; });
 }
 
 void Renderer::setEnvironmentMap(const std::string& exrPath)
 {
-  if (exrPath == this->EnvironmentPath && !this->EnvironmentDirty)
+  if (exrPath == this->Settings.environmentMap && !this->EnvironmentDirty)
     return;
   Gpu& g = *this->Device;
   // Read and upload first: a failure leaves the previous environment in place.
@@ -327,25 +364,14 @@ void Renderer::setEnvironmentMap(const std::string& exrPath)
   g.envConditional = std::move(conditional);
   g.envTexels = std::move(texelBuffer);
   g.envSize = glm::uvec2(map.width, map.height);
-  this->EnvironmentPath = exrPath;
+  this->Settings.environmentMap = exrPath;
   this->EnvironmentDirty = false;
   ++this->EnvironmentGeneration;
 }
 
 void Renderer::setSun(const SunLight& sun)
 {
-  const auto& d = sun.direction;
-  const double length = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-  if (!(length > 0) || !std::isfinite(length))
-    throw std::invalid_argument("the sun direction must be a finite, non-zero vector");
-  for (float e : sun.irradiance)
-  {
-    if (!(e >= 0) || !std::isfinite(e))
-      throw std::invalid_argument("the sun irradiance must be finite and >= 0");
-  }
-  if (!(sun.angularRadiusDegrees >= 0 && sun.angularRadiusDegrees < 90))
-    throw std::invalid_argument("the sun's angular radius must be in [0, 90) degrees");
-  this->Sun = sun;
+  this->Settings = edited(this->Settings, [&sun](RenderSettings& s) { s.sun = sun; });
 }
 
 Material Renderer::defaultMaterial(uint32_t labelIndex)
@@ -358,12 +384,10 @@ Material Renderer::defaultMaterial(uint32_t labelIndex)
   return m;
 }
 
-void Renderer::setMaterial(uint32_t labelIndex, const Material& material)
+namespace
 {
-  if (labelIndex >= this->Materials.size())
-    throw std::invalid_argument("label index " + std::to_string(labelIndex) +
-      " is outside the volume's label table (" + std::to_string(this->Materials.size()) +
-      " labels)");
+void checkMaterial(const Material& material)
+{
   if (!finite(material.baseColorVisibility) || !finite(material.emission) ||
     !finite(material.params) || !finite(material.extra))
     throw std::invalid_argument("material values must be finite");
@@ -371,11 +395,39 @@ void Renderer::setMaterial(uint32_t labelIndex, const Material& material)
   const glm::vec4& e = material.emission;
   if (c.x < 0 || c.y < 0 || c.z < 0 || e.x < 0 || e.y < 0 || e.z < 0 || material.params.w <= 0)
     throw std::invalid_argument("material colors and emission must be >= 0 and the IOR > 0");
+}
+} // namespace
+
+void Renderer::setMaterial(uint32_t labelIndex, const Material& material)
+{
+  if (labelIndex >= this->Materials.size())
+    throw std::invalid_argument("label index " + std::to_string(labelIndex) +
+      " is outside the volume's label table (" + std::to_string(this->Materials.size()) +
+      " labels)");
+  checkMaterial(material);
   Material& current = this->Materials[labelIndex];
   if (std::memcmp(&current, &material, sizeof(Material)) == 0)
     return;
   const bool visibilityChanged = visible(current) != visible(material);
   current = material;
+  this->MaterialsDirty = true;
+  if (visibilityChanged)
+    this->applyVisibility();
+}
+
+void Renderer::setMaterials(const std::vector<Material>& materials)
+{
+  if (materials.size() != this->Materials.size())
+    throw std::invalid_argument("setMaterials got " + std::to_string(materials.size()) +
+      " materials for a label table of " + std::to_string(this->Materials.size()));
+  for (const Material& m : materials)
+    checkMaterial(m);
+  if (std::memcmp(materials.data(), this->Materials.data(), materials.size() * sizeof(Material)) == 0)
+    return;
+  bool visibilityChanged = false;
+  for (size_t i = 0; i < materials.size(); ++i)
+    visibilityChanged = visibilityChanged || visible(materials[i]) != visible(this->Materials[i]);
+  this->Materials = materials;
   this->MaterialsDirty = true;
   if (visibilityChanged)
     this->applyVisibility();
@@ -392,10 +444,10 @@ const Material& Renderer::material(uint32_t labelIndex) const
 ShaderFeatures Renderer::shaderFeatures() const
 {
   ShaderFeatures f;
-  f.nextEventEstimation = this->Nee;
-  f.environmentMap = !this->EnvironmentPath.empty();
-  f.sun = this->Sun.on &&
-    (this->Sun.irradiance[0] > 0 || this->Sun.irradiance[1] > 0 || this->Sun.irradiance[2] > 0);
+  const SunLight& sun = this->Settings.sun;
+  f.nextEventEstimation = this->Settings.nextEventEstimation;
+  f.environmentMap = !this->Settings.environmentMap.empty();
+  f.sun = sun.on && (sun.irradiance[0] > 0 || sun.irradiance[1] > 0 || sun.irradiance[2] > 0);
   f.emission = false;
   f.transmission = false;
   for (const Material& m : this->Materials)
@@ -435,30 +487,39 @@ const Image& Renderer::render()
     throw std::runtime_error("render needs a volume first (setVolume)");
   if (!g.scene->ready())
     throw std::runtime_error("the scene's BVH is not built: its last build failed");
-  const RayBasis basis = rayBasis(this->View, this->Width, this->Height);
+  const RenderSettings& settings = this->Settings;
+  const ViewRays rays = this->viewRays();
   const uint32_t pixels = this->Width * this->Height;
+  if (!this->RayLimits.empty() && this->RayLimits.size() != pixels)
+    throw std::invalid_argument("the ray limits hold " + std::to_string(this->RayLimits.size()) +
+      " values for an image of " + std::to_string(pixels) + " pixels");
   g.resizeOutputs(pixels);
 
   const Volume& volume = g.scene->volume();
   const FieldWidths& w = volume.widths;
   const auto cells = volume.geometry.cellCounts();
   const auto& s = volume.geometry.spacing;
-  const double pixelAngle =
-    2 * std::tan(this->View.viewAngle * 3.14159265358979323846 / 360) / this->Height;
+  const PixelFootprint footprint = pixelFootprint(rays, this->Height);
   gpu::FrameUniforms u{};
   // Relative to the scene's reference point, in double before rounding to float (Scene.h).
   const auto& reference = g.scene->worldReference();
-  u.cameraPosition = vec({ { this->View.position[0] - reference[0],
-    this->View.position[1] - reference[1], this->View.position[2] - reference[2] } });
-  u.cameraForward = vec(basis.forward);
-  u.cameraRight = vec(basis.right);
-  u.cameraUp = vec(basis.up);
-  u.background = glm::vec4(
-    this->Background[0], this->Background[1], this->Background[2], this->Background[3]);
-  u.display = glm::vec4(this->Exposure, 0.0f, 0.0f, 0.0f);
-  u.autoLod = glm::vec4(
-    float(std::min({ s[0], s[1], s[2] }) / pixelAngle), this->AutoLodPixels, 0.0f, 0.0f);
-  u.image = glm::uvec4(this->Width, this->Height, uint32_t(this->Detail), 0u);
+  u.rayOrigin = vec({ { rays.origin[0] - reference[0], rays.origin[1] - reference[1],
+    rays.origin[2] - reference[2] } });
+  u.rayOrigin.w = rays.bounded ? 1.0f : 0.0f;
+  u.rayOriginU = vec(rays.originU);
+  u.rayOriginV = vec(rays.originV);
+  u.rayDirection = vec(rays.direction);
+  u.rayDirectionU = vec(rays.directionU);
+  u.rayDirectionV = vec(rays.directionV);
+  if (!finite(u.rayOrigin) || !finite(u.rayDirection) || !finite(u.rayOriginU) ||
+    !finite(u.rayOriginV) || !finite(u.rayDirectionU) || !finite(u.rayDirectionV))
+    throw std::invalid_argument("the camera's rays are not finite in float precision");
+  const auto& bg = settings.background;
+  u.background = glm::vec4(bg[0], bg[1], bg[2], bg[3]);
+  u.display = glm::vec4(settings.exposure, 0.0f, 0.0f, 0.0f);
+  u.autoLod = glm::vec4(float(std::min({ s[0], s[1], s[2] })), settings.autoLodPixels,
+    float(footprint.footprint0), float(footprint.footprintSlope));
+  u.image = glm::uvec4(this->Width, this->Height, uint32_t(settings.lod), 0u);
   u.grid = glm::uvec4(uint32_t(cells[0]), uint32_t(cells[1]), g.scene->primitivesPerBlas(), 0u);
   u.widths = glm::uvec4(w.cellBits, w.labelBits, w.rootRefBits, w.midRefBits);
   u.widths2 = glm::uvec4(w.leafRefBits, w.blockBits(), 0u, 0u);
@@ -467,37 +528,41 @@ const Image& Renderer::render()
   u.sceneOutputs = addresses(g.scene->primitiveBlocksAddress(), g.label.address());
   u.outputs = addresses(g.depth.address(), g.normal.address());
   u.outputs2 = addresses(g.hdr.address(), g.color.address());
+  u.rayLimits = addresses(this->RayLimits.empty() ? 0 : g.rayLimits.address(), 0);
+  u.statistics = addresses(g.squares.address(), g.variance.address());
 
   // Lighting (PathTracerParams). The sun direction is normalised in double.
   if (this->EnvironmentDirty)
-    this->setEnvironmentMap(this->EnvironmentPath);
+    this->setEnvironmentMap(settings.environmentMap);
   const ShaderFeatures features = this->shaderFeatures();
-  const auto& sd = this->Sun.direction;
+  const SunLight& sun = settings.sun;
+  const auto& sd = sun.direction;
   const double sunLength = std::sqrt(sd[0] * sd[0] + sd[1] * sd[1] + sd[2] * sd[2]);
   u.sunDirection = glm::vec4(float(sd[0] / sunLength), float(sd[1] / sunLength),
     float(sd[2] / sunLength),
-    float(std::cos(this->Sun.angularRadiusDegrees * 3.14159265358979323846 / 180)));
-  u.sunRadiance = glm::vec4(this->Sun.irradiance[0], this->Sun.irradiance[1],
-    this->Sun.irradiance[2], features.sun ? 1.0f : 0.0f);
+    float(std::cos(sun.angularRadiusDegrees * 3.14159265358979323846 / 180)));
+  u.sunRadiance = glm::vec4(
+    sun.irradiance[0], sun.irradiance[1], sun.irradiance[2], features.sun ? 1.0f : 0.0f);
   // Ray epsilon: a thousandth of the smallest voxel side, but never below the float rounding of
-  // positions (relative to the reference point: camera distance plus the volume's extent).
+  // positions (relative to the reference point: ray origin distance plus the volume's extent).
   const auto bounds = worldBounds(volume.geometry);
-  double extent = 0, cameraDistance = 0;
+  double extent = 0, originDistance = 0;
   for (int a = 0; a < 3; ++a)
   {
     extent = std::max(extent, bounds[2 * a + 1] - bounds[2 * a]);
-    cameraDistance = std::max(cameraDistance, std::abs(this->View.position[a] - reference[a]));
+    originDistance = std::max(originDistance, std::abs(rays.origin[a] - reference[a]));
   }
   const double epsilon =
-    std::max(1e-3 * std::min({ s[0], s[1], s[2] }), 4e-6 * (extent + cameraDistance));
-  u.environment = glm::vec4(this->EnvironmentColor[0], this->EnvironmentColor[1],
-    this->EnvironmentColor[2], float(epsilon));
-  u.lighting = glm::uvec4(g.envSize.x, g.envSize.y, this->MaxBounces,
-    this->Nee ? 1u : 0u /* FLAG_NEE */);
+    std::max(1e-3 * std::min({ s[0], s[1], s[2] }), 4e-6 * (extent + originDistance));
+  const auto& env = settings.environmentColor;
+  u.environment = glm::vec4(env[0], env[1], env[2], float(epsilon));
+  u.lighting = glm::uvec4(g.envSize.x, g.envSize.y, settings.maximumBounces,
+    settings.nextEventEstimation ? 1u : 0u /* FLAG_NEE */);
   u.materials = addresses(g.materials.address(), g.accumulation.address());
   u.environmentMap = addresses(g.envMarginal.address(), g.envConditional.address());
   u.environmentMap2 = addresses(g.envTexels.address(), 0);
-  u.sampling = glm::uvec4(0u, this->SamplesPerPixel, this->Seed, uint32_t(this->Materials.size()));
+  u.sampling =
+    glm::uvec4(0u, settings.samplesPerPixel, settings.seed, uint32_t(this->Materials.size()));
 
   if (this->MaterialsDirty)
   {
@@ -506,6 +571,8 @@ const Image& Renderer::render()
     this->MaterialsDirty = false;
     ++this->MaterialGeneration;
   }
+  if (!this->RayLimits.empty())
+    std::memcpy(g.rayLimits.mapped(), this->RayLimits.data(), pixels * sizeof(float));
   g.pipeline.setFeatures(features);
 
   // Everything that changes the image, besides the per-pass fields (samples, exposure): a
@@ -519,7 +586,7 @@ const Image& Renderer::render()
   std::memcpy(state.data(), &key, sizeof(key));
   std::memcpy(state.data() + sizeof(key), generations, sizeof(generations));
   if (!this->AccumulationValid || state != this->AccumulatedState ||
-    uint64_t(this->Accumulated) + this->SamplesPerPixel > UINT32_MAX)
+    uint64_t(this->Accumulated) + settings.samplesPerPixel > UINT32_MAX)
   {
     this->Accumulated = 0;
     this->RenderSeconds = 0;
@@ -547,7 +614,7 @@ const Image& Renderer::render()
   this->FrameMilliseconds =
     std::chrono::duration<double, std::milli>(Clock::now() - start).count();
   this->RenderSeconds += this->FrameMilliseconds / 1000;
-  this->Accumulated += this->SamplesPerPixel;
+  this->Accumulated += settings.samplesPerPixel;
   this->AccumulationValid = true;
 
   Image& out = this->Output;
@@ -562,6 +629,11 @@ const Image& Renderer::render()
   read(out.normal, g.normal, size_t(pixels) * 3);
   read(out.hdr, g.hdr, size_t(pixels) * 4);
   read(out.color, g.color, pixels);
+  read(out.variance, g.variance, pixels);
+  double sum = 0;
+  for (float v : out.variance)
+    sum += v;
+  this->ErrorEstimate = std::sqrt(sum / pixels);
   return out;
 }
 

@@ -1,6 +1,6 @@
 #include "svdag_render/Scene.h"
 
-#include "svdag_render/Camera.h"
+#include "svdag_render/WorldFrame.h"
 
 #include <algorithm>
 #include <chrono>
@@ -81,24 +81,6 @@ void checkAddressable(uint64_t words, const char* what)
   }
 }
 } // namespace
-
-std::array<double, 12> indexToWorld(const Geometry& g)
-{
-  // world = origin + A * (p - 0.5) with A = D * diag(spacing): translation origin - A * 0.5.
-  std::array<double, 12> m{};
-  for (int r = 0; r < 3; ++r)
-  {
-    double translation = g.origin[r];
-    for (int c = 0; c < 3; ++c)
-    {
-      const double a = g.direction[3 * r + c] * g.spacing[c];
-      m[4 * r + c] = a;
-      translation -= 0.5 * a;
-    }
-    m[4 * r + 3] = translation;
-  }
-  return m;
-}
 
 Scene::Scene(Context& context, std::shared_ptr<const Volume> volume)
   : Ctx(context)

@@ -39,6 +39,11 @@ layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer Sv
   vec4 v[];
 };
 // Read and written by the same invocation only (one pixel's accumulated sums).
+layout(buffer_reference, std430, buffer_reference_align = 4) buffer SvdagFloatAccumulation
+{
+  float v[];
+};
+// Read and written by the same invocation only (one pixel's accumulated sums).
 layout(buffer_reference, std430, buffer_reference_align = 16) buffer SvdagVec4Accumulation
 {
   vec4 v[];

@@ -45,7 +45,7 @@ void main()
   float pdf;
   vec3 d = envSample(vec2(random01(rng), random01(rng)), 16u, 8u, pdf);
   float w = powerHeuristic(pdf, bsdfPdf(m, n, wo, d));
-  vec3 path = tracePath(params, vec3(0.0, 0.0, 2.0), normalize(vec3(0.1, 0.2, -1.0)), rng);
+  vec3 path = tracePath(params, vec3(0.0, 0.0, 2.0), normalize(vec3(0.1, 0.2, -1.0)), 1e30, rng);
   results[gl_GlobalInvocationID.x + 1u] = vec4(path, 1.0);
   results[gl_GlobalInvocationID.x] =
     vec4(finiteOrZero(s.weight + w * bsdfEval(m, n, wo, d) * envRadiance(d, 16u, 8u) / pdf), envPdf(d, 16u, 8u));

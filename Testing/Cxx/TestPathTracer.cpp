@@ -129,7 +129,7 @@ glm::dvec3 meanRadiance(const PathTracerParams& p, glm::vec3 origin, glm::vec3 t
   for (int i = 0; i < paths; ++i)
   {
     uint32_t rng = pcgHash(uint32_t(i) * 9781u + 17u);
-    sum += glm::dvec3(tracePath(p, origin, d, rng));
+    sum += glm::dvec3(tracePath(p, origin, d, 1e30f, rng));
   }
   return sum / double(paths);
 }
@@ -196,8 +196,8 @@ TEST(PathTracer, DeterministicAndFiniteOnExtremeMaterials)
   {
     uint32_t a = uint32_t(i), b = uint32_t(i);
     const glm::vec3 d = glm::normalize(glm::vec3(std::sin(i * 0.37f), std::cos(i * 0.11f), -0.5f));
-    const glm::vec3 la = tracePath(p, glm::vec3(0, -4, 3), d, a);
-    const glm::vec3 lb = tracePath(p, glm::vec3(0, -4, 3), d, b);
+    const glm::vec3 la = tracePath(p, glm::vec3(0, -4, 3), d, 1e30f, a);
+    const glm::vec3 lb = tracePath(p, glm::vec3(0, -4, 3), d, 1e30f, b);
     ASSERT_EQ(la, lb) << "same seed, same result";
     for (int c = 0; c < 3; ++c)
       ASSERT_TRUE(std::isfinite(la[c]));

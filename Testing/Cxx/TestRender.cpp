@@ -214,3 +214,44 @@ TEST(RenderFrame, VoxelHitsMatchTheCpuRayCaster)
   EXPECT_GE(agree, size_t(0.999 * 32 * 24));
   EXPECT_GT(hits, 32u * 24u / 5); // the view sees the volume
 }
+
+// Ray limits (an opaque surface in front, as the VTK mapper passes the depth buffer) end camera
+// rays: a pixel limited before its hit shows background, one limited after it is unchanged; the
+// error estimate is positive once two samples are accumulated, with limits as without.
+TEST(RenderFrame, RayLimitsEndCameraRays)
+{
+  const svdag::Geometry g = tiltedGeometry();
+  const auto volume = randomVolume(g, 7);
+  svdag::render::Renderer renderer;
+  renderer.setVolume(volume);
+  renderer.setImageSize(32, 24);
+  renderer.setCamera(svdag::render::frameVolume(g, 25, -15, 1.5));
+  const svdag::render::Image reference = renderer.render();
+  renderer.render();
+  EXPECT_EQ(renderer.errorEstimate() > 0, true);
+  std::vector<float> limits(32 * 24);
+  size_t hits = 0;
+  for (size_t i = 0; i < limits.size(); ++i)
+  {
+    const bool before = i % 2 == 0;
+    hits += reference.label[i] != 0;
+    limits[i] = reference.label[i] == 0 ? 1e30f
+                                        : (before ? 0.5f * reference.depth[i] : 2.0f * reference.depth[i]);
+  }
+  ASSERT_GT(hits, 50u);
+  renderer.setRayLimits(limits);
+  renderer.resetAccumulation();
+  const svdag::render::Image& limited = renderer.render();
+  for (size_t i = 0; i < limits.size(); ++i)
+  {
+    if (reference.label[i] != 0 && i % 2 == 0)
+      EXPECT_EQ(limited.label[i], 0u) << i;
+    else
+      EXPECT_EQ(limited.label[i], reference.label[i]) << i;
+  }
+  renderer.render();
+  EXPECT_GT(renderer.errorEstimate(), 0.0);
+  std::vector<float> wrongSize(5, 1.0f);
+  renderer.setRayLimits(wrongSize);
+  EXPECT_THROW(renderer.render(), std::invalid_argument);
+}

@@ -32,8 +32,42 @@ struct RayBasis
 };
 RayBasis rayBasis(const Camera& camera, uint32_t width, uint32_t height);
 
-// World-space axis-aligned bounds of the volume's voxels: xmin, xmax, ymin, ymax, zmin, zmax.
-std::array<double, 6> worldBounds(const Geometry& geometry);
+// The primary rays of an image, as affine functions of the image coordinates u, v in [-1, 1]
+// (GpuLayout.h: u = 2 (x + 0.5) / width - 1, v likewise with height):
+//   origin(u, v) = origin + u * originU + v * originV
+//   span(u, v)   = direction + u * directionU + v * directionV   (not unit length)
+// The ray through (u, v) starts at origin(u, v) with the unit direction span / |span|; when
+// `bounded`, it ends at origin + span (a far clipping plane), else it is unbounded. Both the
+// pinhole Camera and any projective camera whose homogeneous w does not depend on u, v (VTK's
+// perspective, off-axis and parallel projections, tiles of them) are exactly of this form.
+struct ViewRays
+{
+  std::array<double, 3> origin{ { 0, 0, 1 } };
+  std::array<double, 3> originU{ { 0, 0, 0 } };
+  std::array<double, 3> originV{ { 0, 0, 0 } };
+  std::array<double, 3> direction{ { 0, 0, -1 } };
+  std::array<double, 3> directionU{ { 0, 0, 0 } };
+  std::array<double, 3> directionV{ { 0, 0, 0 } };
+  bool bounded = false;
+};
+
+// The rays of a pinhole camera (origin: the camera position, unbounded); throws like rayBasis.
+ViewRays viewRays(const Camera& camera, uint32_t width, uint32_t height);
+
+// The rays between the near (z = -1) and far (z = +1) planes of a projection, from the inverse
+// of a world-to-clip matrix (row-major 4 x 4, clip = M * (x, y, z, 1)): origin on the near plane,
+// far end on the far plane. Throws std::invalid_argument for a singular or non-finite matrix and
+// for one whose w varies across the image (not a projection of this form).
+ViewRays viewRaysFromClipToWorld(const std::array<double, 16>& clipToWorld);
+
+// World size of one image pixel (along v) at the ray origin, and its growth per unit of distance
+// along the ray: a pixel at distance t covers footprint0 + t * footprintSlope world units.
+struct PixelFootprint
+{
+  double footprint0;
+  double footprintSlope;
+};
+PixelFootprint pixelFootprint(const ViewRays& rays, uint32_t height);
 
 // A camera that frames the whole volume like vtkRenderer::ResetCamera followed by
 // vtkCamera::Azimuth(azimuth), Elevation(elevation) (degrees) and a dolly by `zoom` (> 0; 2 halves

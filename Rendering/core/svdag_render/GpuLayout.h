@@ -9,20 +9,21 @@
  *
  * Primary rays (the pixel-center convention; tests generate the same rays):
  *   pixel (x, y), 0 <= x < width, 0 <= y < height, y = 0 is the BOTTOM row (VTK image order), its
- *   outputs at index x + width * y. With the camera's unit forward F (position -> focal point),
- *   unit right R = normalize(cross(F, viewUp)), orthogonal up U = cross(R, F), h = tan(viewAngle/2)
- *   (vertical view angle, VTK semantics) and aspect = width / height:
+ *   outputs at index x + width * y, at image coordinates
  *       u = 2 * (x + 0.5) / width - 1,   v = 2 * (y + 0.5) / height - 1
- *       direction = normalize(F + u * h * aspect * R + v * h * U),  origin = camera position
- *   (on the GPU, world coordinates are shifted by a reference point near the volume, Scene.h;
- *   distances and directions do not change)
- *   The host stores F, h * aspect * R and h * U below (cameraForward, cameraRight, cameraUp).
- *   The world ray is traced from t = 0; since the direction has unit length, t is the distance in
- *   world units.
+ *   Its ray (Camera.h's ViewRays) starts at rayOrigin + u * rayOriginU + v * rayOriginV with the
+ *   unit direction of span = rayDirection + u * rayDirectionU + v * rayDirectionV, from t = 0 to
+ *   |span| if rayOrigin.w == 1 (a far plane), else unbounded, and to at most the pixel's ray limit
+ *   when rayLimits.xy is not 0 (an opaque surface in front). Since the direction has unit length,
+ *   t is the distance in world units. A pinhole camera (VTK semantics: unit forward F, right
+ *   R = normalize(cross(F, viewUp)), up U = cross(R, F), h = tan(viewAngle / 2), aspect = width /
+ *   height) has origin = its position, span = F + u * h * aspect * R + v * h * U.
+ *   (On the GPU, world coordinates are shifted by a reference point near the volume, Scene.h;
+ *   distances and directions do not change.)
  *
  * Outputs, per pixel:
  *   label   uint32  label index + 1, 0 where the ray hits nothing (background)
- *   depth   float   distance from the camera along the ray (world units); SVDAG_DEPTH_MISS where
+ *   depth   float   distance from the ray origin along the ray (world units); SVDAG_DEPTH_MISS where
  *                   label == 0. Never NaN or inf.
  *   normal  3 float world-space unit normal of the entry face; (0, 0, 0) on a miss and where the
  *                   camera is inside the hit voxel/box (no entry face)
@@ -30,6 +31,9 @@
  *   color   RGBA8   the tone-mapped display color, R in the lowest byte (bytes R, G, B, A in memory):
  *                   per channel x = exposure * hdr, then Reinhard's curve x / (1 + x), then the
  *                   sRGB transfer function; alpha = hdr.a
+ *   variance float  the variance of the accumulated mean's luminance (luminance of a sample:
+ *                   0.2126 r + 0.7152 g + 0.0722 b): (sum of squares / n - mean^2) / (n - 1)
+ *                   over the n accumulated samples; 0 while n < 2
  *
  * Path tracing (camera.rgen, Shading.h, PathTracer.h): every pass adds sampling.y samples per
  * pixel, each a camera path through a uniformly jittered point of the pixel. A sample whose camera
@@ -97,16 +101,19 @@ SVDAG_GPU_CONST SVDAG_RENDER_LOD_AUTO = 3u;
 #define SVDAG_DEPTH_MISS 3.402823466e38f
 
 SVDAG_UNIFORMS_BEGIN(FrameUniforms)
-  vec4 cameraPosition; // xyz: world position of the camera minus the scene's reference point
-                       // (Scene.h: the instance transform is shifted alike); w unused
-  vec4 cameraForward;  // xyz: unit forward F; w unused
-  vec4 cameraRight;    // xyz: R * tan(viewAngle / 2) * aspect; w unused
-  vec4 cameraUp;       // xyz: U * tan(viewAngle / 2); w unused
+  vec4 rayOrigin;      // xyz: ray origin at u = v = 0 minus the scene's reference point (Scene.h:
+                       // the instance transform is shifted alike); w: 1 = bounded (far plane)
+  vec4 rayOriginU;     // xyz: origin change per unit u; w unused
+  vec4 rayOriginV;     // xyz: origin change per unit v; w unused
+  vec4 rayDirection;   // xyz: span at u = v = 0 (not unit length); w unused
+  vec4 rayDirectionU;  // xyz: span change per unit u; w unused
+  vec4 rayDirectionV;  // xyz: span change per unit v; w unused
   vec4 background;     // linear RGBA of camera samples that hit nothing
   vec4 display;        // x: exposure (color output, see above); y, z, w unused
-  vec4 autoLod;        // x: world size of one voxel / angle of one pixel (radians): a voxel at
-                       //    distance d covers x / d pixels; y: pixels a leaf (4 voxels) or block
-                       //    (16 voxels) may cover to be drawn at that coarser level; z, w unused
+  vec4 autoLod;        // x: world size of one voxel; y: pixels a leaf (4 voxels) or block
+                       //    (16 voxels) may cover to be drawn at that coarser level; z: world
+                       //    size of a pixel at the ray origin, w: its growth per unit distance (a
+                       //    voxel at distance t covers x / (z + w t) pixels)
   uvec4 image;         // x: width, y: height, z: LOD (SVDAG_RENDER_LOD_*), w: unused
   uvec4 grid;          // x, y: cells along x and y (cell index = cx + nx * (cy + ny * cz));
                        // z: primitives per BLAS (instance i's primitive p is entry
@@ -129,6 +136,8 @@ SVDAG_UNIFORMS_BEGIN(FrameUniforms)
                        // zw accumulation (vec4 per pixel: rgb sum, alpha sum)
   uvec4 environmentMap; // addresses: xy marginal CDF (float), zw conditional CDFs (float)
   uvec4 environmentMap2; // addresses: xy texels (vec4 per texel, rgb radiance); z, w unused
+  uvec4 rayLimits;     // addresses: xy per-pixel ray limit (float; 0: none); z, w unused
+  uvec4 statistics;    // addresses: xy luminance sums of squares (float per pixel), zw variance
 SVDAG_UNIFORMS_END(frame)
 
 /* Reinhard's tone curve on exposure-scaled linear radiance (the color output). */
@@ -157,7 +166,7 @@ SVDAG_GPU_FN vec3 svdagLabelColor(uint labelIndex)
 }
 
 #ifdef __cplusplus
-static_assert(sizeof(FrameUniforms) == 24 * 16, "FrameUniforms must stay a list of 16-byte members");
+static_assert(sizeof(FrameUniforms) == 28 * 16, "FrameUniforms must stay a list of 16-byte members");
 } // namespace gpu
 } // namespace render
 } // namespace svdag

@@ -91,8 +91,11 @@ SHADING_FN vec3 sunSample(PathTracerParams p, vec2 u, SHADING_OUT(float) pdf)
   return normalize(toWorld(vec3(r * cos(phi), r * sin(phi), z), axis));
 }
 
-/* Radiance arriving along a camera ray; `rng` advances. Never NaN or Inf. */
-SHADING_FN vec3 tracePath(PathTracerParams p, vec3 origin, vec3 direction, SHADING_INOUT(uint) rng)
+/* Radiance arriving along a camera ray that may hit the volume up to `cameraTmax` (an opaque
+ * surface drawn before the volume, or a far plane: beyond it the ray counts as a miss); `rng`
+ * advances. Never NaN or Inf. */
+SHADING_FN vec3 tracePath(
+  PathTracerParams p, vec3 origin, vec3 direction, float cameraTmax, SHADING_INOUT(uint) rng)
 {
   vec3 radiance = vec3(0.0f);
   vec3 throughput = vec3(1.0f);
@@ -107,10 +110,11 @@ SHADING_FN vec3 tracePath(PathTracerParams p, vec3 origin, vec3 direction, SHADI
   for (uint bounce = 0u; bounce <= maxBounces; ++bounce)
   {
     PathHit h;
+    float tmax = bounce == 0u ? cameraTmax : 1e30f;
     if (SVDAG_FEATURE_TRANSMISSION && through)
-      SVDAG_TRACE_CLOSEST_THROUGH(h, o, d, 1e30f);
+      SVDAG_TRACE_CLOSEST_THROUGH(h, o, d, tmax);
     else
-      SVDAG_TRACE_CLOSEST(h, o, d, 1e30f);
+      SVDAG_TRACE_CLOSEST(h, o, d, tmax);
     if (!h.hit)
     {
       bool weighted = nee && !previousDelta;

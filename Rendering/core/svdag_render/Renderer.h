@@ -25,6 +25,7 @@
 #include "svdag_render/Camera.h"
 #include "svdag_render/Pipeline.h"
 #include "svdag_render/Material.h"
+#include "svdag_render/RenderSettings.h"
 
 #include <svdag/Volume.h>
 
@@ -43,28 +44,6 @@ class Context;
 class Scene;
 using shading::Material;
 
-// A directional light: a disk of the given angular radius (0: a delta light) in `direction`
-// (towards the light, world space), with `irradiance` at normal incidence (linear RGB).
-struct SunLight
-{
-  bool on = false;
-  std::array<double, 3> direction{ { 0, 0, 1 } };
-  std::array<float, 3> irradiance{ { 3, 3, 3 } };
-  double angularRadiusDegrees = 0.27;
-};
-
-enum class Lod : uint32_t
-{
-  Block = 0, // the block's tight bounds box
-  Leaf = 1,  // the first non-empty 4^3 region
-  Voxel = 2, // the first solid voxel (lossless)
-  Auto = 3   // per ray: the coarsest level whose cells cover at most autoLodPixels pixels
-};
-// "block", "leaf", "voxel", "auto".
-const char* lodName(Lod lod);
-// Parses lodName's names; throws std::invalid_argument otherwise.
-Lod parseLod(const std::string& name);
-
 // Host copies of the outputs, pixel (x, y) at index x + width * y, y = 0 the bottom row.
 struct Image
 {
@@ -75,6 +54,9 @@ struct Image
   std::vector<float> normal;   // 3 per pixel, world unit normal; 0 on a miss or inside
   std::vector<float> hdr;      // 4 per pixel, linear RGBA: the mean of the accumulated samples
   std::vector<uint32_t> color; // RGBA8, tone-mapped sRGB, R in the lowest byte
+  // Per pixel, the variance of the accumulated mean's luminance (the sample variance over the
+  // accumulated samples divided by their count; 0 before two samples).
+  std::vector<float> variance;
 };
 
 class Renderer
@@ -97,44 +79,56 @@ public:
   // Caps the primitives per BLAS (0: the driver's limit); see Scene::setPrimitivesPerBlasLimit.
   void setPrimitivesPerBlasLimit(uint32_t limit);
   size_t blasCount() const;
-  void setCamera(const Camera& camera) { this->View = camera; }
+  // The primary rays: a pinhole camera (its rays follow the image's aspect), or explicit rays
+  // (ViewRays, for example from a VTK camera's projection); the last call wins.
+  void setCamera(const Camera& camera);
   const Camera& camera() const { return this->View; }
+  void setViewRays(const ViewRays& rays);
+  // The rays of the next render() for the current image size.
+  ViewRays viewRays() const;
+  // Per pixel (x + width * y), the farthest distance along the unit ray direction a camera ray
+  // may hit (an opaque surface drawn before the volume); empty: no limit. The size must be the
+  // image's pixel count at render(). The values are uploaded on each render(); a change of their
+  // content does not restart the accumulation (call resetAccumulation()).
+  void setRayLimits(std::vector<float> limits);
   // Throws std::invalid_argument for 0 or more pixels than the device dispatches (or 2^28).
   void setImageSize(uint32_t width, uint32_t height);
-  void setLod(Lod lod) { this->Detail = lod; }
-  Lod lod() const { return this->Detail; }
-  // Lod::Auto draws a leaf (block) where a leaf (block) covers at most this many pixels (> 0).
+  // Every setting at once (validate() first: std::invalid_argument, the previous ones stay).
+  // The setters below change one setting each, with the same checks.
+  void setSettings(const RenderSettings& settings);
+  const RenderSettings& settings() const { return this->Settings; }
+  void setLod(Lod lod);
+  Lod lod() const { return this->Settings.lod; }
   void setAutoLodPixels(float pixels);
-  float autoLodPixels() const { return this->AutoLodPixels; }
-  // Linear RGBA of camera samples that hit nothing (the environment lights, it is not seen).
-  void setBackground(const std::array<float, 4>& linearRGBA) { this->Background = linearRGBA; }
+  float autoLodPixels() const { return this->Settings.autoLodPixels; }
+  void setBackground(const std::array<float, 4>& linearRGBA);
 
   // ---- path tracing ----
   // Samples per pixel added by each render(), 1 .. 65536 (std::invalid_argument otherwise).
   void setSamplesPerPixel(uint32_t samples);
-  uint32_t samplesPerPixel() const { return this->SamplesPerPixel; }
+  uint32_t samplesPerPixel() const { return this->Settings.samplesPerPixel; }
   // Scattering events per path, 0 (direct view of emission only) .. 64.
   void setMaxBounces(uint32_t bounces);
-  uint32_t maxBounces() const { return this->MaxBounces; }
-  void setSeed(uint32_t seed) { this->Seed = seed; }
-  uint32_t seed() const { return this->Seed; }
+  uint32_t maxBounces() const { return this->Settings.maximumBounces; }
+  void setSeed(uint32_t seed) { this->Settings.seed = seed; }
+  uint32_t seed() const { return this->Settings.seed; }
   // Next-event estimation with MIS (default) or the plain estimator that finds light only when
   // a path escapes (the paper authors' estimator).
-  void setNextEventEstimation(bool on) { this->Nee = on; }
-  bool nextEventEstimation() const { return this->Nee; }
+  void setNextEventEstimation(bool on) { this->Settings.nextEventEstimation = on; }
+  bool nextEventEstimation() const { return this->Settings.nextEventEstimation; }
   // Scale of the linear color before the tone curve (> 0, finite).
   void setExposure(float exposure);
-  float exposure() const { return this->Exposure; }
+  float exposure() const { return this->Settings.exposure; }
   // Constant environment radiance (default 1, 1, 1), or the scale of the environment map.
   void setEnvironmentColor(const std::array<float, 3>& radiance);
   // An equirectangular OpenEXR environment (EnvironmentMap::fromEXR); "" returns to the constant
   // environment. Throws std::runtime_error for an unreadable file (the previous one stays).
   void setEnvironmentMap(const std::string& exrPath);
-  const std::string& environmentMap() const { return this->EnvironmentPath; }
+  const std::string& environmentMap() const { return this->Settings.environmentMap; }
   // Throws std::invalid_argument for a zero or non-finite direction, negative or non-finite
   // irradiance, or an angular radius outside [0, 90) degrees.
   void setSun(const SunLight& sun);
-  const SunLight& sun() const { return this->Sun; }
+  const SunLight& sun() const { return this->Settings.sun; }
 
   static Material defaultMaterial(uint32_t labelIndex);
   // The material of a label index (needs a volume; std::invalid_argument for an index outside
@@ -142,6 +136,9 @@ public:
   // not 0).
   void setMaterial(uint32_t labelIndex, const Material& material);
   const Material& material(uint32_t labelIndex) const;
+  // Every label's material at once (one per label index, same checks): the BVH is rebuilt at
+  // most once, when the set of visible labels changes.
+  void setMaterials(const std::vector<Material>& materials);
   size_t materialCount() const { return this->Materials.size(); }
   // The feature switches the next render() compiles the pipeline with.
   ShaderFeatures shaderFeatures() const;
@@ -152,6 +149,9 @@ public:
   uint32_t accumulatedSamples() const { return this->Accumulated; }
   // Seconds of tracing (sum of frame times) that produced the current image.
   double renderSeconds() const { return this->RenderSeconds; }
+  // An estimate of the current image's error: the root mean square over pixels of the standard
+  // error of each pixel's mean luminance (linear units; 0 before two samples).
+  double errorEstimate() const { return this->ErrorEstimate; }
   // BVH builds (setVolume and visibility changes) and ray tracing pipeline builds so far.
   uint64_t bvhBuilds() const { return this->BvhBuilds; }
   uint64_t pipelineBuilds() const;
@@ -177,29 +177,22 @@ private:
 
   struct Gpu;
   std::unique_ptr<Gpu> Device;
+  RenderSettings Settings;
   Camera View;
+  ViewRays Rays;
+  bool RaysFromCamera = true;
+  std::vector<float> RayLimits;
   uint32_t Width = 256;
   uint32_t Height = 256;
-  Lod Detail = Lod::Voxel;
-  float AutoLodPixels = 1.0f;
-  uint32_t BlasLimit = 0;
-  std::array<float, 4> Background{ { 0.1f, 0.1f, 0.12f, 1.0f } };
   Image Output;
   double SetupSeconds = 0;
   double FrameMilliseconds = 0;
+  double ErrorEstimate = 0;
 
   std::vector<uint32_t> ExplicitHidden;
   std::vector<Material> Materials;
   bool MaterialsDirty = true;
-  uint32_t SamplesPerPixel = 1;
-  uint32_t MaxBounces = 4;
-  uint32_t Seed = 0;
-  bool Nee = true;
-  float Exposure = 1.0f;
-  std::array<float, 3> EnvironmentColor{ { 1, 1, 1 } };
-  std::string EnvironmentPath;
   bool EnvironmentDirty = true;
-  SunLight Sun;
 
   // Accumulation state: what the last pass rendered (render() compares) and its sample count.
   bool AccumulationValid = false;

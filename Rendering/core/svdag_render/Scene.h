@@ -21,6 +21,7 @@
 #include "svdag_render/AccelerationStructure.h"
 #include "svdag_render/Buffer.h"
 #include "svdag_render/Context.h"
+#include "svdag_render/WorldFrame.h"
 
 #include <svdag/Volume.h>
 
@@ -33,9 +34,6 @@ namespace svdag
 {
 namespace render
 {
-
-// The volume's index-to-world matrix as 3 rows of 4 (VkTransformMatrixKHR's layout).
-std::array<double, 12> indexToWorld(const Geometry& geometry);
 
 class Scene
 {

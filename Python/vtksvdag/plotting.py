@@ -1,0 +1,425 @@
+"""pyvista glue: path-trace a segmentation in a ``pyvista.Plotter``, refine it, pick labels.
+
+The volume is drawn by ``vtkSegmentationSVDAGVolumeMapper`` inside the plotter's own render
+window, depth-composited with every mesh in the scene.
+"""
+import numbers
+import os
+
+import numpy as np
+
+from ._vtkrun import vtk_errors_raised
+
+_LODS = {"block": 0, "leaf": 1, "voxel": 2, "auto": 3}
+
+# Keyword arguments of add_segmentation beyond the named ones (documented there).
+_EXTRA_OPTIONS = ("exposure", "seed", "next_event_estimation", "write_depth", "error_target",
+                  "auto_adjust", "samples_per_pass")
+
+
+def _segmentation_volume(data):
+    """A SegmentationVolume from any of the inputs add_segmentation accepts."""
+    from .build import from_image, from_numpy
+    from .fileio import read
+    from .volume import SegmentationVolume
+
+    if isinstance(data, SegmentationVolume):
+        return data
+    if isinstance(data, (str, os.PathLike)):
+        return read(data)
+    if isinstance(data, np.ndarray):
+        return from_numpy(data)
+    if hasattr(data, "IsA") and data.IsA("vtkImageData"):
+        return from_image(data)
+    raise TypeError(
+        "data must be a SegmentationVolume, a file path, a numpy label array or a "
+        f"pyvista.ImageData / vtkImageData, not {type(data).__name__}"
+    )
+
+
+def _rgb(color):
+    """A color pyvista understands (name, hex, 0-1 floats or 0-255 ints) as 0-1 floats."""
+    import pyvista as pv
+
+    return tuple(float(c) for c in pv.Color(color).float_rgb)
+
+
+def _check_fraction(value, what):
+    if not isinstance(value, numbers.Real) or not 0 <= float(value) <= 1:
+        raise ValueError(f"{what} must be a number in [0, 1], got {value!r}")
+    return float(value)
+
+
+def _label_keys(volume, values, what):
+    """Label values as the mapper's int64 keys; values the volume does not hold are errors."""
+    from ._labels import label_pattern
+
+    keys = []
+    present = set(volume.labels.tolist())
+    for value in values:
+        if value not in present:
+            raise ValueError(f"{what} {value!r} is not a label of the volume")
+        pattern = label_pattern(value, volume.dtype, what)
+        keys.append(int(np.array(pattern, dtype=np.uint64).view(np.int64)))
+    return keys
+
+
+def _apply_colors(props, volume, colors, cmap):
+    if cmap is not None:
+        if hasattr(cmap, "IsA") and cmap.IsA("vtkScalarsToColors"):
+            props.SetLookupTable(cmap)
+        else:
+            import matplotlib
+
+            colormap = matplotlib.colormaps[cmap] if isinstance(cmap, str) else cmap
+            n = len(volume.labels)
+            # Categorical: listed colormaps cycle their colors, continuous ones are sampled evenly.
+            count = getattr(colormap, "N", 256)
+            for index, key in enumerate(_label_keys(volume, volume.labels.tolist(), "label")):
+                if count < 256:
+                    rgba = colormap(index % count)
+                else:
+                    rgba = colormap(index / max(n - 1, 1))
+                props.SetColor(key, *rgba[:3])
+    if colors is not None:
+        if not hasattr(colors, "items"):
+            raise TypeError("colors must be a dict {label value: color}")
+        values = list(colors)
+        for key, value in zip(_label_keys(volume, values, "colors label"), values):
+            props.SetColor(key, *_rgb(colors[value]))
+
+
+def _apply_sun(settings, sun):
+    if sun is None or sun is False:
+        settings.SetSun(False)
+        return
+    settings.SetSun(True)
+    if sun is True:
+        return
+    if hasattr(sun, "items"):
+        unknown = set(sun) - {"direction", "irradiance", "angular_radius"}
+        if unknown:
+            raise TypeError(f"unknown sun options {sorted(unknown)} (direction, irradiance, angular_radius)")
+        direction = sun.get("direction")
+        if "irradiance" in sun:
+            irradiance = np.broadcast_to(np.asarray(sun["irradiance"], float), (3,))
+            if not np.all(np.isfinite(irradiance)) or np.any(irradiance < 0):
+                raise ValueError("the sun irradiance must be finite and >= 0")
+            settings.SetSunIrradiance(*irradiance)
+        if "angular_radius" in sun:
+            radius = float(sun["angular_radius"])
+            if not 0 <= radius <= 89.9:
+                raise ValueError(f"the sun's angular radius must be in [0, 89.9] degrees, got {radius}")
+            settings.SetSunAngularRadius(radius)
+    else:
+        direction = sun
+    if direction is not None:
+        d = np.asarray(direction, float)
+        if d.shape != (3,) or not np.all(np.isfinite(d)) or not np.any(d):
+            raise ValueError(f"the sun direction must be 3 finite numbers, not all 0, got {direction!r}")
+        settings.SetSunDirection(*d)
+
+
+def _apply_environment(settings, environment):
+    if environment is None:
+        return
+    if isinstance(environment, (str, os.PathLike)) and str(environment).lower().endswith(".exr"):
+        if not os.path.isfile(environment):
+            raise FileNotFoundError(f"environment map {environment} does not exist")
+        settings.SetEnvironmentMap(os.fspath(environment))
+        return
+    settings.SetEnvironmentColor(*_rgb(environment))
+
+
+def add_segmentation(
+    plotter,
+    data,
+    *,
+    colors=None,
+    cmap=None,
+    opacity=1.0,
+    hidden_labels=None,
+    lod="auto",
+    spp=64,
+    bounces=4,
+    sun=None,
+    environment=None,
+    name=None,
+    reset_camera=None,
+    **kwargs,
+):
+    """Add a path-traced segmentation volume to a ``pyvista.Plotter``.
+
+    The volume is traced with Vulkan ray tracing (a GPU, or Mesa's lavapipe on the CPU) and
+    composited with the plotter's meshes by depth. While the view is still, each render adds
+    samples until ``spp`` samples per pixel (see :func:`refine`); while the user interacts,
+    frames keep to the plotter's update rate with a coarser LOD and resolution.
+
+    Parameters
+    ----------
+    plotter : pyvista.Plotter
+        The plotter; the volume goes into its active renderer (subplot).
+    data : SegmentationVolume, str, os.PathLike, numpy.ndarray or pyvista.ImageData
+        The segmentation: a compressed volume, a file :func:`vtksvdag.read` reads, a 3D integer
+        label array indexed ``[x, y, z]``, or a label image.
+    colors : dict, optional
+        ``{label value: color}``; any color pyvista accepts (name, hex, RGB floats or ints).
+    cmap : str, matplotlib colormap or vtkScalarsToColors, optional
+        Colors of the labels ``colors`` does not name: a listed (categorical) colormap cycles
+        through its colors in label order, a continuous one is sampled evenly; a VTK lookup
+        table maps the label values. Without either, colors come from a hash of each label.
+    opacity : float or dict, default: 1.0
+        Opacity of every label, or ``{label value: opacity}``. 0 hides a label; values between
+        0 and 1 let that share of the light pass the label's surface (path-traced transmission).
+    hidden_labels : iterable of int, optional
+        Label values not drawn.
+    lod : {"auto", "block", "leaf", "voxel"}, default: "auto"
+        Level of detail of still frames: ``"voxel"`` is lossless, ``"auto"`` draws coarser
+        levels where a voxel is smaller than a pixel.
+    spp : int, default: 64
+        Samples per pixel a still view refines to.
+    bounces : int, default: 4
+        Scattering events per path (0 .. 64).
+    sun : bool, sequence of 3 floats or dict, optional
+        A sun light: ``True`` for the default one, a direction towards the sun, or a dict with
+        ``direction``, ``irradiance`` and ``angular_radius`` (degrees).
+    environment : color or str, optional
+        The environment light: a constant color, or the path of an equirectangular ``.exr`` map.
+    name : str, optional
+        Actor name (replaces an actor of the same name).
+    reset_camera : bool, optional
+        Reset the camera after adding; by default only when it is the first actor.
+    **kwargs
+        ``exposure`` (float), ``seed`` (int), ``next_event_estimation`` (bool),
+        ``write_depth`` (bool), ``error_target`` (float: stop refining at this error estimate),
+        ``auto_adjust`` (bool: keep interactive frames within the time budget),
+        ``samples_per_pass`` (int: samples each render adds).
+
+    Returns
+    -------
+    pyvista.Volume
+        The actor; ``actor.GetMapper()`` is the ``vtkSegmentationSVDAGVolumeMapper``.
+
+    Raises
+    ------
+    RuntimeError
+        No Vulkan device with ray tracing (the message lists the devices found).
+    ValueError, TypeError
+        An option is out of range or of the wrong type.
+
+    Examples
+    --------
+    >>> import pyvista as pv
+    >>> import vtksvdag
+    >>> plotter = pv.Plotter(off_screen=True)
+    >>> actor = vtksvdag.add_segmentation(plotter, "examples/data/cells.nrrd", sun=True)  # doctest: +SKIP
+    >>> vtksvdag.refine(plotter)  # doctest: +SKIP
+    >>> image = plotter.screenshot()  # doctest: +SKIP
+    """
+    import pyvista as pv
+
+    from .vtkSVDAGRendering import vtkSegmentationSVDAGVolumeMapper
+
+    unknown = set(kwargs) - set(_EXTRA_OPTIONS)
+    if unknown:
+        raise TypeError(f"add_segmentation got unknown options {sorted(unknown)}")
+    if lod not in _LODS:
+        raise ValueError(f"lod must be one of {sorted(_LODS)}, got {lod!r}")
+    for value, what, lo, hi in ((spp, "spp", 1, 1 << 24), (bounces, "bounces", 0, 64),
+                                (kwargs.get("samples_per_pass", 1), "samples_per_pass", 1, 65536)):
+        if isinstance(value, bool) or not isinstance(value, numbers.Integral) or not lo <= value <= hi:
+            raise ValueError(f"{what} must be an integer in {lo} .. {hi}, got {value!r}")
+
+    volume = _segmentation_volume(data)
+    mapper = vtkSegmentationSVDAGVolumeMapper()
+    mapper.SetInputData(volume.dataobject)
+    settings = mapper.GetSettings()
+    settings.SetLOD(_LODS[lod])
+    settings.SetMaximumBounces(int(bounces))
+    settings.SetSamplesPerPixel(int(kwargs.get("samples_per_pass", 1)))
+    mapper.SetTargetSamplesPerPixel(int(spp))
+    if "exposure" in kwargs:
+        exposure = float(kwargs["exposure"])
+        if not (np.isfinite(exposure) and 1e-6 <= exposure <= 1e6):
+            raise ValueError(f"exposure must be in [1e-6, 1e6], got {kwargs['exposure']!r}")
+        settings.SetExposure(exposure)
+    if "seed" in kwargs:
+        seed = kwargs["seed"]
+        if not isinstance(seed, numbers.Integral) or not 0 <= seed < 2**32:
+            raise ValueError(f"seed must be an integer in 0 .. 2**32 - 1, got {seed!r}")
+        settings.SetSeed(int(seed))
+    if "next_event_estimation" in kwargs:
+        settings.SetNextEventEstimation(bool(kwargs["next_event_estimation"]))
+    if "write_depth" in kwargs:
+        mapper.SetWriteDepth(bool(kwargs["write_depth"]))
+    if "auto_adjust" in kwargs:
+        mapper.SetAutoAdjustToRenderTime(bool(kwargs["auto_adjust"]))
+    if "error_target" in kwargs:
+        target = float(kwargs["error_target"])
+        if not (target >= 0 and np.isfinite(target)):
+            raise ValueError(f"error_target must be a finite number >= 0, got {kwargs['error_target']!r}")
+        mapper.SetErrorTarget(target)
+    _apply_sun(settings, sun)
+    _apply_environment(settings, environment)
+
+    props = mapper.GetLabelProperties()
+    _apply_colors(props, volume, colors, cmap)
+    if hasattr(opacity, "items"):
+        values = list(opacity)
+        for key, value in zip(_label_keys(volume, values, "opacity label"), values):
+            props.SetOpacity(key, _check_fraction(opacity[value], f"opacity of label {value}"))
+    else:
+        alpha = _check_fraction(opacity, "opacity")
+        if alpha != 1.0:
+            for key in _label_keys(volume, volume.labels.tolist(), "label"):
+                props.SetOpacity(key, alpha)
+    if hidden_labels is not None:
+        for key in _label_keys(volume, list(hidden_labels), "hidden label"):
+            props.SetVisibility(key, False)
+
+    with vtk_errors_raised(mapper, RuntimeError):
+        mapper.InitializeDevice()
+
+    actor = pv.Volume()
+    actor.SetMapper(mapper)
+    # Keep the Python wrapper (and so the SegmentationVolume) alive as long as the actor.
+    actor._vtksvdag_volume = volume
+    if reset_camera is None:
+        reset_camera = not plotter.renderer.actors
+    plotter.add_actor(actor, name=name, reset_camera=bool(reset_camera))
+    _enable_refinement(plotter)
+    return actor
+
+
+def _segmentation_mappers(plotter):
+    """(renderer, mapper) of every segmentation volume in the plotter."""
+    from .vtkSVDAGRendering import vtkSegmentationSVDAGVolumeMapper
+
+    found = []
+    for renderer in plotter.renderers:
+        volumes = renderer.GetVolumes()
+        volumes.InitTraversal()
+        for _ in range(volumes.GetNumberOfItems()):
+            mapper = volumes.GetNextVolume().GetMapper()
+            if isinstance(mapper, vtkSegmentationSVDAGVolumeMapper):
+                found.append((renderer, mapper))
+    return found
+
+
+def _enable_refinement(plotter):
+    """While the view is still, re-render on a timer until every segmentation has converged.
+
+    The timer starts with the interactor (``show()`` of an on-screen plotter); off-screen
+    plotters refine with :func:`refine`.
+    """
+    if getattr(plotter, "_vtksvdag_refining", False) or plotter.iren is None:
+        return
+    plotter._vtksvdag_refining = True
+    state = {"timer": None}
+
+    def on_timer(interactor, _event):
+        style = interactor.GetInteractorStyle()
+        interacting = style is not None and style.GetState() != 0
+        if interacting:
+            return
+        if any(not mapper.IsConverged() for _, mapper in _segmentation_mappers(plotter)):
+            plotter.render_window.Render()
+
+    def on_render(*_args):
+        interactor = plotter.iren.interactor if plotter.iren is not None else None
+        if interactor is None or state["timer"] is not None or not interactor.GetInitialized():
+            return
+        state["timer"] = interactor.CreateRepeatingTimer(30)
+
+    plotter.iren.interactor.AddObserver("TimerEvent", on_timer)
+    plotter.add_on_render_callback(on_render, render_event=False)
+
+
+def refine(plotter, timeout=60.0):
+    """Render until every segmentation in the plotter has converged, or ``timeout`` seconds.
+
+    Parameters
+    ----------
+    plotter : pyvista.Plotter
+        A plotter with segmentations added by :func:`add_segmentation`.
+    timeout : float, default: 60.0
+        Seconds after which refinement stops.
+
+    Returns
+    -------
+    list of dict
+        Per segmentation: ``samples`` (per pixel), ``error`` (the error estimate: root mean
+        square standard error of the pixel luminances), ``seconds`` (of tracing) and
+        ``converged``.
+
+    Examples
+    --------
+    >>> stats = vtksvdag.refine(plotter, timeout=10)  # doctest: +SKIP
+    >>> stats[0]["samples"]  # doctest: +SKIP
+    64
+    """
+    import time
+
+    if not (isinstance(timeout, numbers.Real) and timeout > 0):
+        raise ValueError(f"timeout must be a number > 0, got {timeout!r}")
+    mappers = _segmentation_mappers(plotter)
+    start = time.perf_counter()
+    window = plotter.render_window
+    with vtk_errors_raised([m for _, m in mappers], RuntimeError):
+        window.Render()
+        while any(not m.IsConverged() for _, m in mappers) and time.perf_counter() - start < timeout:
+            window.Render()
+    return [
+        {
+            "samples": m.GetAccumulatedSamples(),
+            "error": m.GetErrorEstimate(),
+            "seconds": m.GetRenderSeconds(),
+            "converged": bool(m.IsConverged()),
+        }
+        for _, m in mappers
+    ]
+
+
+def pick(plotter, x, y):
+    """The segmentation label under a display pixel of the last rendered frame.
+
+    Parameters
+    ----------
+    plotter : pyvista.Plotter
+    x, y : float
+        Display coordinates as VTK's: pixels, origin at the bottom left of the window.
+
+    Returns
+    -------
+    dict or None
+        ``{"label": value, "position": (x, y, z), "normal": (nx, ny, nz)}`` in world
+        coordinates for the nearest segmentation hit, or ``None`` on background.
+
+    Examples
+    --------
+    >>> hit = vtksvdag.pick(plotter, 150, 120)  # doctest: +SKIP
+    >>> hit["label"]  # doctest: +SKIP
+    7
+    """
+    best = None
+    for renderer, mapper in _segmentation_mappers(plotter):
+        if not mapper.Pick(renderer, float(x), float(y)):
+            continue
+        position = [0.0, 0.0, 0.0]
+        normal = [0.0, 0.0, 0.0]
+        mapper.GetPickedPosition(position)
+        mapper.GetPickedNormal(normal)
+        camera = np.array(renderer.GetActiveCamera().GetPosition())
+        distance = float(np.linalg.norm(np.array(position) - camera))
+        if best is None or distance < best[0]:
+            # The mapper names labels by their 64-bit pattern as an int64.
+            value = np.array(mapper.GetPickedLabel(), dtype=np.int64).astype(_label_dtype(mapper))
+            best = (distance, {"label": value.item(), "position": tuple(position),
+                               "normal": tuple(normal)})
+    return None if best is None else best[1]
+
+
+def _label_dtype(mapper):
+    from ._labels import numpy_dtype_of_vtk_type
+
+    return numpy_dtype_of_vtk_type(mapper.GetInput().GetLabelScalarType())

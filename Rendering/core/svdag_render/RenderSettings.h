@@ -1,0 +1,76 @@
+// Every setting of a rendered image, with its one default: the core renderer, the VTK mapper and
+// the VTK image renderer all hold this struct (the VTK classes expose its members under the same
+// names through vtkSegmentationSVDAGRenderSettings).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+
+namespace svdag
+{
+namespace render
+{
+
+enum class Lod : uint32_t
+{
+  Block = 0, // the block's tight bounds box
+  Leaf = 1,  // the first non-empty 4^3 region
+  Voxel = 2, // the first solid voxel (lossless)
+  Auto = 3   // per ray: the coarsest level whose cells cover at most autoLodPixels pixels
+};
+// "block", "leaf", "voxel", "auto".
+const char* lodName(Lod lod);
+// Parses lodName's names; throws std::invalid_argument otherwise.
+Lod parseLod(const std::string& name);
+
+// A directional light: a disk of the given angular radius (0: a delta light) in `direction`
+// (towards the light, world space), with `irradiance` at normal incidence (linear RGB).
+struct SunLight
+{
+  bool on = false;
+  std::array<double, 3> direction{ { 0.3, 0.4, 0.866 } };
+  std::array<float, 3> irradiance{ { 3, 3, 3 } };
+  double angularRadiusDegrees = 0.27;
+};
+
+// The ranges validate() checks (the VTK setters clamp to the same ones).
+constexpr uint32_t MaximumSamplesPerPixel = 65536;
+constexpr uint32_t MaximumBounces = 64;
+constexpr double MaximumSunAngularRadius = 89.9;
+
+struct RenderSettings
+{
+  Lod lod = Lod::Voxel;
+  // Lod::Auto draws a leaf (block) where a leaf (block) covers at most this many pixels.
+  float autoLodPixels = 1.0f;
+  // Samples per pixel each render pass adds to the progressive accumulation.
+  uint32_t samplesPerPixel = 1;
+  // Scattering events per path (0: only what emits light is seen).
+  uint32_t maximumBounces = 4;
+  // The same seed and settings give the same image.
+  uint32_t seed = 0;
+  // Next-event estimation with multiple importance sampling; off: the estimator that finds light
+  // only when a path escapes (the paper authors'), same mean, slower to converge.
+  bool nextEventEstimation = true;
+  // Scale of the linear color before the tone curve.
+  float exposure = 1.0f;
+  // Linear RGBA of camera samples that hit nothing (the environment lights, it is not seen).
+  std::array<float, 4> background{ { 0.1f, 0.1f, 0.12f, 1.0f } };
+  // Constant environment radiance, or the scale of the environment map.
+  std::array<float, 3> environmentColor{ { 1, 1, 1 } };
+  // An equirectangular OpenEXR environment map; "" for the constant environment.
+  std::string environmentMap;
+  SunLight sun;
+  // Most blocks per bottom-level acceleration structure; 0: the device's limit.
+  uint32_t maximumBlocksPerBlas = 0;
+};
+
+// The valid ranges, checked in one place: throws std::invalid_argument naming the setting and
+// its range (samplesPerPixel 1 .. MaximumSamplesPerPixel, maximumBounces 0 .. MaximumBounces,
+// exposure and autoLodPixels finite > 0, colors finite >= 0, a finite non-zero sun direction,
+// sun radius in [0, MaximumSunAngularRadius]).
+void validate(const RenderSettings& settings);
+
+} // namespace render
+} // namespace svdag

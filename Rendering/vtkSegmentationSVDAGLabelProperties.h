@@ -1,0 +1,119 @@
+/**
+ * @class   vtkSegmentationSVDAGLabelProperties
+ * @brief   per-label appearance of a segmentation, keyed by the ORIGINAL label values
+ *
+ * What each label looks like in the volume mapper: color, opacity, visibility and the path
+ * tracer's material (roughness, metallic, transmission, index of refraction, specular, emission).
+ * Labels are named by their value in the segmentation (not by their index in the compressed
+ * label table), so the same object applies to any volume with those labels. A value a volume
+ * does not hold is ignored. Values are 64-bit: a uint64 label of 2^63 or more is named by the
+ * int64 with the same bits.
+ *
+ * Colors are display (sRGB) values in [0, 1], as everywhere in VTK; the path tracer works in
+ * linear RGB and converts them. Colors come, in order of precedence, from SetColor, from the
+ * LookupTable (any vtkScalarsToColors: a vtkLookupTable with indexed or interval lookup, a
+ * vtkColorTransferFunction, mapped at the label value), else from a hash of the label's index.
+ *
+ * Opacity 0 hides a label (like SetVisibility(false)); 0 < opacity < 1 is rendered as the path
+ * tracer's transmission, an approximation of alpha blending: the label's surface passes
+ * 1 - opacity of the light straight through, tinted by its color, with no reflection at the
+ * surface (index of refraction 1), and continues to what lies behind. The effective transmission
+ * is 1 - opacity * (1 - Transmission).
+ *
+ * Defaults (labels never set): opacity 1, visible, roughness 0.6, metallic 0, transmission 0,
+ * IOR 1.5, specular 0.5, no emission (svdag::render::Renderer::defaultMaterial).
+ *
+ * A mapper re-uploads the materials (a buffer copy) when the MTime changes; only a change of
+ * which labels are visible rebuilds its acceleration structure.
+ */
+#ifndef vtkSegmentationSVDAGLabelProperties_h
+#define vtkSegmentationSVDAGLabelProperties_h
+
+#include "vtkObject.h"
+#include "vtkSVDAGRenderingModule.h" // for export macro
+
+#include <memory> // for std::unique_ptr
+#include <vector> // for std::vector
+
+class vtkScalarsToColors;
+#ifndef __VTK_WRAP__
+namespace svdag
+{
+class Volume;
+namespace shading
+{
+struct Material;
+}
+}
+#endif
+
+class VTKSVDAGRENDERING_EXPORT vtkSegmentationSVDAGLabelProperties : public vtkObject
+{
+public:
+  static vtkSegmentationSVDAGLabelProperties* New();
+  vtkTypeMacro(vtkSegmentationSVDAGLabelProperties, vtkObject);
+  void PrintSelf(ostream& os, vtkIndent indent) override;
+  vtkMTimeType GetMTime() override;
+
+  ///@{
+  /** The appearance of one label value. Values are clamped: colors and emission to >= 0 (colors
+   * to [0, 1]), opacity, roughness, metallic, transmission and specular to [0, 1], IOR to
+   * [1e-3, 10]. The getters return the defaults for labels never set. */
+  void SetColor(vtkTypeInt64 label, double r, double g, double b);
+  /** Whether a color was set for the label; GetColor returns it (else false, rgb untouched). */
+  bool GetColor(vtkTypeInt64 label, double rgb[3]);
+  void SetOpacity(vtkTypeInt64 label, double opacity);
+  double GetOpacity(vtkTypeInt64 label);
+  void SetVisibility(vtkTypeInt64 label, bool visible);
+  bool GetVisibility(vtkTypeInt64 label);
+  void SetRoughness(vtkTypeInt64 label, double roughness);
+  double GetRoughness(vtkTypeInt64 label);
+  void SetMetallic(vtkTypeInt64 label, double metallic);
+  double GetMetallic(vtkTypeInt64 label);
+  void SetTransmission(vtkTypeInt64 label, double transmission);
+  double GetTransmission(vtkTypeInt64 label);
+  void SetIOR(vtkTypeInt64 label, double ior);
+  double GetIOR(vtkTypeInt64 label);
+  void SetSpecular(vtkTypeInt64 label, double specular);
+  double GetSpecular(vtkTypeInt64 label);
+  /** Emitted linear radiance (>= 0). */
+  void SetEmission(vtkTypeInt64 label, double r, double g, double b);
+  ///@}
+
+  ///@{
+  /** Colors of labels without SetColor: the table's color at the label value. */
+  void SetLookupTable(vtkScalarsToColors* table);
+  vtkScalarsToColors* GetLookupTable();
+  ///@}
+
+  ///@{
+  /** Hide (show) every label, those never set included; SetVisibility(label, true) after
+   * HideAllLabels shows only that label. Opacity is kept. */
+  void HideAllLabels();
+  void ShowAllLabels();
+  /** Forgets everything set for one label, or for all (the table stays). */
+  void RemoveLabel(vtkTypeInt64 label);
+  void RemoveAllLabels();
+  /** Labels with something set, in ascending order. */
+  vtkIdType GetNumberOfLabels();
+  vtkTypeInt64 GetLabel(vtkIdType i);
+  ///@}
+
+#ifndef __VTK_WRAP__
+  /** The materials of a volume's labels, by label index (the core renderer's layout). */
+  std::vector<svdag::shading::Material> MaterialsFor(const svdag::Volume& volume);
+#endif
+
+protected:
+  vtkSegmentationSVDAGLabelProperties();
+  ~vtkSegmentationSVDAGLabelProperties() override;
+
+private:
+  vtkSegmentationSVDAGLabelProperties(const vtkSegmentationSVDAGLabelProperties&) = delete;
+  void operator=(const vtkSegmentationSVDAGLabelProperties&) = delete;
+
+  struct Internals;
+  std::unique_ptr<Internals> Internal;
+};
+
+#endif

@@ -1,0 +1,143 @@
+/**
+ * @class   vtkSegmentationSVDAGRenderSettings
+ * @brief   the path tracer's settings, shared by the volume mapper and the image renderer
+ *
+ * Holds one svdag::render::RenderSettings (Rendering/core/svdag_render/RenderSettings.h: the one
+ * definition of every setting and its default) and exposes its members under the same names.
+ * Setters clamp to the core's ranges, like vtkSetClampMacro; each change bumps the MTime, which
+ * the owning mapper or renderer includes in its own.
+ *
+ * Defaults: LOD voxel, AutoLODPixels 1, SamplesPerPixel 1 (added per render pass), MaximumBounces
+ * 4, Seed 0, NextEventEstimation on, Exposure 1, Background (0.1, 0.1, 0.12, 1) linear RGBA
+ * (the volume mapper draws misses transparent instead), EnvironmentColor (1, 1, 1), no
+ * EnvironmentMap, Sun off with direction (0.3, 0.4, 0.866), irradiance (3, 3, 3) and angular
+ * radius 0.27 degrees, MaximumBlocksPerBLAS 0 (the device's limit).
+ */
+#ifndef vtkSegmentationSVDAGRenderSettings_h
+#define vtkSegmentationSVDAGRenderSettings_h
+
+#include "vtkObject.h"
+#include "vtkSVDAGRenderingModule.h" // for export macro
+
+#include <memory> // for std::unique_ptr
+
+#ifndef __VTK_WRAP__
+namespace svdag
+{
+namespace render
+{
+struct RenderSettings;
+}
+}
+#endif
+
+class VTKSVDAGRENDERING_EXPORT vtkSegmentationSVDAGRenderSettings : public vtkObject
+{
+public:
+  static vtkSegmentationSVDAGRenderSettings* New();
+  vtkTypeMacro(vtkSegmentationSVDAGRenderSettings, vtkObject);
+  void PrintSelf(ostream& os, vtkIndent indent) override;
+
+  /** Level of detail: the block's box, the first non-empty 4^3 leaf, the voxel (lossless), or
+   * per ray from the projected size of a voxel (LOD_AUTO). */
+  enum
+  {
+    LOD_BLOCK = 0,
+    LOD_LEAF = 1,
+    LOD_VOXEL = 2,
+    LOD_AUTO = 3
+  };
+
+  ///@{
+  /** Level of detail, LOD_BLOCK .. LOD_AUTO. */
+  void SetLOD(int lod);
+  int GetLOD() const;
+  void SetLODToBlock() { this->SetLOD(LOD_BLOCK); }
+  void SetLODToLeaf() { this->SetLOD(LOD_LEAF); }
+  void SetLODToVoxel() { this->SetLOD(LOD_VOXEL); }
+  void SetLODToAuto() { this->SetLOD(LOD_AUTO); }
+  /** LOD_AUTO draws a block (leaf) where its 16 (4) voxels project to at most this many pixels. */
+  void SetAutoLODPixels(double pixels);
+  double GetAutoLODPixels() const;
+  ///@}
+
+  ///@{
+  /** Samples per pixel each render pass adds to the accumulation (1 .. 65536). */
+  void SetSamplesPerPixel(int samples);
+  int GetSamplesPerPixel() const;
+  /** Scattering events per path (0 .. 64; 0 shows only what emits light). */
+  void SetMaximumBounces(int bounces);
+  int GetMaximumBounces() const;
+  /** Random seed: the same seed and settings give the same image. */
+  void SetSeed(vtkTypeUInt32 seed);
+  vtkTypeUInt32 GetSeed() const;
+  /** Next-event estimation with multiple importance sampling; off: the estimator that finds
+   * light only when a path escapes (same mean, slower to converge). */
+  void SetNextEventEstimation(bool on);
+  bool GetNextEventEstimation() const;
+  vtkBooleanMacro(NextEventEstimation, bool);
+  /** Scale of the linear color before the tone curve (1e-6 .. 1e6). */
+  void SetExposure(double exposure);
+  double GetExposure() const;
+  ///@}
+
+  ///@{
+  /** Linear RGBA of camera samples that hit nothing (image renderer only). */
+  void SetBackground(double r, double g, double b, double a);
+  void SetBackground(const double rgba[4]) { this->SetBackground(rgba[0], rgba[1], rgba[2], rgba[3]); }
+  void GetBackground(double rgba[4]) const;
+  ///@}
+
+  ///@{
+  /** Environment: constant linear radiance, or the scale of the map. */
+  void SetEnvironmentColor(double r, double g, double b);
+  void SetEnvironmentColor(const double rgb[3]) { this->SetEnvironmentColor(rgb[0], rgb[1], rgb[2]); }
+  void GetEnvironmentColor(double rgb[3]) const;
+  /** An equirectangular OpenEXR environment map (longitude along x from +x towards +y, +z up);
+   * nullptr or "" for the constant environment. Read on the next render (errors there). */
+  void SetEnvironmentMap(const char* path);
+  const char* GetEnvironmentMap() const;
+  ///@}
+
+  ///@{
+  /** The sun: a disk light of SunAngularRadius degrees (0: a delta light) in SunDirection
+   * (towards the sun, world), with SunIrradiance (linear RGB at normal incidence). */
+  void SetSun(bool on);
+  bool GetSun() const;
+  vtkBooleanMacro(Sun, bool);
+  void SetSunDirection(double x, double y, double z);
+  void SetSunDirection(const double d[3]) { this->SetSunDirection(d[0], d[1], d[2]); }
+  void GetSunDirection(double d[3]) const;
+  void SetSunIrradiance(double r, double g, double b);
+  void SetSunIrradiance(const double e[3]) { this->SetSunIrradiance(e[0], e[1], e[2]); }
+  void GetSunIrradiance(double e[3]) const;
+  void SetSunAngularRadius(double degrees);
+  double GetSunAngularRadius() const;
+  ///@}
+
+  ///@{
+  /** Most blocks per bottom-level acceleration structure; 0 uses the device's limit. Smaller
+   * values trace slower: they exist to exercise the split (tests). */
+  void SetMaximumBlocksPerBLAS(vtkTypeInt64 blocks);
+  vtkTypeInt64 GetMaximumBlocksPerBLAS() const;
+  ///@}
+
+  /** Copies every setting of another object. */
+  void DeepCopy(vtkSegmentationSVDAGRenderSettings* other);
+
+#ifndef __VTK_WRAP__
+  const svdag::render::RenderSettings& GetCoreSettings() const { return *this->Settings; }
+#endif
+
+protected:
+  vtkSegmentationSVDAGRenderSettings();
+  ~vtkSegmentationSVDAGRenderSettings() override;
+
+private:
+  vtkSegmentationSVDAGRenderSettings(const vtkSegmentationSVDAGRenderSettings&) = delete;
+  void operator=(const vtkSegmentationSVDAGRenderSettings&) = delete;
+
+  std::unique_ptr<svdag::render::RenderSettings> Settings;
+};
+
+#endif

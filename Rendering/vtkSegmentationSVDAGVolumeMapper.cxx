@@ -1,0 +1,589 @@
+#include "vtkSegmentationSVDAGVolumeMapper.h"
+
+#include "vtkCommand.h"
+#include "vtkInformation.h"
+#include "vtkMath.h"
+#include "vtkMatrix3x3.h"
+#include "vtkMatrix4x4.h"
+#include "vtkObjectFactory.h"
+#include "vtkOpenGLCamera.h"
+#include "vtkOpenGLRenderWindow.h"
+#include "vtkRenderWindow.h"
+#include "vtkRenderer.h"
+#include "vtkSegmentationSVDAG.h"
+#include "vtkSegmentationSVDAGLabelProperties.h"
+#include "vtkSegmentationSVDAGRenderSettings.h"
+#include "vtkSmartPointer.h"
+#include "vtkTimerLog.h"
+#include "vtkVolume.h"
+
+#include "svdagGLCompositor.h"
+
+#include <svdag_render/FrameBudget.h>
+#include <svdag_render/Material.h>
+#include <svdag_render/RenderSettings.h>
+#include <svdag_render/Renderer.h>
+#include <svdag_render/WorldFrame.h>
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+vtkStandardNewMacro(vtkSegmentationSVDAGVolumeMapper);
+
+namespace
+{
+namespace core = svdag::render;
+using Matrix = std::array<double, 16>; // row-major
+using Vec3 = std::array<double, 3>;
+using Clock = std::chrono::steady_clock;
+
+Matrix fromVTK(vtkMatrix4x4* m, bool transpose)
+{
+  Matrix out;
+  for (int r = 0; r < 4; ++r)
+  {
+    for (int c = 0; c < 4; ++c)
+      out[4 * r + c] = transpose ? m->GetElement(c, r) : m->GetElement(r, c);
+  }
+  return out;
+}
+
+Matrix multiply(const Matrix& a, const Matrix& b)
+{
+  Matrix out{};
+  for (int r = 0; r < 4; ++r)
+  {
+    for (int c = 0; c < 4; ++c)
+    {
+      for (int k = 0; k < 4; ++k)
+        out[4 * r + c] += a[4 * r + k] * b[4 * k + c];
+    }
+  }
+  return out;
+}
+
+Matrix inverse(const Matrix& m)
+{
+  double in[16], out[16];
+  std::copy(m.begin(), m.end(), in);
+  vtkMatrix4x4::Invert(in, out);
+  Matrix result;
+  std::copy(out, out + 16, result.begin());
+  for (double x : result)
+  {
+    if (!std::isfinite(x))
+      throw std::invalid_argument("the camera or volume matrix is singular");
+  }
+  return result;
+}
+
+// The ray through image point (u, v) in [-1, 1]^2: origin, unit direction.
+struct Ray
+{
+  Vec3 origin;
+  Vec3 direction;
+};
+Ray rayAt(const core::ViewRays& r, double u, double v)
+{
+  Ray ray;
+  Vec3 span;
+  for (int a = 0; a < 3; ++a)
+  {
+    ray.origin[a] = r.origin[a] + u * r.originU[a] + v * r.originV[a];
+    span[a] = r.direction[a] + u * r.directionU[a] + v * r.directionV[a];
+  }
+  const double length = std::sqrt(span[0] * span[0] + span[1] * span[1] + span[2] * span[2]);
+  for (int a = 0; a < 3; ++a)
+    ray.direction[a] = span[a] / length;
+  return ray;
+}
+
+// Image coordinate of pixel center i of n.
+double imageCoordinate(int i, int n)
+{
+  return 2.0 * (i + 0.5) / n - 1.0;
+}
+
+// 64-bit FNV-1a of a float buffer (a change of what was drawn before the volume).
+uint64_t hashFloats(const std::vector<float>& values)
+{
+  uint64_t h = 1469598103934665603ull;
+  const unsigned char* bytes = reinterpret_cast<const unsigned char*>(values.data());
+  for (size_t i = 0; i < values.size() * sizeof(float); ++i)
+    h = (h ^ bytes[i]) * 1099511628211ull;
+  return h;
+}
+} // namespace
+
+struct vtkSegmentationSVDAGVolumeMapper::Internals
+{
+  vtkSmartPointer<vtkSegmentationSVDAGRenderSettings> Settings =
+    vtkSmartPointer<vtkSegmentationSVDAGRenderSettings>::New();
+  vtkSmartPointer<vtkSegmentationSVDAGLabelProperties> Labels =
+    vtkSmartPointer<vtkSegmentationSVDAGLabelProperties>::New();
+  std::unique_ptr<core::Renderer> Renderer;
+  // Why the Vulkan renderer could not be created (reported on every render, not retried).
+  std::string DeviceError;
+  std::shared_ptr<const svdag::Volume> Uploaded;
+  vtkMTimeType MaterialsTime = 0;
+  svdag::gl::Compositor Compositor;
+  core::FrameBudget Budget;
+
+  // The frame the accumulation belongs to: a different one restarts it.
+  std::vector<double> FrameKey;
+  bool Converged = false;
+  bool FullQuality = false;
+  core::FrameLevel Level;
+  double TraceMilliseconds = 0;
+  double FrameMilliseconds = 0;
+
+  // What Pick reads: the last traced frame.
+  vtkRenderer* PickRenderer = nullptr;
+  svdag::gl::Viewport PickViewport;
+  core::ViewRays PickRays;
+  Matrix ModelToWorld{};
+  vtkTypeInt64 PickedLabel = 0;
+  Vec3 PickedPosition{ { 0, 0, 0 } };
+  Vec3 PickedNormal{ { 0, 0, 0 } };
+};
+
+vtkSegmentationSVDAGVolumeMapper::vtkSegmentationSVDAGVolumeMapper()
+  : Internal(new Internals)
+{
+}
+
+vtkSegmentationSVDAGVolumeMapper::~vtkSegmentationSVDAGVolumeMapper() = default;
+
+int vtkSegmentationSVDAGVolumeMapper::FillInputPortInformation(int, vtkInformation* info)
+{
+  info->Set(vtkAlgorithm::INPUT_REQUIRED_DATA_TYPE(), "vtkSegmentationSVDAG");
+  return 1;
+}
+
+void vtkSegmentationSVDAGVolumeMapper::SetInputData(vtkSegmentationSVDAG* input)
+{
+  this->SetInputDataObject(0, input);
+}
+
+vtkSegmentationSVDAG* vtkSegmentationSVDAGVolumeMapper::GetInput()
+{
+  return vtkSegmentationSVDAG::SafeDownCast(this->GetDataObjectInput());
+}
+
+vtkMTimeType vtkSegmentationSVDAGVolumeMapper::GetMTime()
+{
+  return std::max({ this->Superclass::GetMTime(), this->Internal->Settings->GetMTime(),
+    this->Internal->Labels->GetMTime() });
+}
+
+vtkSegmentationSVDAGRenderSettings* vtkSegmentationSVDAGVolumeMapper::GetSettings()
+{
+  return this->Internal->Settings;
+}
+
+void vtkSegmentationSVDAGVolumeMapper::SetSettings(vtkSegmentationSVDAGRenderSettings* settings)
+{
+  if (settings && settings != this->Internal->Settings)
+  {
+    this->Internal->Settings = settings;
+    this->Modified();
+  }
+}
+
+vtkSegmentationSVDAGLabelProperties* vtkSegmentationSVDAGVolumeMapper::GetLabelProperties()
+{
+  return this->Internal->Labels;
+}
+
+void vtkSegmentationSVDAGVolumeMapper::SetLabelProperties(
+  vtkSegmentationSVDAGLabelProperties* properties)
+{
+  if (properties && properties != this->Internal->Labels)
+  {
+    this->Internal->Labels = properties;
+    this->Internal->MaterialsTime = 0;
+    this->Modified();
+  }
+}
+
+double* vtkSegmentationSVDAGVolumeMapper::GetBounds()
+{
+  if (this->GetNumberOfInputConnections(0) > 0)
+    this->Update();
+  vtkSegmentationSVDAG* input = this->GetInput();
+  if (!input || !input->HasVolume())
+  {
+    vtkMath::UninitializeBounds(this->Bounds);
+    return this->Bounds;
+  }
+  const auto b = core::worldBounds(input->GetVolume()->geometry);
+  std::copy(b.begin(), b.end(), this->Bounds);
+  return this->Bounds;
+}
+
+void vtkSegmentationSVDAGVolumeMapper::Render(vtkRenderer* renderer, vtkVolume* volume)
+{
+  Internals& in = *this->Internal;
+  auto* window = vtkOpenGLRenderWindow::SafeDownCast(renderer->GetRenderWindow());
+  auto* camera = vtkOpenGLCamera::SafeDownCast(renderer->GetActiveCamera());
+  if (!window || !camera)
+  {
+    vtkErrorMacro("Render needs an OpenGL render window (vtkOpenGLRenderWindow)");
+    return;
+  }
+  vtkSegmentationSVDAG* input = this->GetInput();
+  if (!input || !input->HasVolume() || !this->InitializeDevice())
+    return;
+  this->InvokeEvent(vtkCommand::VolumeMapperRenderStartEvent, nullptr);
+  const auto start = Clock::now();
+  in.Converged = false;
+  try
+  {
+    core::Renderer& r = *in.Renderer;
+    if (in.Uploaded != input->GetVolume())
+    {
+      in.Uploaded.reset();
+      r.setVolume(input->GetVolume());
+      in.Uploaded = input->GetVolume();
+      in.MaterialsTime = 0;
+    }
+    if (in.Labels->GetMTime() != in.MaterialsTime)
+    {
+      r.setMaterials(in.Labels->MaterialsFor(*in.Uploaded));
+      in.MaterialsTime = in.Labels->GetMTime();
+    }
+
+    const svdag::gl::Viewport vp = svdag::gl::Compositor::currentViewport(window);
+    if (vp.width <= 0 || vp.height <= 0)
+      throw std::runtime_error("the renderer's viewport is empty");
+
+    // Rays in the data object's world (the vtkVolume's model coordinates).
+    vtkMatrix4x4 *worldToView, *viewToDevice, *worldToDevice;
+    vtkMatrix3x3* normals;
+    camera->GetKeyMatrices(renderer, worldToView, normals, viewToDevice, worldToDevice);
+    const Matrix modelToWorld = fromVTK(volume->GetMatrix(), false);
+    const Matrix modelToClip = multiply(fromVTK(worldToDevice, true), modelToWorld);
+    const Matrix clipToModel = inverse(modelToClip);
+    const core::ViewRays rays = core::viewRaysFromClipToWorld(clipToModel);
+
+    // The level: full quality unless the allocated time is too short for it.
+    const core::RenderSettings& base = in.Settings->GetCoreSettings();
+    const uint64_t viewportPixels = uint64_t(vp.width) * uint64_t(vp.height);
+    const double budget = this->AutoAdjustToRenderTime ? volume->GetAllocatedRenderTime() : 0.0;
+    in.Level = in.Budget.choose(base.lod, viewportPixels, budget);
+    in.FullQuality = in.Level.lod == base.lod && in.Level.reduction == 1;
+    core::RenderSettings settings = base;
+    settings.lod = in.Level.lod;
+    settings.background = { { 0, 0, 0, 0 } }; // misses are transparent over the scene
+    if (!in.FullQuality)
+      settings.samplesPerPixel = 1;
+    r.setSettings(settings);
+    const int width = int((vp.width + in.Level.reduction - 1) / in.Level.reduction);
+    const int height = int((vp.height + in.Level.reduction - 1) / in.Level.reduction);
+
+    // Depth in: each traced pixel's ray ends at the surface drawn there before the volume.
+    const std::vector<float> sceneDepth = in.Compositor.readDepth(window, vp);
+    std::vector<float> limits(size_t(width) * size_t(height), 3.402823466e38f);
+    bool limited = false;
+    auto viewportPixel = [&](int x, int y) {
+      const int fx = std::min(int((x + 0.5) * vp.width / width), vp.width - 1);
+      const int fy = std::min(int((y + 0.5) * vp.height / height), vp.height - 1);
+      return size_t(fx) + size_t(vp.width) * size_t(fy);
+    };
+    for (int y = 0; y < height; ++y)
+    {
+      const double v = imageCoordinate(y, height);
+      for (int x = 0; x < width; ++x)
+      {
+        const float d = sceneDepth[viewportPixel(x, y)];
+        if (!(d < 1.0f))
+          continue;
+        const double u = imageCoordinate(x, width);
+        const double clip[4] = { u, v, 2.0 * d - 1.0, 1.0 };
+        double p[4] = { 0, 0, 0, 0 };
+        for (int row = 0; row < 4; ++row)
+        {
+          for (int c = 0; c < 4; ++c)
+            p[row] += clipToModel[4 * row + c] * clip[c];
+        }
+        const Ray ray = rayAt(rays, u, v);
+        double t = 0;
+        for (int a = 0; a < 3; ++a)
+          t += (p[a] / p[3] - ray.origin[a]) * ray.direction[a];
+        limits[size_t(x) + size_t(width) * size_t(y)] = float(std::max(t, 0.0));
+        limited = true;
+      }
+    }
+
+    // The frame's identity: while it stays the same, passes accumulate.
+    std::vector<double> key(modelToClip.begin(), modelToClip.end());
+    key.insert(key.end(), { double(vp.width), double(vp.height), double(in.Level.reduction),
+                            double(uint32_t(in.Level.lod)), double(in.Settings->GetMTime()),
+                            double(in.Labels->GetMTime()),
+                            double(reinterpret_cast<uintptr_t>(in.Uploaded.get())),
+                            double(limited ? hashFloats(limits) : 0) });
+    const bool sameFrame = key == in.FrameKey && r.accumulatedSamples() > 0 &&
+      r.image().width == uint32_t(width) && r.image().height == uint32_t(height);
+    const bool refined = sameFrame && in.FullQuality &&
+      (r.accumulatedSamples() >= uint32_t(this->TargetSamplesPerPixel) ||
+        (this->ErrorTarget > 0 && r.accumulatedSamples() >= 2 &&
+          r.errorEstimate() <= this->ErrorTarget));
+    in.TraceMilliseconds = 0;
+    if (!refined)
+    {
+      if (!sameFrame)
+        r.resetAccumulation();
+      r.setImageSize(uint32_t(width), uint32_t(height));
+      r.setViewRays(rays);
+      r.setRayLimits(limited ? std::move(limits) : std::vector<float>());
+      r.render();
+      in.TraceMilliseconds = r.lastFrameMilliseconds();
+      in.FrameKey = std::move(key);
+    }
+    const core::Image& image = r.image();
+    in.Converged = in.FullQuality &&
+      (r.accumulatedSamples() >= uint32_t(this->TargetSamplesPerPixel) ||
+        (this->ErrorTarget > 0 && r.accumulatedSamples() >= 2 &&
+          r.errorEstimate() <= this->ErrorTarget));
+
+    // Depth out: the window depth of each traced pixel's hit, the nearer of it and the scene's.
+    std::vector<float> depth;
+    if (this->WriteDepth)
+    {
+      std::vector<float> traced(size_t(width) * size_t(height), 1.0f);
+      for (int y = 0; y < height; ++y)
+      {
+        for (int x = 0; x < width; ++x)
+        {
+          const size_t i = size_t(x) + size_t(width) * size_t(y);
+          if (image.label[i] == 0)
+            continue;
+          const Ray ray = rayAt(rays, imageCoordinate(x, width), imageCoordinate(y, height));
+          double p[4];
+          for (int a = 0; a < 3; ++a)
+            p[a] = ray.origin[a] + double(image.depth[i]) * ray.direction[a];
+          p[3] = 1;
+          double z = 0, w = 0;
+          for (int c = 0; c < 4; ++c)
+          {
+            z += modelToClip[8 + c] * p[c];
+            w += modelToClip[12 + c] * p[c];
+          }
+          traced[i] = float(std::min(std::max(0.5 * z / w + 0.5, 0.0), 1.0));
+        }
+      }
+      depth = sceneDepth;
+      for (int fy = 0; fy < vp.height; ++fy)
+      {
+        const int y = std::min(int(int64_t(fy) * height / vp.height), height - 1);
+        for (int fx = 0; fx < vp.width; ++fx)
+        {
+          const int x = std::min(int(int64_t(fx) * width / vp.width), width - 1);
+          float& d = depth[size_t(fx) + size_t(vp.width) * size_t(fy)];
+          d = std::min(d, traced[size_t(x) + size_t(width) * size_t(y)]);
+        }
+      }
+    }
+    in.Compositor.draw(
+      window, vp, image.hdr.data(), width, height, depth, float(base.exposure));
+
+    in.PickRenderer = renderer;
+    in.PickViewport = vp;
+    in.PickRays = rays;
+    in.ModelToWorld = modelToWorld;
+    const double total = std::chrono::duration<double>(Clock::now() - start).count();
+    if (in.TraceMilliseconds > 0)
+      in.Budget.record(in.Level.lod, uint64_t(width) * uint64_t(height),
+        in.TraceMilliseconds / 1000, total - in.TraceMilliseconds / 1000);
+  }
+  catch (const std::exception& e)
+  {
+    vtkErrorMacro("Render failed: " << e.what());
+  }
+  in.FrameMilliseconds = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+  this->TimeToDraw = in.FrameMilliseconds / 1000;
+  this->InvokeEvent(vtkCommand::VolumeMapperRenderEndEvent, nullptr);
+}
+
+bool vtkSegmentationSVDAGVolumeMapper::InitializeDevice()
+{
+  Internals& in = *this->Internal;
+  if (in.Renderer)
+    return true;
+  if (in.DeviceError.empty())
+  {
+    try
+    {
+      in.Renderer = std::make_unique<core::Renderer>();
+      return true;
+    }
+    catch (const std::exception& e)
+    {
+      in.DeviceError = e.what();
+    }
+  }
+  vtkErrorMacro("no Vulkan renderer: " << in.DeviceError);
+  return false;
+}
+
+int vtkSegmentationSVDAGVolumeMapper::RenderUntilConverged(
+  vtkRenderWindow* window, double maximumSeconds)
+{
+  if (!window)
+  {
+    vtkErrorMacro("RenderUntilConverged needs a render window");
+    return 0;
+  }
+  const auto start = Clock::now();
+  int renders = 0;
+  do
+  {
+    window->Render();
+    ++renders;
+    if (!this->Internal->Renderer || this->Internal->FrameKey.empty())
+      return 0; // nothing traced: the error was reported
+  } while (!this->IsConverged() &&
+    std::chrono::duration<double>(Clock::now() - start).count() < maximumSeconds);
+  return renders;
+}
+
+bool vtkSegmentationSVDAGVolumeMapper::IsConverged()
+{
+  return this->Internal->Converged;
+}
+
+int vtkSegmentationSVDAGVolumeMapper::GetAccumulatedSamples()
+{
+  return this->Internal->Renderer ? int(this->Internal->Renderer->accumulatedSamples()) : 0;
+}
+
+double vtkSegmentationSVDAGVolumeMapper::GetErrorEstimate()
+{
+  return this->Internal->Renderer ? this->Internal->Renderer->errorEstimate() : 0.0;
+}
+
+double vtkSegmentationSVDAGVolumeMapper::GetRenderSeconds()
+{
+  return this->Internal->Renderer ? this->Internal->Renderer->renderSeconds() : 0.0;
+}
+
+int vtkSegmentationSVDAGVolumeMapper::GetLastLOD()
+{
+  return int(this->Internal->Level.lod);
+}
+
+int vtkSegmentationSVDAGVolumeMapper::GetLastReductionFactor()
+{
+  return int(this->Internal->Level.reduction);
+}
+
+double vtkSegmentationSVDAGVolumeMapper::GetLastTraceMilliseconds()
+{
+  return this->Internal->TraceMilliseconds;
+}
+
+double vtkSegmentationSVDAGVolumeMapper::GetLastFrameMilliseconds()
+{
+  return this->Internal->FrameMilliseconds;
+}
+
+const char* vtkSegmentationSVDAGVolumeMapper::GetDeviceName()
+{
+  return this->Internal->Renderer ? this->Internal->Renderer->deviceName().c_str() : "";
+}
+
+vtkTypeInt64 vtkSegmentationSVDAGVolumeMapper::GetNumberOfBVHBuilds()
+{
+  return this->Internal->Renderer ? vtkTypeInt64(this->Internal->Renderer->bvhBuilds()) : 0;
+}
+
+bool vtkSegmentationSVDAGVolumeMapper::Pick(vtkRenderer* renderer, double x, double y)
+{
+  Internals& in = *this->Internal;
+  if (!in.Renderer || !renderer || renderer != in.PickRenderer || !in.Uploaded)
+    return false;
+  const core::Image& image = in.Renderer->image();
+  const svdag::gl::Viewport& vp = in.PickViewport;
+  if (!(x >= vp.x && x < vp.x + vp.width && y >= vp.y && y < vp.y + vp.height) ||
+    image.width == 0)
+    return false;
+  const int px = std::min(int((x - vp.x) * image.width / vp.width), int(image.width) - 1);
+  const int py = std::min(int((y - vp.y) * image.height / vp.height), int(image.height) - 1);
+  const size_t i = size_t(px) + size_t(image.width) * size_t(py);
+  if (image.label[i] == 0)
+    return false;
+  in.PickedLabel = vtkTypeInt64(in.Uploaded->labels[image.label[i] - 1].value);
+  const Ray ray = rayAt(in.PickRays, imageCoordinate(px, int(image.width)),
+    imageCoordinate(py, int(image.height)));
+  const Matrix& m = in.ModelToWorld;
+  Vec3 model, normal;
+  for (int a = 0; a < 3; ++a)
+  {
+    model[a] = ray.origin[a] + double(image.depth[i]) * ray.direction[a];
+    normal[a] = image.normal[3 * i + a];
+  }
+  // Normals transform with the inverse transpose of the model matrix's linear part.
+  const Matrix inv = inverse(m);
+  double length = 0;
+  for (int r = 0; r < 3; ++r)
+  {
+    in.PickedPosition[r] = m[4 * r + 3];
+    in.PickedNormal[r] = 0;
+    for (int c = 0; c < 3; ++c)
+    {
+      in.PickedPosition[r] += m[4 * r + c] * model[c];
+      in.PickedNormal[r] += inv[4 * c + r] * normal[c];
+    }
+    length += in.PickedNormal[r] * in.PickedNormal[r];
+  }
+  length = std::sqrt(length);
+  for (int r = 0; r < 3; ++r)
+    in.PickedNormal[r] = length > 0 ? in.PickedNormal[r] / length : 0.0;
+  return true;
+}
+
+vtkTypeInt64 vtkSegmentationSVDAGVolumeMapper::GetPickedLabel()
+{
+  return this->Internal->PickedLabel;
+}
+
+void vtkSegmentationSVDAGVolumeMapper::GetPickedPosition(double position[3])
+{
+  std::copy(this->Internal->PickedPosition.begin(), this->Internal->PickedPosition.end(), position);
+}
+
+void vtkSegmentationSVDAGVolumeMapper::GetPickedNormal(double normal[3])
+{
+  std::copy(this->Internal->PickedNormal.begin(), this->Internal->PickedNormal.end(), normal);
+}
+
+void vtkSegmentationSVDAGVolumeMapper::ReleaseGraphicsResources(vtkWindow* window)
+{
+  this->Internal->Compositor.releaseGraphicsResources(window);
+  this->Internal->FrameKey.clear();
+  this->Internal->PickRenderer = nullptr;
+}
+
+void vtkSegmentationSVDAGVolumeMapper::PrintSelf(ostream& os, vtkIndent indent)
+{
+  this->Superclass::PrintSelf(os, indent);
+  os << indent << "WriteDepth: " << this->WriteDepth << "\n";
+  os << indent << "AutoAdjustToRenderTime: " << this->AutoAdjustToRenderTime << "\n";
+  os << indent << "TargetSamplesPerPixel: " << this->TargetSamplesPerPixel << "\n";
+  os << indent << "ErrorTarget: " << this->ErrorTarget << "\n";
+  os << indent << "DeviceName: " << this->GetDeviceName() << "\n";
+  os << indent << "AccumulatedSamples: " << this->GetAccumulatedSamples() << "\n";
+  os << indent << "ErrorEstimate: " << this->GetErrorEstimate() << "\n";
+  os << indent << "LastLOD: " << this->GetLastLOD() << "\n";
+  os << indent << "LastReductionFactor: " << this->GetLastReductionFactor() << "\n";
+  os << indent << "Settings:\n";
+  this->Internal->Settings->PrintSelf(os, indent.GetNextIndent());
+  os << indent << "LabelProperties:\n";
+  this->Internal->Labels->PrintSelf(os, indent.GetNextIndent());
+}

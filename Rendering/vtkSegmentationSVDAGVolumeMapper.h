@@ -1,0 +1,159 @@
+/**
+ * @class   vtkSegmentationSVDAGVolumeMapper
+ * @brief   path-traces a vtkSegmentationSVDAG inside any VTK OpenGL render window
+ *
+ * A volume mapper for vtkVolume: its input (SetInputConnection from vtkSegmentationVolumeReader
+ * or vtkImageDataToSegmentationSVDAG, or SetInputData) is traced with the Vulkan path tracer
+ * (Rendering/core) and drawn into the renderer's viewport:
+ *
+ * - Camera: rays come from the active camera's world-to-device matrix (vtkOpenGLCamera key
+ *   matrices), so perspective and parallel projection, viewports, tiled screenshots
+ *   (vtkWindowToImageFilter scale) and the near and far clipping planes are those VTK draws
+ *   meshes with. The vtkVolume's matrix (position, orientation, scale, user matrix) applies on
+ *   top of the data object's index-to-world transform.
+ * - Depth: opaque props drawn before the volume end the rays at their surface (the mapper reads
+ *   the depth buffer, resolving MSAA); the volume's first opaque hit is written into the depth
+ *   buffer as VTK's window depth (WriteDepth, on by default), so props drawn later, picking and
+ *   depth readers see it. Misses are transparent; color is blended with premultiplied alpha.
+ *   The settings' Background is not used.
+ * - Progressive refinement: while the view, the volume and the settings stay the same, every
+ *   render adds Settings->SamplesPerPixel samples per pixel, up to TargetSamplesPerPixel or until
+ *   the error estimate falls to ErrorTarget; then renders only composite the finished image.
+ *   RenderUntilConverged renders the window until then. GetErrorEstimate is the root mean square,
+ *   over pixels, of the standard error of each pixel's mean luminance (linear units).
+ * - Time budget (AutoAdjustToRenderTime, on by default): when a full-quality frame would not fit
+ *   the time VTK allocates to the volume (vtkRenderWindow::DesiredUpdateRate while interacting),
+ *   the frame is traced at a coarser LOD and/or a reduced resolution (svdag::render::FrameBudget),
+ *   one sample per pixel; still renders (StillUpdateRate) return to full quality.
+ * - Appearance per ORIGINAL label value: vtkSegmentationSVDAGLabelProperties (colors, lookup
+ *   table, opacity, visibility, materials). Material edits re-upload a buffer; visibility edits
+ *   rebuild only the acceleration structure.
+ * - Picking: Pick(renderer, x, y) reads the label, position and normal under a display pixel
+ *   from the last frame traced for that renderer.
+ *
+ * Errors (no Vulkan device with ray tracing: the message names every device found and what it
+ * lacks; a render window that is not OpenGL) are reported with vtkErrorMacro, and the volume is
+ * not drawn.
+ */
+#ifndef vtkSegmentationSVDAGVolumeMapper_h
+#define vtkSegmentationSVDAGVolumeMapper_h
+
+#include "vtkAbstractVolumeMapper.h"
+#include "vtkSVDAGRenderingModule.h" // for export macro
+
+#include <memory> // for std::unique_ptr
+
+class vtkRenderWindow;
+class vtkSegmentationSVDAG;
+class vtkSegmentationSVDAGLabelProperties;
+class vtkSegmentationSVDAGRenderSettings;
+
+class VTKSVDAGRENDERING_EXPORT vtkSegmentationSVDAGVolumeMapper : public vtkAbstractVolumeMapper
+{
+public:
+  static vtkSegmentationSVDAGVolumeMapper* New();
+  vtkTypeMacro(vtkSegmentationSVDAGVolumeMapper, vtkAbstractVolumeMapper);
+  void PrintSelf(ostream& os, vtkIndent indent) override;
+  vtkMTimeType GetMTime() override;
+
+  ///@{
+  /** The volume to render (or SetInputConnection). */
+  void SetInputData(vtkSegmentationSVDAG* input);
+  vtkSegmentationSVDAG* GetInput();
+  ///@}
+
+  ///@{
+  /** The path tracer's settings (LOD, samples, bounces, lighting, exposure): never null. */
+  vtkSegmentationSVDAGRenderSettings* GetSettings();
+  void SetSettings(vtkSegmentationSVDAGRenderSettings* settings);
+  /** Per-label appearance by original label value: never null. */
+  vtkSegmentationSVDAGLabelProperties* GetLabelProperties();
+  void SetLabelProperties(vtkSegmentationSVDAGLabelProperties* properties);
+  ///@}
+
+  ///@{
+  /** Write the volume's first opaque hit into the depth buffer (default on). */
+  vtkSetMacro(WriteDepth, bool);
+  vtkGetMacro(WriteDepth, bool);
+  vtkBooleanMacro(WriteDepth, bool);
+  /** Trace coarser and smaller images when a full frame would exceed the allocated render time
+   * (default on). */
+  vtkSetMacro(AutoAdjustToRenderTime, bool);
+  vtkGetMacro(AutoAdjustToRenderTime, bool);
+  vtkBooleanMacro(AutoAdjustToRenderTime, bool);
+  /** Samples per pixel at which a still view stops refining (default 64). */
+  vtkSetClampMacro(TargetSamplesPerPixel, int, 1, 1 << 24);
+  vtkGetMacro(TargetSamplesPerPixel, int);
+  /** Error estimate at which a still view stops refining (default 0: refine to
+   * TargetSamplesPerPixel). */
+  vtkSetClampMacro(ErrorTarget, double, 0.0, VTK_DOUBLE_MAX);
+  vtkGetMacro(ErrorTarget, double);
+  ///@}
+
+  /** Creates the Vulkan renderer now (else on the first render): returns false and reports the
+   * reason (no device with ray tracing: every device found and what it lacks) with
+   * vtkErrorMacro. */
+  bool InitializeDevice();
+
+  /** Renders the window until the view has converged (TargetSamplesPerPixel or ErrorTarget) or
+   * `maximumSeconds` have passed; returns the number of renders (0 on error). */
+  int RenderUntilConverged(vtkRenderWindow* window, double maximumSeconds = 60.0);
+  /** Whether the last frame was full quality and refined to the targets. */
+  bool IsConverged();
+
+  ///@{
+  /** The last frame: samples per pixel accumulated, error estimate, seconds of tracing, the LOD
+   * and reduction factor it was traced at, its trace and total milliseconds. */
+  int GetAccumulatedSamples();
+  double GetErrorEstimate();
+  double GetRenderSeconds();
+  int GetLastLOD();
+  int GetLastReductionFactor();
+  double GetLastTraceMilliseconds();
+  double GetLastFrameMilliseconds();
+  /** The Vulkan device ("" before the first render). */
+  const char* GetDeviceName();
+  /** BVH builds since the device was created (visibility edits rebuild, material edits not). */
+  vtkTypeInt64 GetNumberOfBVHBuilds();
+  ///@}
+
+  ///@{
+  /**
+   * The label under display pixel (x, y) (pixels, origin at the bottom left, as VTK's display
+   * coordinates) in the last frame traced for `renderer`. Returns true on a hit; then
+   * GetPickedLabel (the original value; a uint64 label >= 2^63 as the int64 with its bits),
+   * GetPickedPosition (world) and GetPickedNormal (world, unit; zero where the camera is inside
+   * the label) describe it. False on background, outside the viewport or before a frame.
+   */
+  bool Pick(vtkRenderer* renderer, double x, double y);
+  vtkTypeInt64 GetPickedLabel();
+  void GetPickedPosition(double position[3]);
+  void GetPickedNormal(double normal[3]);
+  ///@}
+
+  /** World bounds of the volume's voxels (before the vtkVolume's matrix). */
+  double* GetBounds() VTK_SIZEHINT(6) override;
+  using Superclass::GetBounds;
+
+  void Render(vtkRenderer* renderer, vtkVolume* volume) override;
+  void ReleaseGraphicsResources(vtkWindow* window) override;
+
+protected:
+  vtkSegmentationSVDAGVolumeMapper();
+  ~vtkSegmentationSVDAGVolumeMapper() override;
+  int FillInputPortInformation(int port, vtkInformation* info) override;
+
+  bool WriteDepth = true;
+  bool AutoAdjustToRenderTime = true;
+  int TargetSamplesPerPixel = 64;
+  double ErrorTarget = 0.0;
+
+private:
+  vtkSegmentationSVDAGVolumeMapper(const vtkSegmentationSVDAGVolumeMapper&) = delete;
+  void operator=(const vtkSegmentationSVDAGVolumeMapper&) = delete;
+
+  struct Internals;
+  std::unique_ptr<Internals> Internal;
+};
+
+#endif
