@@ -90,19 +90,3 @@ def read(path, background=0, exclude=(), dataset=None, progress=None):
     if reader.GetFileFormat() == "SVDAG":
         return SegmentationVolume(output, load_seconds=seconds)
     return SegmentationVolume(output, build_seconds=seconds)
-
-
-def write_svdag(volume, path, compression_level=3, progress=None):
-    """Write ``volume`` (a SegmentationVolume) to the ``.svdag`` file ``path``.
-
-    See :meth:`SegmentationVolume.save`.
-    """
-    from .vtkSVDAGIO import vtkSegmentationSVDAGWriter
-
-    if not isinstance(compression_level, (int, np.integer)) or isinstance(compression_level, bool):
-        raise TypeError(f"compression_level must be an integer, not {compression_level!r}")
-    writer = vtkSegmentationSVDAGWriter()
-    writer.SetInputData(volume.dataobject)
-    writer.SetFileName(os.fspath(path))
-    writer.SetCompressionLevel(int(compression_level))
-    run_algorithm(writer, action="Write", progress=progress, error=OSError, what=os.fspath(path))

@@ -6,6 +6,7 @@ from vtkmodules.util.numpy_support import vtk_to_numpy
 from vtkmodules.vtkCommonDataModel import vtkImageData
 
 from ._labels import numpy_dtype_of_vtk_type
+from ._svdagfile import write_svdag
 from ._vtkrun import run_algorithm
 from .vtkSVDAGCore import vtkSegmentationSVDAG, vtkSegmentationSVDAGToImageData
 
@@ -329,8 +330,6 @@ class SegmentationVolume:
         >>> volume = vtksvdag.from_numpy(np.eye(8, dtype=np.uint8)[:, :, None])
         >>> volume.save("eye.svdag")  # doctest: +SKIP
         """
-        from .fileio import write_svdag
-
         write_svdag(self, os.fspath(path), compression_level=compression_level, progress=progress)
 
     def __repr__(self):

@@ -11,9 +11,8 @@ import sys
 import time
 
 import numpy as np
-from vtkmodules.util.misc import calldata_type
-from vtkmodules.util.vtkConstants import VTK_STRING
 
+from .._vtkrun import vtk_errors_raised
 from ._common import add_input_options, load, print_json, print_table
 
 NAME = "render"
@@ -90,22 +89,18 @@ def run(args):
         hidden.append(values.index(value))
 
     renderer = vtkSegmentationSVDAGRenderer()
-    errors = []
 
-    @calldata_type(VTK_STRING)
-    def on_error(_obj, _event, message):
-        errors.append(message)
-
-    renderer.AddObserver("ErrorEvent", on_error)
-
-    def check(ok, what):
-        if not ok:
-            detail = errors[-1] if errors else "unknown error"
-            # VTK's error text starts with "ERROR: In FILE, line N\nCLASS (ADDRESS): ".
-            detail = detail.split("): ", 1)[-1]
+    def check(call, what):
+        try:
+            with vtk_errors_raised(renderer, RuntimeError):
+                ok = call()
+        except RuntimeError as error:
+            detail = str(error)
             if "devices found" in detail or "Vulkan" in detail:
                 detail = "no Vulkan ray-tracing device: " + detail
-            raise RuntimeError(_fail(f"{what}: {detail}"))
+            raise RuntimeError(_fail(f"{what}: {detail}")) from None
+        if not ok:
+            raise RuntimeError(_fail(f"{what}: unknown error"))
 
     renderer.SetInputData(volume.dataobject)
     renderer.SetWidth(args.width)
@@ -128,14 +123,14 @@ def run(args):
     for index in hidden:
         renderer.SetLabelVisibility(index, False)
     try:
-        check(renderer.ResetCamera(args.azimuth, args.elevation, args.zoom), "camera")
+        check(lambda: renderer.ResetCamera(args.azimuth, args.elevation, args.zoom), "camera")
         start = time.perf_counter()
         pass_ms = []
         for _ in range(args.spp):
-            check(renderer.Render(), "render")
+            check(renderer.Render, "render")
             pass_ms.append(renderer.GetLastFrameMilliseconds())
         wall = time.perf_counter() - start
-        check(renderer.WriteImage(args.output), "write")
+        check(lambda: renderer.WriteImage(args.output), "write")
     except RuntimeError as error:
         print(f"vtksvdag: error: {error}", file=sys.stderr)
         return 1
