@@ -106,18 +106,17 @@ void Pipeline::createLayouts()
 {
   const VkShaderStageFlags stages = VK_SHADER_STAGE_RAYGEN_BIT_KHR | VK_SHADER_STAGE_MISS_BIT_KHR |
     VK_SHADER_STAGE_INTERSECTION_BIT_KHR | VK_SHADER_STAGE_CLOSEST_HIT_BIT_KHR;
-  VkDescriptorSetLayoutBinding bindings[2] = {};
-  bindings[0].binding = SVDAG_BINDING_TLAS;
-  bindings[0].descriptorType = VK_DESCRIPTOR_TYPE_ACCELERATION_STRUCTURE_KHR;
-  bindings[0].descriptorCount = 1;
-  bindings[0].stageFlags = stages;
-  bindings[1].binding = SVDAG_BINDING_FRAME;
-  bindings[1].descriptorType = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER;
-  bindings[1].descriptorCount = 1;
-  bindings[1].stageFlags = stages;
+  std::array<VkDescriptorSetLayoutBinding, DescriptorBindings.size()> bindings{};
+  for (size_t i = 0; i < bindings.size(); ++i)
+  {
+    bindings[i].binding = DescriptorBindings[i].binding;
+    bindings[i].descriptorType = DescriptorBindings[i].type;
+    bindings[i].descriptorCount = 1;
+    bindings[i].stageFlags = stages;
+  }
   VkDescriptorSetLayoutCreateInfo setInfo{ VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO };
-  setInfo.bindingCount = 2;
-  setInfo.pBindings = bindings;
+  setInfo.bindingCount = uint32_t(bindings.size());
+  setInfo.pBindings = bindings.data();
   check(vkCreateDescriptorSetLayout(this->Ctx.device(), &setInfo, nullptr, &this->SetLayout),
     "vkCreateDescriptorSetLayout");
   VkPipelineLayoutCreateInfo layoutInfo{ VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO };

@@ -87,12 +87,13 @@ struct Renderer::Gpu
 
   Gpu()
   {
-    VkDescriptorPoolSize sizes[2] = { { VK_DESCRIPTOR_TYPE_ACCELERATION_STRUCTURE_KHR, 1 },
-      { VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1 } };
+    std::array<VkDescriptorPoolSize, DescriptorBindings.size()> sizes{};
+    for (size_t i = 0; i < sizes.size(); ++i)
+      sizes[i] = { DescriptorBindings[i].type, 1 };
     VkDescriptorPoolCreateInfo poolInfo{ VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO };
     poolInfo.maxSets = 1;
-    poolInfo.poolSizeCount = 2;
-    poolInfo.pPoolSizes = sizes;
+    poolInfo.poolSizeCount = uint32_t(sizes.size());
+    poolInfo.pPoolSizes = sizes.data();
     check(vkCreateDescriptorPool(context.device(), &poolInfo, nullptr, &pool),
       "vkCreateDescriptorPool");
     VkDescriptorSetLayout layout = pipeline.setLayout();
@@ -140,19 +141,22 @@ struct Renderer::Gpu
     asInfo.accelerationStructureCount = 1;
     asInfo.pAccelerationStructures = &tlas;
     VkDescriptorBufferInfo uniformInfo{ uniforms.handle(), 0, sizeof(gpu::FrameUniforms) };
-    VkWriteDescriptorSet writes[2] = { { VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET },
-      { VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET } };
+    // One write per entry of DescriptorBindings, in its order.
+    std::array<VkWriteDescriptorSet, DescriptorBindings.size()> writes{};
+    for (size_t i = 0; i < writes.size(); ++i)
+    {
+      writes[i].sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET;
+      writes[i].dstSet = set;
+      writes[i].dstBinding = DescriptorBindings[i].binding;
+      writes[i].descriptorCount = 1;
+      writes[i].descriptorType = DescriptorBindings[i].type;
+    }
+    static_assert(DescriptorBindings[0].binding == SVDAG_BINDING_TLAS &&
+        DescriptorBindings[1].binding == SVDAG_BINDING_FRAME,
+      "the writes below follow DescriptorBindings' order");
     writes[0].pNext = &asInfo;
-    writes[0].dstSet = set;
-    writes[0].dstBinding = SVDAG_BINDING_TLAS;
-    writes[0].descriptorCount = 1;
-    writes[0].descriptorType = VK_DESCRIPTOR_TYPE_ACCELERATION_STRUCTURE_KHR;
-    writes[1].dstSet = set;
-    writes[1].dstBinding = SVDAG_BINDING_FRAME;
-    writes[1].descriptorCount = 1;
-    writes[1].descriptorType = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER;
     writes[1].pBufferInfo = &uniformInfo;
-    vkUpdateDescriptorSets(context.device(), 2, writes, 0, nullptr);
+    vkUpdateDescriptorSets(context.device(), uint32_t(writes.size()), writes.data(), 0, nullptr);
   }
 };
 

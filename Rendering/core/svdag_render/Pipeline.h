@@ -14,11 +14,26 @@
 
 #include "svdag_render/Buffer.h"
 #include "svdag_render/Context.h"
+#include "svdag_render/GpuLayout.h"
+
+#include <array>
 
 namespace svdag
 {
 namespace render
 {
+
+// Descriptor set 0, declared once: the set layout, the descriptor pool and the descriptor writes
+// are all made from this table (GpuLayout.h names the bindings).
+struct DescriptorBinding
+{
+  uint32_t binding;
+  VkDescriptorType type;
+};
+constexpr std::array<DescriptorBinding, 2> DescriptorBindings{ {
+  { SVDAG_BINDING_TLAS, VK_DESCRIPTOR_TYPE_ACCELERATION_STRUCTURE_KHR },
+  { SVDAG_BINDING_FRAME, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER },
+} };
 
 // The path tracer's feature switches (PathTracer.h's SVDAG_FEATURE_*). A feature a scene does not
 // use is compiled out.
