@@ -1,50 +1,39 @@
 #include "vtkSegmentationSVDAGRenderer.h"
 
+#include "vtkAlgorithmOutput.h"
+#include "vtkDataObject.h"
 #include "vtkFloatArray.h"
 #include "vtkImageData.h"
+#include "vtkInformation.h"
+#include "vtkInformationVector.h"
 #include "vtkIntArray.h"
 #include "vtkNew.h"
 #include "vtkObjectFactory.h"
 #include "vtkPointData.h"
 #include "vtkSegmentationSVDAG.h"
+#include "vtkSegmentationSVDAGLabelProperties.h"
+#include "vtkSegmentationSVDAGRenderSettings.h"
 #include "vtkSmartPointer.h"
+#include "vtkStreamingDemandDrivenPipeline.h"
 #include "vtkUnsignedCharArray.h"
 
 #include <svdag_render/ImageFiles.h>
 #include <svdag_render/Renderer.h>
 
+#include "svdagRenderSession.h"
+
+#include <algorithm>
 #include <cstring>
 #include <exception>
-#include <map>
-#include <set>
-#include <stdexcept>
 #include <string>
 #include <vector>
 
 struct vtkSegmentationSVDAGRenderer::Internals
 {
-  vtkSmartPointer<vtkSegmentationSVDAG> Input;
-  std::unique_ptr<svdag::render::Renderer> Renderer;
-  // The volume the renderer holds (uploaded), to re-upload only when the input's volume changes.
-  std::shared_ptr<const svdag::Volume> Uploaded;
-  std::set<vtkIdType> Hidden;
-  // Edited materials by label index (the others keep the renderer's defaults); after
-  // ResetLabelMaterials the next Render() returns every label to its default first.
-  std::map<vtkIdType, svdag::render::Material> Materials;
-  bool MaterialsReset = false;
-  vtkNew<vtkImageData> Output;
+  svdag::vtkglue::RenderSession Session;
   bool CameraSet = false;
-
-  svdag::render::Material& edit(vtkIdType index)
-  {
-    auto it = this->Materials.find(index);
-    if (it == this->Materials.end())
-    {
-      const uint32_t defaultIndex = index >= 0 && index <= vtkIdType(UINT32_MAX) ? uint32_t(index) : 0;
-      it = this->Materials.emplace(index, svdag::render::Renderer::defaultMaterial(defaultIndex)).first;
-    }
-    return it->second;
-  }
+  // Whether the last execution succeeded (Render()'s result).
+  bool Succeeded = false;
 };
 
 vtkStandardNewMacro(vtkSegmentationSVDAGRenderer);
@@ -52,87 +41,55 @@ vtkStandardNewMacro(vtkSegmentationSVDAGRenderer);
 vtkSegmentationSVDAGRenderer::vtkSegmentationSVDAGRenderer()
   : Internal(new Internals)
 {
+  this->SetNumberOfInputPorts(1);
+  this->SetNumberOfOutputPorts(1);
 }
 
-vtkSegmentationSVDAGRenderer::~vtkSegmentationSVDAGRenderer()
-{
-  this->SetEnvironmentMap(nullptr);
-}
+vtkSegmentationSVDAGRenderer::~vtkSegmentationSVDAGRenderer() = default;
 
-void vtkSegmentationSVDAGRenderer::SetLabelColor(vtkIdType index, double r, double g, double b)
+int vtkSegmentationSVDAGRenderer::FillInputPortInformation(int, vtkInformation* info)
 {
-  glm::vec4& c = this->Internal->edit(index).baseColorVisibility;
-  c = glm::vec4(float(r), float(g), float(b), c.a);
-  this->Modified();
-}
-
-void vtkSegmentationSVDAGRenderer::SetLabelRoughness(vtkIdType index, double roughness)
-{
-  this->Internal->edit(index).params.x = float(roughness);
-  this->Modified();
-}
-
-void vtkSegmentationSVDAGRenderer::SetLabelMetallic(vtkIdType index, double metallic)
-{
-  this->Internal->edit(index).params.y = float(metallic);
-  this->Modified();
-}
-
-void vtkSegmentationSVDAGRenderer::SetLabelTransmission(vtkIdType index, double transmission)
-{
-  this->Internal->edit(index).params.z = float(transmission);
-  this->Modified();
-}
-
-void vtkSegmentationSVDAGRenderer::SetLabelIOR(vtkIdType index, double ior)
-{
-  this->Internal->edit(index).params.w = float(ior);
-  this->Modified();
-}
-
-void vtkSegmentationSVDAGRenderer::SetLabelSpecular(vtkIdType index, double specular)
-{
-  this->Internal->edit(index).extra.x = float(specular);
-  this->Modified();
-}
-
-void vtkSegmentationSVDAGRenderer::SetLabelEmission(vtkIdType index, double r, double g, double b)
-{
-  this->Internal->edit(index).emission = glm::vec4(float(r), float(g), float(b), 0.0f);
-  this->Modified();
-}
-
-void vtkSegmentationSVDAGRenderer::SetLabelVisibility(vtkIdType index, bool visible)
-{
-  this->Internal->edit(index).baseColorVisibility.a = visible ? 1.0f : 0.0f;
-  this->Modified();
-}
-
-void vtkSegmentationSVDAGRenderer::ResetLabelMaterials()
-{
-  this->Internal->Materials.clear();
-  this->Internal->MaterialsReset = true;
-  this->Modified();
-}
-
-void vtkSegmentationSVDAGRenderer::ResetAccumulation()
-{
-  if (this->Internal->Renderer)
-    this->Internal->Renderer->resetAccumulation();
-}
-
-void vtkSegmentationSVDAGRenderer::SetInputData(vtkSegmentationSVDAG* volume)
-{
-  if (this->Internal->Input != volume)
-  {
-    this->Internal->Input = volume;
-    this->Modified();
-  }
+  info->Set(vtkAlgorithm::INPUT_REQUIRED_DATA_TYPE(), "vtkSegmentationSVDAG");
+  return 1;
 }
 
 vtkSegmentationSVDAG* vtkSegmentationSVDAGRenderer::GetInput()
 {
-  return this->Internal->Input;
+  return vtkSegmentationSVDAG::SafeDownCast(this->GetInputDataObject(0, 0));
+}
+
+vtkMTimeType vtkSegmentationSVDAGRenderer::GetMTime()
+{
+  return std::max(this->Superclass::GetMTime(), this->Internal->Session.mtime());
+}
+
+vtkSegmentationSVDAGRenderSettings* vtkSegmentationSVDAGRenderer::GetSettings()
+{
+  return this->Internal->Session.settings();
+}
+
+void vtkSegmentationSVDAGRenderer::SetSettings(vtkSegmentationSVDAGRenderSettings* settings)
+{
+  if (this->Internal->Session.setSettings(settings))
+    this->Modified();
+}
+
+vtkSegmentationSVDAGLabelProperties* vtkSegmentationSVDAGRenderer::GetLabelProperties()
+{
+  return this->Internal->Session.labels();
+}
+
+void vtkSegmentationSVDAGRenderer::SetLabelProperties(
+  vtkSegmentationSVDAGLabelProperties* properties)
+{
+  if (this->Internal->Session.setLabels(properties))
+    this->Modified();
+}
+
+void vtkSegmentationSVDAGRenderer::ResetAccumulation()
+{
+  if (svdag::render::Renderer* r = this->Internal->Session.renderer())
+    r->resetAccumulation();
 }
 
 void vtkSegmentationSVDAGRenderer::SetCameraPosition(double x, double y, double z)
@@ -173,12 +130,12 @@ void vtkSegmentationSVDAGRenderer::SetCameraViewAngle(double degrees)
   }
 }
 
-int vtkSegmentationSVDAGRenderer::ResetCamera(double azimuth, double elevation, double zoom)
+int vtkSegmentationSVDAGRenderer::FrameVolume(
+  vtkSegmentationSVDAG* input, double azimuth, double elevation, double zoom)
 {
-  vtkSegmentationSVDAG* input = this->Internal->Input;
   if (!input || !input->HasVolume())
   {
-    vtkErrorMacro("ResetCamera needs an input volume (SetInputData)");
+    vtkErrorMacro("ResetCamera needs an input volume (SetInputConnection or SetInputData)");
     return 0;
   }
   try
@@ -198,126 +155,58 @@ int vtkSegmentationSVDAGRenderer::ResetCamera(double azimuth, double elevation, 
     return 0;
   }
   this->Internal->CameraSet = true;
+  return 1;
+}
+
+int vtkSegmentationSVDAGRenderer::ResetCamera(double azimuth, double elevation, double zoom)
+{
+  // A connected input is brought up to date first (its volume is what is framed).
+  if (this->GetNumberOfInputConnections(0) > 0)
+  {
+    vtkAlgorithmOutput* connection = this->GetInputConnection(0, 0);
+    connection->GetProducer()->Update(connection->GetIndex());
+  }
+  if (!this->FrameVolume(this->GetInput(), azimuth, elevation, zoom))
+    return 0;
   this->Modified();
   return 1;
 }
 
-void vtkSegmentationSVDAGRenderer::HideLabel(vtkIdType index)
-{
-  if (this->Internal->Hidden.insert(index).second)
-    this->Modified();
-}
-
-void vtkSegmentationSVDAGRenderer::ShowLabel(vtkIdType index)
-{
-  if (this->Internal->Hidden.erase(index))
-    this->Modified();
-}
-
-void vtkSegmentationSVDAGRenderer::ShowAllLabels()
-{
-  if (!this->Internal->Hidden.empty())
-  {
-    this->Internal->Hidden.clear();
-    this->Modified();
-  }
-}
-
-bool vtkSegmentationSVDAGRenderer::IsLabelHidden(vtkIdType index) const
-{
-  return this->Internal->Hidden.count(index) != 0;
-}
-
 int vtkSegmentationSVDAGRenderer::Render()
 {
-  Internals& in = *this->Internal;
-  if (!in.Input || !in.Input->HasVolume())
+  if (this->GetNumberOfInputConnections(0) == 0)
   {
-    vtkErrorMacro("Render needs an input volume (SetInputData)");
+    vtkErrorMacro("Render needs an input volume (SetInputConnection or SetInputData)");
     return 0;
   }
-  if (!in.CameraSet && !this->ResetCamera())
-    return 0;
-  try
-  {
-    if (!in.Renderer)
-    {
-      in.Renderer = std::make_unique<svdag::render::Renderer>();
-      in.Uploaded.reset();
-    }
-    svdag::render::Renderer& r = *in.Renderer;
-    r.setPrimitivesPerBlasLimit(uint32_t(this->MaximumBlocksPerBLAS));
-    if (in.Uploaded != in.Input->GetVolume())
-    {
-      r.setVolume(in.Input->GetVolume());
-      in.Uploaded = in.Input->GetVolume();
-    }
-    std::vector<uint32_t> hidden;
-    for (vtkIdType index : in.Hidden)
-    {
-      if (index >= 0 && index <= vtkIdType(UINT32_MAX))
-        hidden.push_back(uint32_t(index));
-    }
-    r.setHiddenLabels(hidden);
-    svdag::render::Camera camera;
-    for (int a = 0; a < 3; ++a)
-    {
-      camera.position[a] = this->CameraPosition[a];
-      camera.focalPoint[a] = this->CameraFocalPoint[a];
-      camera.viewUp[a] = this->CameraViewUp[a];
-    }
-    camera.viewAngle = this->CameraViewAngle;
-    r.setCamera(camera);
-    r.setImageSize(uint32_t(this->Width), uint32_t(this->Height));
-    r.setLod(static_cast<svdag::render::Lod>(this->LOD));
-    r.setAutoLodPixels(float(this->AutoLODPixels));
-    r.setBackground({ { float(this->Background[0]), float(this->Background[1]),
-      float(this->Background[2]), float(this->Background[3]) } });
-    r.setSamplesPerPixel(uint32_t(this->SamplesPerPixel));
-    r.setMaxBounces(uint32_t(this->MaximumBounces));
-    r.setSeed(this->Seed);
-    r.setNextEventEstimation(this->NextEventEstimation);
-    r.setExposure(float(this->Exposure));
-    r.setEnvironmentColor({ { float(this->EnvironmentColor[0]), float(this->EnvironmentColor[1]),
-      float(this->EnvironmentColor[2]) } });
-    r.setEnvironmentMap(this->EnvironmentMap ? this->EnvironmentMap : "");
-    svdag::render::SunLight sun;
-    sun.on = this->Sun;
-    for (int a = 0; a < 3; ++a)
-    {
-      sun.direction[a] = this->SunDirection[a];
-      sun.irradiance[a] = float(this->SunIrradiance[a]);
-    }
-    sun.angularRadiusDegrees = this->SunAngularRadius;
-    r.setSun(sun);
-    if (in.MaterialsReset)
-    {
-      for (size_t i = 0; i < r.materialCount(); ++i)
-        r.setMaterial(uint32_t(i), svdag::render::Renderer::defaultMaterial(uint32_t(i)));
-      in.MaterialsReset = false;
-    }
-    for (const auto& entry : in.Materials)
-    {
-      if (entry.first < 0 || uint64_t(entry.first) >= r.materialCount())
-      {
-        throw std::invalid_argument("a material is set for label index " +
-          std::to_string(entry.first) + ", outside the volume's label table (" +
-          std::to_string(r.materialCount()) + " labels)");
-      }
-      r.setMaterial(uint32_t(entry.first), entry.second);
-    }
-    r.render();
-  }
-  catch (const std::exception& e)
-  {
-    vtkErrorMacro("Render failed: " << e.what());
-    return 0;
-  }
+  this->Internal->Succeeded = false;
+  this->Modified();
+  this->Update();
+  return this->Internal->Succeeded ? 1 : 0;
+}
 
-  const svdag::render::Image& image = in.Renderer->image();
+int vtkSegmentationSVDAGRenderer::RequestInformation(
+  vtkInformation*, vtkInformationVector**, vtkInformationVector* outputVector)
+{
+  vtkInformation* outInfo = outputVector->GetInformationObject(0);
+  const int extent[6] = { 0, this->Width - 1, 0, this->Height - 1, 0, 0 };
+  outInfo->Set(vtkStreamingDemandDrivenPipeline::WHOLE_EXTENT(), extent, 6);
+  const double origin[3] = { 0, 0, 0 };
+  const double spacing[3] = { 1, 1, 1 };
+  outInfo->Set(vtkDataObject::ORIGIN(), origin, 3);
+  outInfo->Set(vtkDataObject::SPACING(), spacing, 3);
+  vtkDataObject::SetPointDataActiveScalarInfo(outInfo, VTK_UNSIGNED_CHAR, 4);
+  return 1;
+}
+
+namespace
+{
+// The core image as point data of a vtkImageData of its size.
+void fillOutput(const svdag::render::Image& image, vtkImageData* output)
+{
   const vtkIdType pixels = vtkIdType(image.width) * image.height;
-  vtkNew<vtkImageData> output;
-  output->SetDimensions(int(image.width), int(image.height), 1);
+  output->Initialize();
+  output->SetExtent(0, int(image.width) - 1, 0, int(image.height) - 1, 0, 0);
   vtkNew<vtkUnsignedCharArray> color;
   color->SetName("Color");
   color->SetNumberOfComponents(4);
@@ -348,7 +237,54 @@ int vtkSegmentationSVDAGRenderer::Render()
   pd->AddArray(floats("Depth", 1, image.depth));
   pd->AddArray(label);
   pd->AddArray(floats("Normal", 3, image.normal));
-  in.Output->ShallowCopy(output);
+}
+} // namespace
+
+int vtkSegmentationSVDAGRenderer::RequestData(
+  vtkInformation*, vtkInformationVector** inputVector, vtkInformationVector* outputVector)
+{
+  Internals& in = *this->Internal;
+  in.Succeeded = false;
+  vtkSegmentationSVDAG* input = vtkSegmentationSVDAG::GetData(inputVector[0], 0);
+  vtkImageData* output = vtkImageData::GetData(outputVector, 0);
+  if (!output)
+  {
+    vtkErrorMacro("the output is not a vtkImageData");
+    return 0;
+  }
+  output->Initialize();
+  if (!input || !input->HasVolume())
+  {
+    vtkErrorMacro("Render needs an input volume (SetInputConnection or SetInputData)");
+    return 0;
+  }
+  if (!in.CameraSet && !this->FrameVolume(input, 0.0, 0.0, 1.0))
+    return 0;
+  try
+  {
+    if (!in.Session.initialize())
+      throw std::runtime_error(in.Session.error());
+    svdag::render::Renderer& r = in.Session.prepare(input->GetVolume());
+    svdag::render::Camera camera;
+    for (int a = 0; a < 3; ++a)
+    {
+      camera.position[a] = this->CameraPosition[a];
+      camera.focalPoint[a] = this->CameraFocalPoint[a];
+      camera.viewUp[a] = this->CameraViewUp[a];
+    }
+    camera.viewAngle = this->CameraViewAngle;
+    r.setCamera(camera);
+    r.setImageSize(uint32_t(this->Width), uint32_t(this->Height));
+    r.setSettings(in.Session.settings()->GetCoreSettings());
+    r.render();
+  }
+  catch (const std::exception& e)
+  {
+    vtkErrorMacro("Render failed: " << e.what());
+    return 0;
+  }
+  fillOutput(in.Session.renderer()->image(), output);
+  in.Succeeded = true;
   return 1;
 }
 
@@ -364,17 +300,18 @@ int vtkSegmentationSVDAGRenderer::WriteImage(const char* path)
     vtkErrorMacro("WriteImage: the file name must end in .png or .exr, got '" << name << "'");
     return 0;
   }
-  if (!this->Internal->Renderer || this->Internal->Renderer->image().width == 0)
+  const svdag::render::Renderer* renderer = this->Internal->Session.renderer();
+  if (!renderer || renderer->image().width == 0)
   {
-    vtkErrorMacro("WriteImage: nothing rendered yet (call Render first)");
+    vtkErrorMacro("WriteImage: nothing rendered yet (call Render or Update first)");
     return 0;
   }
   try
   {
     if (endsWith(".png"))
-      svdag::render::writePng(this->Internal->Renderer->image(), name);
+      svdag::render::writePng(renderer->image(), name);
     else
-      svdag::render::writeExr(this->Internal->Renderer->image(), name);
+      svdag::render::writeExr(renderer->image(), name);
   }
   catch (const std::exception& e)
   {
@@ -384,107 +321,57 @@ int vtkSegmentationSVDAGRenderer::WriteImage(const char* path)
   return 1;
 }
 
-int vtkSegmentationSVDAGRenderer::GetAccumulatedSamples() const
-{
-  return this->Internal->Renderer ? int(this->Internal->Renderer->accumulatedSamples()) : 0;
-}
-
-double vtkSegmentationSVDAGRenderer::GetRenderSeconds() const
-{
-  return this->Internal->Renderer ? this->Internal->Renderer->renderSeconds() : 0.0;
-}
-
-vtkTypeInt64 vtkSegmentationSVDAGRenderer::GetNumberOfBVHBuilds() const
-{
-  return this->Internal->Renderer ? vtkTypeInt64(this->Internal->Renderer->bvhBuilds()) : 0;
-}
-
-vtkTypeInt64 vtkSegmentationSVDAGRenderer::GetNumberOfPipelineBuilds() const
-{
-  return this->Internal->Renderer ? vtkTypeInt64(this->Internal->Renderer->pipelineBuilds()) : 0;
-}
-
-vtkImageData* vtkSegmentationSVDAGRenderer::GetOutput()
-{
-  return this->Internal->Output;
-}
+// The statistics: the core renderer's, 0 (or "") before the first pass.
+#define SVDAG_RENDERER_STATISTIC(Type, Name, expression)                                           \
+  Type vtkSegmentationSVDAGRenderer::Get##Name() const                                             \
+  {                                                                                                \
+    const svdag::render::Renderer* r = this->Internal->Session.renderer();                             \
+    return r ? Type(expression) : Type(0);                                                         \
+  }
+SVDAG_RENDERER_STATISTIC(int, AccumulatedSamples, r->accumulatedSamples())
+SVDAG_RENDERER_STATISTIC(double, RenderSeconds, r->renderSeconds())
+SVDAG_RENDERER_STATISTIC(double, ErrorEstimate, r->errorEstimate())
+SVDAG_RENDERER_STATISTIC(vtkTypeInt64, NumberOfBVHBuilds, r->bvhBuilds())
+SVDAG_RENDERER_STATISTIC(vtkTypeInt64, NumberOfPipelineBuilds, r->pipelineBuilds())
+SVDAG_RENDERER_STATISTIC(double, SetupSeconds, r->setupSeconds())
+SVDAG_RENDERER_STATISTIC(double, LastFrameMilliseconds, r->lastFrameMilliseconds())
+SVDAG_RENDERER_STATISTIC(vtkTypeInt64, BLASBytes, r->blasBytes())
+SVDAG_RENDERER_STATISTIC(vtkTypeInt64, TLASBytes, r->tlasBytes())
+SVDAG_RENDERER_STATISTIC(int, NumberOfBLAS, r->blasCount())
+#undef SVDAG_RENDERER_STATISTIC
 
 const char* vtkSegmentationSVDAGRenderer::GetDeviceName() const
 {
-  return this->Internal->Renderer ? this->Internal->Renderer->deviceName().c_str() : "";
-}
-
-double vtkSegmentationSVDAGRenderer::GetSetupSeconds() const
-{
-  return this->Internal->Renderer ? this->Internal->Renderer->setupSeconds() : 0.0;
-}
-
-double vtkSegmentationSVDAGRenderer::GetLastFrameMilliseconds() const
-{
-  return this->Internal->Renderer ? this->Internal->Renderer->lastFrameMilliseconds() : 0.0;
-}
-
-vtkTypeInt64 vtkSegmentationSVDAGRenderer::GetBLASBytes() const
-{
-  return this->Internal->Renderer ? vtkTypeInt64(this->Internal->Renderer->blasBytes()) : 0;
-}
-
-int vtkSegmentationSVDAGRenderer::GetNumberOfBLAS() const
-{
-  return this->Internal->Renderer ? int(this->Internal->Renderer->blasCount()) : 0;
-}
-
-vtkTypeInt64 vtkSegmentationSVDAGRenderer::GetTLASBytes() const
-{
-  return this->Internal->Renderer ? vtkTypeInt64(this->Internal->Renderer->tlasBytes()) : 0;
+  const svdag::render::Renderer* r = this->Internal->Session.renderer();
+  return r ? r->deviceName().c_str() : "";
 }
 
 void vtkSegmentationSVDAGRenderer::PrintSelf(ostream& os, vtkIndent indent)
 {
   this->Superclass::PrintSelf(os, indent);
-  os << indent << "Input: " << this->Internal->Input.GetPointer() << "\n";
+  auto triple = [&os](const double* v) { os << v[0] << " " << v[1] << " " << v[2] << "\n"; };
   os << indent << "Width: " << this->Width << "\n";
   os << indent << "Height: " << this->Height << "\n";
-  os << indent << "LOD: " << this->LOD << "\n";
-  os << indent << "AutoLODPixels: " << this->AutoLODPixels << "\n";
-  os << indent << "CameraPosition: " << this->CameraPosition[0] << " " << this->CameraPosition[1]
-     << " " << this->CameraPosition[2] << "\n";
-  os << indent << "CameraFocalPoint: " << this->CameraFocalPoint[0] << " "
-     << this->CameraFocalPoint[1] << " " << this->CameraFocalPoint[2] << "\n";
-  os << indent << "CameraViewUp: " << this->CameraViewUp[0] << " " << this->CameraViewUp[1] << " "
-     << this->CameraViewUp[2] << "\n";
+  os << indent << "CameraPosition: ";
+  triple(this->CameraPosition);
+  os << indent << "CameraFocalPoint: ";
+  triple(this->CameraFocalPoint);
+  os << indent << "CameraViewUp: ";
+  triple(this->CameraViewUp);
   os << indent << "CameraViewAngle: " << this->CameraViewAngle << "\n";
-  os << indent << "Background: " << this->Background[0] << " " << this->Background[1] << " "
-     << this->Background[2] << " " << this->Background[3] << "\n";
-  os << indent << "HiddenLabels:";
-  for (vtkIdType index : this->Internal->Hidden)
-    os << " " << index;
-  os << "\n";
+  os << indent << "Settings:\n";
+  this->Internal->Session.settings()->PrintSelf(os, indent.GetNextIndent());
+  os << indent << "LabelProperties:\n";
+  this->Internal->Session.labels()->PrintSelf(os, indent.GetNextIndent());
   os << indent << "DeviceName: " << this->GetDeviceName() << "\n";
   os << indent << "SetupSeconds: " << this->GetSetupSeconds() << "\n";
   os << indent << "LastFrameMilliseconds: " << this->GetLastFrameMilliseconds() << "\n";
   os << indent << "BLASBytes: " << this->GetBLASBytes() << "\n";
   os << indent << "TLASBytes: " << this->GetTLASBytes() << "\n";
-  os << indent << "MaximumBlocksPerBLAS: " << this->MaximumBlocksPerBLAS << "\n";
   os << indent << "NumberOfBLAS: " << this->GetNumberOfBLAS() << "\n";
-  os << indent << "SamplesPerPixel: " << this->SamplesPerPixel << "\n";
-  os << indent << "MaximumBounces: " << this->MaximumBounces << "\n";
-  os << indent << "Seed: " << this->Seed << "\n";
-  os << indent << "NextEventEstimation: " << this->NextEventEstimation << "\n";
-  os << indent << "Exposure: " << this->Exposure << "\n";
-  os << indent << "EnvironmentColor: " << this->EnvironmentColor[0] << " "
-     << this->EnvironmentColor[1] << " " << this->EnvironmentColor[2] << "\n";
-  os << indent << "EnvironmentMap: " << (this->EnvironmentMap ? this->EnvironmentMap : "(none)")
-     << "\n";
-  os << indent << "Sun: " << this->Sun << "\n";
-  os << indent << "SunDirection: " << this->SunDirection[0] << " " << this->SunDirection[1] << " "
-     << this->SunDirection[2] << "\n";
-  os << indent << "SunIrradiance: " << this->SunIrradiance[0] << " " << this->SunIrradiance[1]
-     << " " << this->SunIrradiance[2] << "\n";
-  os << indent << "SunAngularRadius: " << this->SunAngularRadius << "\n";
-  os << indent << "EditedLabelMaterials: " << this->Internal->Materials.size() << "\n";
   os << indent << "AccumulatedSamples: " << this->GetAccumulatedSamples() << "\n";
   os << indent << "RenderSeconds: " << this->GetRenderSeconds() << "\n";
+  os << indent << "ErrorEstimate: " << this->GetErrorEstimate() << "\n";
   os << indent << "NumberOfBVHBuilds: " << this->GetNumberOfBVHBuilds() << "\n";
   os << indent << "NumberOfPipelineBuilds: " << this->GetNumberOfPipelineBuilds() << "\n";
 }

@@ -65,10 +65,11 @@ def make_renderer(volume, size, lod, bounces, nee):
     r.SetInputData(volume.dataobject)
     r.SetWidth(size)
     r.SetHeight(size)
-    r.SetLOD(LODS[lod])
-    r.SetMaximumBounces(bounces)
-    r.SetNextEventEstimation(nee)
-    r.SetSamplesPerPixel(1)
+    s = r.GetSettings()
+    s.SetLOD(LODS[lod])
+    s.SetMaximumBounces(bounces)
+    s.SetNextEventEstimation(nee)
+    s.SetSamplesPerPixel(1)
     if not r.ResetCamera(30, 20, 1.0):
         raise RuntimeError("ResetCamera failed")
     return r
@@ -114,12 +115,13 @@ def frame_times(volume, name, sizes, frames):
 
 
 def light(r):
-    r.SunOn()
-    r.SetSunDirection(0.45, 0.35, 0.82)
-    r.SetSunAngularRadius(8.0)
-    r.SetSunIrradiance(3.0, 2.9, 2.7)
-    r.SetEnvironmentColor(0.25, 0.3, 0.4)
-    r.SetBackground(0.25, 0.3, 0.4, 1.0)
+    s = r.GetSettings()
+    s.SunOn()
+    s.SetSunDirection(0.45, 0.35, 0.82)
+    s.SetSunAngularRadius(8.0)
+    s.SetSunIrradiance(3.0, 2.9, 2.7)
+    s.SetEnvironmentColor(0.25, 0.3, 0.4)
+    s.SetBackground(0.25, 0.3, 0.4, 1.0)
 
 
 def luminance(rgb):
@@ -131,8 +133,8 @@ def error_curves(volume, name, size, lods, reference_spp, max_spp):
     for lod in lods:
         ref = make_renderer(volume, size, lod, 4, True)
         light(ref)
-        ref.SetSeed(1)
-        ref.SetSamplesPerPixel(min(reference_spp, 64))
+        ref.GetSettings().SetSeed(1)
+        ref.GetSettings().SetSamplesPerPixel(min(reference_spp, 64))
         while ref.GetAccumulatedSamples() < reference_spp:
             render(ref)
         reference = hdr(ref)
@@ -143,7 +145,7 @@ def error_curves(volume, name, size, lods, reference_spp, max_spp):
         for nee in (True, False):
             r = make_renderer(volume, size, lod, 4, nee)
             light(r)
-            r.SetSeed(2)
+            r.GetSettings().SetSeed(2)
             render(r)  # warm-up (shader compilation), then a fresh accumulation
             r.ResetAccumulation()
             render(r)

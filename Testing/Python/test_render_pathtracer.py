@@ -6,13 +6,19 @@ Images are small (48 x 32) so that many samples per pixel stay cheap on a CPU de
 """
 import numpy as np
 import pytest
-from conftest import compress_zyx as build
+from conftest import capture_errors, compress_zyx as build
 from vtkmodules.util.numpy_support import vtk_to_numpy
 
 from vtksvdag.vtkSVDAGRendering import vtkSegmentationSVDAGRenderer
 
 WIDTH, HEIGHT = 48, 32
 VALUES = (3, 5, 9)  # label values; their indices in the label table are 0, 1, 2
+
+
+def srgb(c):
+    """The display (sRGB) encoding of a linear value: SetColor takes display colors and the
+    renderer converts them back, so a physics check passes the encoding of the albedo it means."""
+    return 12.92 * c if c <= 0.0031308 else 1.055 * c ** (1 / 2.4) - 0.055
 
 
 @pytest.fixture(scope="module")
@@ -48,10 +54,11 @@ def render(r):
 
 
 def white_lambertian(r, count=len(VALUES)):
-    for index in range(count):
-        r.SetLabelColor(index, 1, 1, 1)
-        r.SetLabelSpecular(index, 0)
-        r.SetLabelMetallic(index, 0)
+    labels = r.GetLabelProperties()
+    for value in VALUES[:count]:
+        labels.SetColor(value, 1, 1, 1)  # sRGB 1 is linear 1
+        labels.SetSpecular(value, 0)
+        labels.SetMetallic(value, 0)
 
 
 def test_white_furnace(volume):
@@ -59,12 +66,13 @@ def test_white_furnace(volume):
     light: every pixel that sees a voxel has radiance 1 (up to noise and path truncation)."""
     r = make_renderer(volume)
     white_lambertian(r)
-    r.SetEnvironmentColor(1, 1, 1)
-    r.SetBackground(1, 1, 1, 1)  # jittered camera samples that miss also see radiance 1
-    r.SetMaximumBounces(64)
-    r.SetSamplesPerPixel(128)
+    settings = r.GetSettings()
+    settings.SetEnvironmentColor(1, 1, 1)
+    settings.SetBackground(1, 1, 1, 1)  # jittered camera samples that miss also see radiance 1
+    settings.SetMaximumBounces(64)
+    settings.SetSamplesPerPixel(128)
     for nee in (True, False):
-        r.SetNextEventEstimation(nee)
+        settings.SetNextEventEstimation(nee)
         out = render(r)
         out = render(r)  # accumulates: 256 samples
         assert r.GetAccumulatedSamples() == 256
@@ -79,10 +87,11 @@ def test_white_furnace_fails_for_a_grey_material(volume):
     """The furnace check can fail: a 50% grey albedo must give a clearly darker mean."""
     r = make_renderer(volume)
     white_lambertian(r)
-    for index in range(len(VALUES)):
-        r.SetLabelColor(index, 0.5, 0.5, 0.5)
-    r.SetMaximumBounces(64)
-    r.SetSamplesPerPixel(64)
+    grey = srgb(0.5)  # a linear albedo of exactly 0.5
+    for value in VALUES:
+        r.GetLabelProperties().SetColor(value, grey, grey, grey)
+    r.GetSettings().SetMaximumBounces(64)
+    r.GetSettings().SetSamplesPerPixel(64)
     out = render(r)
     hit = out["Label"] > 0
     assert out["HDR"][hit, :3].mean() < 0.85
@@ -90,8 +99,8 @@ def test_white_furnace_fails_for_a_grey_material(volume):
 
 def test_seed_determinism(volume):
     r = make_renderer(volume)
-    r.SetSamplesPerPixel(4)
-    r.SetSeed(11)
+    r.GetSettings().SetSamplesPerPixel(4)
+    r.GetSettings().SetSeed(11)
     first = render(r)
     r.ResetAccumulation()
     again = render(r)
@@ -99,10 +108,10 @@ def test_seed_determinism(volume):
         assert np.array_equal(first[name], again[name]), name
     # Another renderer (another device context) with the same settings: the same bytes.
     other = make_renderer(volume)
-    other.SetSamplesPerPixel(4)
-    other.SetSeed(11)
+    other.GetSettings().SetSamplesPerPixel(4)
+    other.GetSettings().SetSeed(11)
     assert np.array_equal(render(other)["HDR"], first["HDR"])
-    other.SetSeed(12)
+    other.GetSettings().SetSeed(12)
     different = render(other)
     assert other.GetAccumulatedSamples() == 4  # a new seed restarts the accumulation
     assert not np.array_equal(different["HDR"], first["HDR"])
@@ -113,7 +122,7 @@ def test_seed_determinism(volume):
 
 def test_progressive_accumulation(volume):
     r = make_renderer(volume)
-    r.SetSamplesPerPixel(2)
+    r.GetSettings().SetSamplesPerPixel(2)
     one = render(r)
     assert r.GetAccumulatedSamples() == 2
     two = render(r)
@@ -123,7 +132,7 @@ def test_progressive_accumulation(volume):
     # average of the first and of the new samples 2-3 (which a fresh accumulation cannot give).
     assert not np.array_equal(one["HDR"], two["HDR"])
     # Exposure only changes the display color, not the accumulation.
-    r.SetExposure(2.0)
+    r.GetSettings().SetExposure(2.0)
     brighter = render(r)
     assert r.GetAccumulatedSamples() == 6
     hit = brighter["Label"] > 0
@@ -137,51 +146,53 @@ def test_progressive_accumulation(volume):
     def noise(spp):
         images = []
         for seed in (1, 2):
-            r.SetSeed(seed)
-            r.SetSamplesPerPixel(spp)
+            r.GetSettings().SetSeed(seed)
+            r.GetSettings().SetSamplesPerPixel(spp)
             images.append(render(r)["HDR"][:, :3])
         return np.mean((images[0] - images[1]) ** 2)
     assert noise(32) < 0.3 * noise(2)
 
 
+# Per label VALUE v, on the renderer's label properties p. Display colors are clamped to [0, 1]
+# (SetColor), so "overbright" is the brightest base color (1) with the strongest specular.
 EXTREMES = {
-    "huge emission": lambda r, i: r.SetLabelEmission(i, 1e30, 1e30, 1e30),
-    "mirror": lambda r, i: (r.SetLabelRoughness(i, 0), r.SetLabelMetallic(i, 1)),
-    "glass ior 1": lambda r, i: (r.SetLabelTransmission(i, 1), r.SetLabelIOR(i, 1),
-                                 r.SetLabelRoughness(i, 0)),
-    "glass": lambda r, i: (r.SetLabelTransmission(i, 1), r.SetLabelIOR(i, 2.4)),
-    "black": lambda r, i: r.SetLabelColor(i, 0, 0, 0),
-    "overbright": lambda r, i: (r.SetLabelColor(i, 50, 50, 50), r.SetLabelSpecular(i, 1)),
+    "huge emission": lambda p, v: p.SetEmission(v, 1e30, 1e30, 1e30),
+    "mirror": lambda p, v: (p.SetRoughness(v, 0), p.SetMetallic(v, 1)),
+    "glass ior 1": lambda p, v: (p.SetTransmission(v, 1), p.SetIOR(v, 1), p.SetRoughness(v, 0)),
+    "glass": lambda p, v: (p.SetTransmission(v, 1), p.SetIOR(v, 2.4)),
+    "black": lambda p, v: p.SetColor(v, 0, 0, 0),
+    "overbright": lambda p, v: (p.SetColor(v, 50, 50, 50), p.SetSpecular(v, 1)),
 }
 
 
 @pytest.mark.parametrize("sun", ["delta", "huge disk", "grazing"])
 def test_no_nan_or_inf_under_extremes(volume, sun):
     r = make_renderer(volume)
-    for index, setup in zip(range(len(VALUES)), EXTREMES.values()):
-        setup(r, index)
-    r.SunOn()
+    for value, setup in zip(VALUES, EXTREMES.values()):
+        setup(r.GetLabelProperties(), value)
+    settings = r.GetSettings()
+    settings.SunOn()
     if sun == "delta":
-        r.SetSunAngularRadius(0)
-        r.SetSunIrradiance(1e20, 1e20, 1e20)
+        settings.SetSunAngularRadius(0)
+        settings.SetSunIrradiance(1e20, 1e20, 1e20)
     elif sun == "huge disk":
-        r.SetSunAngularRadius(89)
-        r.SetSunIrradiance(1e6, 0, 1e6)
+        settings.SetSunAngularRadius(89)
+        settings.SetSunIrradiance(1e6, 0, 1e6)
     else:
-        r.SetSunDirection(1, 0, 1e-7)
-        r.SetSunIrradiance(5, 5, 5)
-    r.SetMaximumBounces(64)
-    r.SetSamplesPerPixel(8)
+        settings.SetSunDirection(1, 0, 1e-7)
+        settings.SetSunIrradiance(5, 5, 5)
+    settings.SetMaximumBounces(64)
+    settings.SetSamplesPerPixel(8)
     out = render(r)
     for name in ("HDR", "Depth", "Normal"):
         assert np.all(np.isfinite(out[name])), name
     assert np.all(out["HDR"] >= 0)
     # And the remaining extremes on the other labels.
     r2 = make_renderer(volume)
-    for index, setup in zip(range(len(VALUES)), list(EXTREMES.values())[3:]):
-        setup(r2, index)
-    r2.SetEnvironmentColor(1e10, 0, 1e-10)
-    r2.SetSamplesPerPixel(8)
+    for value, setup in zip(VALUES, list(EXTREMES.values())[3:]):
+        setup(r2.GetLabelProperties(), value)
+    r2.GetSettings().SetEnvironmentColor(1e10, 0, 1e-10)
+    r2.GetSettings().SetSamplesPerPixel(8)
     out = render(r2)
     assert np.all(np.isfinite(out["HDR"])) and np.all(out["HDR"] >= 0)
 
@@ -191,10 +202,10 @@ def test_emission_is_the_only_light_in_the_dark(volume):
     glows in its color (with 1 px ~ 1 voxel, jittered samples also see its neighbours, so the
     check is on means), and without emission the image is exactly black."""
     r = make_renderer(volume)
-    r.SetEnvironmentColor(0, 0, 0)
-    r.SetBackground(0, 0, 0, 1)
-    r.SetLabelEmission(1, 4, 2, 1)
-    r.SetSamplesPerPixel(8)
+    r.GetSettings().SetEnvironmentColor(0, 0, 0)
+    r.GetSettings().SetBackground(0, 0, 0, 1)
+    r.GetLabelProperties().SetEmission(VALUES[1], 4, 2, 1)  # label index 1
+    r.GetSettings().SetSamplesPerPixel(8)
     out = render(r)
     emitter = out["Label"] == 2
     others = (out["Label"] > 0) & ~emitter
@@ -202,7 +213,7 @@ def test_emission_is_the_only_light_in_the_dark(volume):
     rgb = out["HDR"][emitter, :3].mean(axis=0)
     assert rgb[0] > 2 and rgb[0] > rgb[1] > rgb[2] > 0
     assert out["HDR"][others, 0].mean() < rgb[0]
-    r.SetLabelEmission(1, 0, 0, 0)
+    r.GetLabelProperties().SetEmission(VALUES[1], 0, 0, 0)
     dark = render(r)
     assert np.all(dark["HDR"][:, :3] == 0)
 
@@ -212,20 +223,20 @@ def test_hidden_labels_vanish(labels, volume):
     a volume built without it (same materials per label value, same seed)."""
     hidden_value = VALUES[1]
     r = make_renderer(volume)
-    r.SetLabelVisibility(1, False)
-    r.SetLabelColor(0, 0.8, 0.3, 0.2)
-    r.SetLabelColor(2, 0.2, 0.4, 0.9)
-    r.SetSamplesPerPixel(16)
-    r.SetSeed(3)
+    r.GetLabelProperties().SetVisibility(hidden_value, False)
+    r.GetLabelProperties().SetColor(VALUES[0], srgb(0.8), srgb(0.3), srgb(0.2))
+    r.GetLabelProperties().SetColor(VALUES[2], srgb(0.2), srgb(0.4), srgb(0.9))
+    r.GetSettings().SetSamplesPerPixel(16)
+    r.GetSettings().SetSeed(3)
     out = render(r)
     assert not np.any(out["Label"] == 2)
 
     without = build(labels, excluded=(hidden_value,))  # label table: VALUES[0], VALUES[2]
     ref = make_renderer(without)
-    ref.SetLabelColor(0, 0.8, 0.3, 0.2)
-    ref.SetLabelColor(1, 0.2, 0.4, 0.9)
-    ref.SetSamplesPerPixel(16)
-    ref.SetSeed(3)
+    ref.GetLabelProperties().SetColor(VALUES[0], srgb(0.8), srgb(0.3), srgb(0.2))
+    ref.GetLabelProperties().SetColor(VALUES[2], srgb(0.2), srgb(0.4), srgb(0.9))
+    ref.GetSettings().SetSamplesPerPixel(16)
+    ref.GetSettings().SetSeed(3)
     expected = render(ref)
     # Label indices differ (index 2 there is index 1 here); hits and depths are equal.
     remap = np.array([0, 1, 3], np.int64)
@@ -234,7 +245,7 @@ def test_hidden_labels_vanish(labels, volume):
     assert np.allclose(expected["HDR"], out["HDR"], atol=1e-4)
     # Shown again: the label returns (and the BVH was rebuilt for both changes).
     builds = r.GetNumberOfBVHBuilds()
-    r.SetLabelVisibility(1, True)
+    r.GetLabelProperties().SetVisibility(hidden_value, True)
     assert np.any(render(r)["Label"] == 2)
     assert r.GetNumberOfBVHBuilds() == builds + 1
 
@@ -245,15 +256,16 @@ def test_nee_and_plain_estimator_agree(volume):
     means = {}
     for nee in (True, False):
         r = make_renderer(volume, azimuth=20, elevation=35)
-        r.SunOn()
-        r.SetSunDirection(0.4, 0.5, 0.77)
-        r.SetSunAngularRadius(8)  # large enough that escaping paths find it
-        r.SetSunIrradiance(3, 3, 3)
-        r.SetEnvironmentColor(0.2, 0.25, 0.3)
-        r.SetMaximumBounces(4)
-        r.SetNextEventEstimation(nee)
-        r.SetSamplesPerPixel(512)
-        r.SetSeed(5)
+        settings = r.GetSettings()
+        settings.SunOn()
+        settings.SetSunDirection(0.4, 0.5, 0.77)
+        settings.SetSunAngularRadius(8)  # large enough that escaping paths find it
+        settings.SetSunIrradiance(3, 3, 3)
+        settings.SetEnvironmentColor(0.2, 0.25, 0.3)
+        settings.SetMaximumBounces(4)
+        settings.SetNextEventEstimation(nee)
+        settings.SetSamplesPerPixel(512)
+        settings.SetSeed(5)
         for _ in range(1 if nee else 8):  # the plain estimator's noise is ~0.5% at 4096 spp
             out = render(r)
         hit = out["Label"] > 0
@@ -264,7 +276,7 @@ def test_nee_and_plain_estimator_agree(volume):
 
 def test_material_edit_does_not_rebuild(volume):
     r = make_renderer(volume)
-    r.SetSamplesPerPixel(2)
+    r.GetSettings().SetSamplesPerPixel(2)
     first = render(r)
     builds = r.GetNumberOfBVHBuilds()
     setup = r.GetSetupSeconds()
@@ -272,8 +284,8 @@ def test_material_edit_does_not_rebuild(volume):
     assert builds >= 1 and pipelines >= 1
     render(r)
     assert r.GetAccumulatedSamples() == 4
-    r.SetLabelColor(0, 0.9, 0.1, 0.1)
-    r.SetLabelRoughness(1, 0.1)
+    r.GetLabelProperties().SetColor(VALUES[0], srgb(0.9), srgb(0.1), srgb(0.1))
+    r.GetLabelProperties().SetRoughness(VALUES[1], 0.1)
     edited = render(r)
     assert r.GetAccumulatedSamples() == 2  # the edit restarted the accumulation
     assert r.GetNumberOfBVHBuilds() == builds and r.GetSetupSeconds() == setup
@@ -281,29 +293,40 @@ def test_material_edit_does_not_rebuild(volume):
     hit0 = first["Label"] == 1
     assert not np.allclose(edited["HDR"][hit0], first["HDR"][hit0])
     # Emission is a feature compiled in only when used: the pipeline is rebuilt, the BVH not.
-    r.SetLabelEmission(2, 1, 1, 1)
+    r.GetLabelProperties().SetEmission(VALUES[2], 1, 1, 1)
     render(r)
     assert r.GetNumberOfPipelineBuilds() == pipelines + 1
     assert r.GetNumberOfBVHBuilds() == builds
     # Visibility is a BVH change.
-    r.SetLabelVisibility(2, False)
+    r.GetLabelProperties().SetVisibility(VALUES[2], False)
     render(r)
     assert r.GetNumberOfBVHBuilds() == builds + 1
 
 
 def test_bad_settings_fail_cleanly(volume, tmp_path):
     r = make_renderer(volume)
-    r.SetLabelColor(7, 1, 1, 1)  # only 3 labels
-    assert r.Render() == 0
-    r.ResetLabelMaterials()
+    plain = render(r)
+    # Label properties are keyed by label value: a value the volume does not hold is ignored.
+    r.GetLabelProperties().SetColor(7, 1, 0, 0)
+    again = render(r)
+    assert r.GetAccumulatedSamples() == 2  # no material changed: the accumulation continues
+    assert np.array_equal(again["Label"], plain["Label"])
+    r.GetLabelProperties().RemoveAllLabels()
     assert r.Render() == 1
-    r.SetEnvironmentMap(str(tmp_path / "missing.exr"))
+    settings = r.GetSettings()
+    settings.SetEnvironmentMap(str(tmp_path / "missing.exr"))
     assert r.Render() == 0
-    r.SetEnvironmentMap(None)
-    r.SunOn()
-    r.SetSunDirection(0, 0, 0)
-    assert r.Render() == 0
-    r.SetSunDirection(0, 0, 1)
+    settings.SetEnvironmentMap(None)
+    settings.SunOn()
+    # A zero sun direction is rejected where it is set (the direction stays).
+    messages = capture_errors(settings)
+    settings.SetSunDirection(0, 0, 0)
+    assert messages and "direction" in messages[0]
+    direction = [0.0] * 3
+    settings.GetSunDirection(direction)
+    assert np.allclose(direction, (0.3, 0.4, 0.866))
+    assert r.Render() == 1
+    settings.SetSunDirection(0, 0, 1)
     assert r.Render() == 1
     assert r.WriteImage(str(tmp_path / "image.bmp")) == 0
 
@@ -312,13 +335,13 @@ def test_environment_map_and_write_image(volume, tmp_path):
     """An equirectangular EXR lights the scene: the renderer's own EXR output serves as a map.
     PNG and EXR outputs are written."""
     r = make_renderer(volume)
-    r.SetSamplesPerPixel(4)
+    r.GetSettings().SetSamplesPerPixel(4)
     out = render(r)
     assert r.WriteImage(str(tmp_path / "image.png")) == 1
     assert r.WriteImage(str(tmp_path / "map.exr")) == 1
     assert (tmp_path / "image.png").stat().st_size > 0
     pipelines = r.GetNumberOfPipelineBuilds()
-    r.SetEnvironmentMap(str(tmp_path / "map.exr"))
+    r.GetSettings().SetEnvironmentMap(str(tmp_path / "map.exr"))
     lit = render(r)
     assert r.GetNumberOfPipelineBuilds() == pipelines + 1  # the map feature is compiled in
     assert np.all(np.isfinite(lit["HDR"]))
@@ -333,6 +356,9 @@ def fresnel_dielectric(cos_i, eta):
     rs = (cos_i - eta * cos_t) / (cos_i + eta * cos_t)
     rp = (eta * cos_i - cos_t) / (eta * cos_i + cos_t)
     return 0.5 * (rs ** 2 + rp ** 2)
+
+
+PANE, FLOOR = 3, 5  # the pane fixture's label values (indices 0 and 1)
 
 
 @pytest.fixture(scope="module")
@@ -354,8 +380,8 @@ def pane_renderer(pane):
     r.SetCameraFocalPoint(15.5, 15.5, 0)
     r.SetCameraViewUp(0, 1, 0)
     r.SetCameraViewAngle(30)
-    r.SetSamplesPerPixel(64)
-    r.SetMaximumBounces(16)
+    r.GetSettings().SetSamplesPerPixel(64)
+    r.GetSettings().SetMaximumBounces(16)
     return r
 
 
@@ -377,14 +403,15 @@ def test_transmission_shows_what_is_behind(pane):
     black sky: the pane's pixels show the floor through it, at the Fresnel-transmitted share of
     its radiance; opaque white (transmission 0) shows nothing there (it only faces the sky)."""
     r = pane_renderer(pane)
-    r.SetEnvironmentColor(0, 0, 0)
-    r.SetBackground(0, 0, 0, 1)
-    r.SetLabelColor(0, 1, 1, 1)
-    r.SetLabelTransmission(0, 1)
-    r.SetLabelIOR(0, 1.5)
-    r.SetLabelRoughness(0, 0)
-    r.SetLabelColor(1, 0, 0, 0)
-    r.SetLabelEmission(1, 1, 1, 1)
+    r.GetSettings().SetEnvironmentColor(0, 0, 0)
+    r.GetSettings().SetBackground(0, 0, 0, 1)
+    labels = r.GetLabelProperties()
+    labels.SetColor(PANE, 1, 1, 1)
+    labels.SetTransmission(PANE, 1)
+    labels.SetIOR(PANE, 1.5)
+    labels.SetRoughness(PANE, 0)
+    labels.SetColor(FLOOR, 0, 0, 0)
+    labels.SetEmission(FLOOR, 1, 1, 1)
     out = render(r)
     for name in ("HDR", "Depth", "Normal"):
         assert np.all(np.isfinite(out[name])), name
@@ -402,7 +429,7 @@ def test_transmission_shows_what_is_behind(pane):
     seen = out["HDR"][inner, :3].mean(axis=0)
     assert np.all(np.abs(seen - expected) < 0.03), (seen, expected)
 
-    r.SetLabelTransmission(0, 0)
+    labels.SetTransmission(PANE, 0)
     opaque = render(r)
     assert np.all(np.isfinite(opaque["HDR"]))
     assert opaque["HDR"][pane_pixels(opaque), :3].mean() < 0.02
@@ -412,14 +439,15 @@ def test_transmissive_white_furnace(pane):
     """Transmission conserves energy: with every label clear white glass under a constant sky of
     radiance 1, every pixel has radiance 1."""
     r = pane_renderer(pane)
-    for index in range(2):
-        r.SetLabelColor(index, 1, 1, 1)
-        r.SetLabelTransmission(index, 1)
-        r.SetLabelIOR(index, 1.5)
-        r.SetLabelRoughness(index, 0)
-    r.SetEnvironmentColor(1, 1, 1)
-    r.SetBackground(1, 1, 1, 1)
-    r.SetMaximumBounces(64)
+    labels = r.GetLabelProperties()
+    for value in (PANE, FLOOR):
+        labels.SetColor(value, 1, 1, 1)
+        labels.SetTransmission(value, 1)
+        labels.SetIOR(value, 1.5)
+        labels.SetRoughness(value, 0)
+    r.GetSettings().SetEnvironmentColor(1, 1, 1)
+    r.GetSettings().SetBackground(1, 1, 1, 1)
+    r.GetSettings().SetMaximumBounces(64)
     out = render(r)
     assert np.all(np.isfinite(out["HDR"]))
     hit = out["Label"] > 0

@@ -21,13 +21,14 @@ from conftest import capture_errors, compress_zyx as build
 from vtkmodules.util.numpy_support import vtk_to_numpy
 
 from vtksvdag.vtkSVDAGCore import vtkSegmentationSVDAGRayCaster
-from vtksvdag.vtkSVDAGRendering import vtkSegmentationSVDAGRenderer
+from vtksvdag.vtkSVDAGRendering import (vtkSegmentationSVDAGRenderer,
+                                        vtkSegmentationSVDAGRenderSettings)
 
 WIDTH, HEIGHT = 64, 48
 LODS = (
-    vtkSegmentationSVDAGRenderer.LOD_BLOCK,
-    vtkSegmentationSVDAGRenderer.LOD_LEAF,
-    vtkSegmentationSVDAGRenderer.LOD_VOXEL,
+    vtkSegmentationSVDAGRenderSettings.LOD_BLOCK,
+    vtkSegmentationSVDAGRenderSettings.LOD_LEAF,
+    vtkSegmentationSVDAGRenderSettings.LOD_VOXEL,
 )
 DEPTH_MISS = np.float32(3.402823466e38)
 
@@ -86,7 +87,7 @@ def lod_boxes(labels, lod):
                     z, y, x = np.nonzero(cell == value)
                     xyz = np.stack([x, y, z], axis=1)
                     block_lo, block_hi = xyz.min(axis=0), xyz.max(axis=0) + 1
-                    if lod == vtkSegmentationSVDAGRenderer.LOD_BLOCK:
+                    if lod == vtkSegmentationSVDAGRenderSettings.LOD_BLOCK:
                         boxes = [(block_lo, block_hi)]
                     else:
                         leaves = np.unique(xyz // 4, axis=0) * 4
@@ -213,12 +214,12 @@ def assert_matches_cpu(labels, volume, renderer, lod, what):
     """Voxel LOD: the labels must agree. Block and leaf LOD: boxes of different labels overlap
     inside a cell, so where several are entered at the same distance the label is any of them
     (checked against an independent brute force over the boxes); hit/miss and depth must agree."""
-    renderer.SetLOD(lod)
+    renderer.GetSettings().SetLOD(lod)
     assert renderer.Render() == 1
     gpu_label, gpu_depth = outputs(renderer)
     gpu_normal = vtk_to_numpy(renderer.GetOutput().GetPointData().GetArray("Normal"))
     cpu_label, cpu_depth, cpu_normal = cpu_reference(volume, renderer, lod)
-    if lod == vtkSegmentationSVDAGRenderer.LOD_VOXEL:
+    if lod == vtkSegmentationSVDAGRenderSettings.LOD_VOXEL:
         same = gpu_label == cpu_label
     else:
         table = vtk_to_numpy(volume.NewLabelValues()).astype(np.int64)
@@ -289,8 +290,10 @@ def test_outputs_are_consistent(real_volume):
             near_hit |= grid[dy:dy + HEIGHT, dx:dx + WIDTH]
     far_miss = ~near_hit.ravel()
     assert far_miss.any()
-    assert np.allclose(hdr[far_miss], renderer.GetBackground(), atol=1e-6)
-    x = hdr[:, :3] * renderer.GetExposure()
+    background = [0.0] * 4
+    renderer.GetSettings().GetBackground(background)
+    assert np.allclose(hdr[far_miss], background, atol=1e-6)
+    x = hdr[:, :3] * renderer.GetSettings().GetExposure()
     mapped = x / (1 + x)
     srgb = np.where(mapped <= 0.0031308, 12.92 * mapped, 1.055 * mapped ** (1 / 2.4) - 0.055)
     assert np.max(np.abs(np.round(np.clip(srgb, 0, 1) * 255) - color[:, :3])) <= 1
@@ -316,18 +319,18 @@ def test_auto_lod_chooses_per_ray(real_volume):
     renderer.ResetCamera(-40, 25, 1.0)
     fixed = {}
     for lod in LODS:
-        renderer.SetLOD(lod)
+        renderer.GetSettings().SetLOD(lod)
         assert renderer.Render() == 1
         fixed[lod] = outputs(renderer)
-    renderer.SetLOD(vtkSegmentationSVDAGRenderer.LOD_AUTO)
-    for pixels, expected in ((1e6, vtkSegmentationSVDAGRenderer.LOD_BLOCK),
-                             (1e-6, vtkSegmentationSVDAGRenderer.LOD_VOXEL)):
-        renderer.SetAutoLODPixels(pixels)
+    renderer.GetSettings().SetLOD(vtkSegmentationSVDAGRenderSettings.LOD_AUTO)
+    for pixels, expected in ((1e6, vtkSegmentationSVDAGRenderSettings.LOD_BLOCK),
+                             (1e-6, vtkSegmentationSVDAGRenderSettings.LOD_VOXEL)):
+        renderer.GetSettings().SetAutoLODPixels(pixels)
         assert renderer.Render() == 1
         label, depth = outputs(renderer)
         assert np.array_equal(label, fixed[expected][0])
         assert np.array_equal(depth, fixed[expected][1])
-    renderer.SetAutoLODPixels(4.0)  # 64x48 pixels: leaves and blocks at some distances
+    renderer.GetSettings().SetAutoLODPixels(4.0)  # 64x48 pixels: leaves and blocks at some distances
     assert renderer.Render() == 1
     label, _ = outputs(renderer)
     some_level = np.zeros(len(label), bool)
@@ -344,14 +347,14 @@ def test_hidden_labels_vanish(real_volume):
     label, _ = outputs(renderer)
     visible, counts = np.unique(label[label > 0], return_counts=True)
     hidden = visible[np.argsort(counts)[-3:]] - 1  # the three largest on screen
+    values = vtk_to_numpy(volume.NewLabelValues()).astype(np.int64)  # index -> label value
     for index in hidden:
-        renderer.HideLabel(int(index))
+        renderer.GetLabelProperties().SetVisibility(int(values[index]), False)
     assert renderer.Render() == 1
     label_hidden, depth_hidden = outputs(renderer)
     assert not np.isin(label_hidden - 1, hidden).any()
     # The pixels they covered now show what lies behind them: exactly the image of a volume
     # built without those labels (compared by label value, the label tables differ).
-    values = vtk_to_numpy(volume.NewLabelValues()).astype(np.int64)
     without = build(labels, spacing=(1.0, 0.9, 1.2), origin=(-50.0, 0.0, 20.0),
                     excluded=values[hidden])
     reference = make_renderer(without)
@@ -363,7 +366,7 @@ def test_hidden_labels_vanish(real_volume):
     as_value = lambda lab, table: np.where(lab > 0, table[np.maximum(lab - 1, 0)], -1)
     assert np.array_equal(as_value(label_hidden, values), as_value(ref_label, ref_values))
     assert np.array_equal(depth_hidden, ref_depth)
-    renderer.ShowAllLabels()
+    renderer.GetLabelProperties().ShowAllLabels()
     assert renderer.Render() == 1
     assert np.array_equal(outputs(renderer)[0], label)
 
@@ -397,7 +400,7 @@ def test_split_into_several_blas_gives_the_same_image(real_volume):
     assert renderer.Render() == 1
     assert renderer.GetNumberOfBLAS() == 1
     single = outputs(renderer)
-    renderer.SetMaximumBlocksPerBLAS(37)  # not a divisor of the block count: a short last BLAS
+    renderer.GetSettings().SetMaximumBlocksPerBLAS(37)  # not a divisor of the block count: a short last BLAS
     assert renderer.Render() == 1
     blocks = real_volume[1].GetNumberOfBlocks()
     assert renderer.GetNumberOfBLAS() == -(-blocks // 37)
@@ -410,8 +413,8 @@ def test_all_labels_hidden_is_an_empty_image(random_volume):
     labels, volume = random_volume
     renderer = make_renderer(volume)
     renderer.ResetCamera(0, 0, 1)
-    for index in range(volume.GetNumberOfLabels()):
-        renderer.HideLabel(index)
+    for value in vtk_to_numpy(volume.NewLabelValues()):
+        renderer.GetLabelProperties().SetVisibility(int(value), False)
     assert renderer.Render() == 1
     label, depth = outputs(renderer)
     assert np.all(label == 0) and np.all(depth == DEPTH_MISS)
@@ -455,7 +458,7 @@ def test_command_line_renders_a_file(real_volume, tmp_path):
     renderer.SetInputData(real_volume[1])
     renderer.SetWidth(40)
     renderer.SetHeight(30)
-    renderer.SetLOD(vtkSegmentationSVDAGRenderer.LOD_LEAF)
+    renderer.GetSettings().SetLOD(vtkSegmentationSVDAGRenderSettings.LOD_LEAF)
     renderer.ResetCamera(15, 20, 1)  # the command line's default elevation is 20
     assert renderer.Render() == 1
     color = vtk_to_numpy(renderer.GetOutput().GetPointData().GetArray("Color"))
@@ -504,3 +507,73 @@ def test_empty_and_single_voxel_volumes():
     for lod in LODS:
         label, _ = assert_matches_cpu(one, single, renderer, lod, "single voxel")
         assert np.count_nonzero(label) > WIDTH * HEIGHT // 10
+
+
+def test_renderer_is_a_pipeline_algorithm():
+    """Connected to vtkImageDataToSegmentationSVDAG by SetInputConnection, Update() renders; a
+    different label image upstream re-executes the renderer (its Label output follows, checked
+    against the CPU ray caster); SetInputData works as well."""
+    from vtkmodules.util.numpy_support import numpy_to_vtk
+    from vtkmodules.vtkCommonDataModel import vtkImageData
+    from vtksvdag.vtkSVDAGCore import vtkImageDataToSegmentationSVDAG
+
+    def label_image(labels):
+        image = vtkImageData()
+        image.SetDimensions(labels.shape[2], labels.shape[1], labels.shape[0])
+        image.GetPointData().SetScalars(numpy_to_vtk(labels.ravel(), deep=True))
+        return image
+
+    first = np.zeros((12, 12, 12), np.uint8)
+    first[3:9, 3:9, 3:9] = 4  # one cube of value 4
+    second = np.zeros_like(first)
+    second[2:10, 2:10, 1:6] = 2  # two boxes of values 2 and 6, larger than the cube
+    second[2:10, 2:10, 6:11] = 6
+
+    builder = vtkImageDataToSegmentationSVDAG()
+    builder.SetInputData(label_image(first))
+    renderer = vtkSegmentationSVDAGRenderer()
+    renderer.SetInputConnection(builder.GetOutputPort())
+    renderer.SetWidth(WIDTH)
+    renderer.SetHeight(HEIGHT)
+    assert renderer.ResetCamera(25, 30, 1.0) == 1  # updates the builder to frame its volume
+    renderer.Update()
+    out = renderer.GetOutput()
+    assert out.GetDimensions() == (WIDTH, HEIGHT, 1)
+    assert renderer.GetAccumulatedSamples() == 1
+    renderer.Update()  # nothing changed: no new pass
+    assert renderer.GetAccumulatedSamples() == 1
+    assert renderer.GetInput() is builder.GetOutput()
+
+    def check(labels, expected_values):
+        volume = builder.GetOutput()
+        gpu_label, _ = outputs(renderer)
+        cpu_label, _, _ = cpu_reference(volume, renderer, vtkSegmentationSVDAGRenderSettings.LOD_VOXEL)
+        assert (gpu_label == cpu_label).mean() >= 0.999
+        table = vtk_to_numpy(volume.NewLabelValues()).astype(np.int64)
+        assert set(table[np.unique(gpu_label[gpu_label > 0]) - 1]) == expected_values
+        return gpu_label
+
+    before = check(first, {4})
+    builder.SetInputData(label_image(second))
+    renderer.Update()  # re-executes: the builder's output changed
+    assert renderer.GetAccumulatedSamples() == 1  # a new volume, a new accumulation
+    after = check(second, {2, 6})
+    assert np.count_nonzero(after) > np.count_nonzero(before)
+    renderer.Update()
+    assert renderer.GetAccumulatedSamples() == 1
+    # A settings change re-executes too, and so does Render() (one more pass).
+    renderer.GetSettings().SetSamplesPerPixel(2)
+    renderer.Update()
+    assert renderer.GetAccumulatedSamples() == 3
+    assert renderer.Render() == 1
+    assert renderer.GetAccumulatedSamples() == 5
+
+    # SetInputData: the same volume gives the same Label image.
+    direct = vtkSegmentationSVDAGRenderer()
+    direct.SetInputData(build(second))
+    direct.SetWidth(WIDTH)
+    direct.SetHeight(HEIGHT)
+    for name in ("CameraPosition", "CameraFocalPoint", "CameraViewUp"):
+        getattr(direct, "Set" + name)(getattr(renderer, "Get" + name)())
+    direct.Update()
+    assert np.array_equal(outputs(direct)[0], after)

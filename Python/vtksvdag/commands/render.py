@@ -82,17 +82,16 @@ def run(args):
 
     volume = load(args, args.input)
     values = list(volume.labels)
-    hidden = []
     for value in args.hide:
         if value not in values:
             raise ValueError(f"--hide: label {value} is not in the volume")
-        hidden.append(values.index(value))
 
     renderer = vtkSegmentationSVDAGRenderer()
 
     def check(call, what):
         try:
-            with vtk_errors_raised(renderer, RuntimeError):
+            # The executive's "returned failure" message only repeats that the pass failed.
+            with vtk_errors_raised([renderer, renderer.GetExecutive(), settings], RuntimeError):
                 ok = call()
         except RuntimeError as error:
             detail = str(error)
@@ -105,23 +104,25 @@ def run(args):
     renderer.SetInputData(volume.dataobject)
     renderer.SetWidth(args.width)
     renderer.SetHeight(args.height)
-    renderer.SetLOD(LODS.index(args.lod))
-    renderer.SetMaximumBounces(args.bounces)
-    renderer.SetSeed(args.seed)
-    renderer.SetNextEventEstimation(not args.no_nee)
-    renderer.SetSamplesPerPixel(1)
+    settings = renderer.GetSettings()
+    settings.SetLOD(LODS.index(args.lod))
+    settings.SetMaximumBounces(args.bounces)
+    settings.SetSeed(args.seed)
+    settings.SetNextEventEstimation(not args.no_nee)
+    settings.SetSamplesPerPixel(1)
     if args.environment:
-        renderer.SetEnvironmentMap(args.environment)
+        settings.SetEnvironmentMap(args.environment)
     sky = args.sky if args.sky else ((0.25, 0.27, 0.3) if args.sun else (1.0, 1.0, 1.0))
     if min(sky) < 0 or not all(math.isfinite(c) for c in sky):
         raise ValueError(f"--sky must be three finite values >= 0, got {sky}")
-    renderer.SetEnvironmentColor(*sky)
+    settings.SetEnvironmentColor(*sky)
     if args.sun:
         az, el = (math.radians(a) for a in args.sun)
-        renderer.SunOn()
-        renderer.SetSunDirection(math.cos(el) * math.cos(az), math.cos(el) * math.sin(az), math.sin(el))
-    for index in hidden:
-        renderer.SetLabelVisibility(index, False)
+        settings.SunOn()
+        settings.SetSunDirection(math.cos(el) * math.cos(az), math.cos(el) * math.sin(az), math.sin(el))
+    for value in args.hide:
+        # A uint64 label of 2^63 or more is named by the int64 with the same bits.
+        renderer.GetLabelProperties().SetVisibility(value - 2 ** 64 if value >= 2 ** 63 else value, False)
     try:
         check(lambda: renderer.ResetCamera(args.azimuth, args.elevation, args.zoom), "camera")
         start = time.perf_counter()

@@ -1,0 +1,88 @@
+#include "svdagRenderSession.h"
+
+#include "vtkSegmentationSVDAGLabelProperties.h"
+#include "vtkSegmentationSVDAGRenderSettings.h"
+
+#include <svdag/Volume.h>
+#include <svdag_render/Material.h>
+#include <svdag_render/Renderer.h>
+
+#include <algorithm>
+#include <exception>
+#include <stdexcept>
+
+namespace svdag
+{
+namespace vtkglue
+{
+
+RenderSession::RenderSession()
+  : Settings(vtkSmartPointer<vtkSegmentationSVDAGRenderSettings>::New())
+  , Labels(vtkSmartPointer<vtkSegmentationSVDAGLabelProperties>::New())
+{
+}
+
+RenderSession::~RenderSession() = default;
+
+bool RenderSession::setSettings(vtkSegmentationSVDAGRenderSettings* settings)
+{
+  if (!settings || settings == this->Settings)
+    return false;
+  this->Settings = settings;
+  return true;
+}
+
+bool RenderSession::setLabels(vtkSegmentationSVDAGLabelProperties* labels)
+{
+  if (!labels || labels == this->Labels)
+    return false;
+  this->Labels = labels;
+  this->MaterialsTime = 0;
+  return true;
+}
+
+vtkMTimeType RenderSession::mtime() const
+{
+  return std::max(this->Settings->GetMTime(), this->Labels->GetMTime());
+}
+
+bool RenderSession::initialize()
+{
+  if (this->Core)
+    return true;
+  if (!this->Error.empty())
+    return false;
+  try
+  {
+    this->Core = std::make_unique<render::Renderer>();
+    return true;
+  }
+  catch (const std::exception& e)
+  {
+    this->Error = e.what();
+    return false;
+  }
+}
+
+render::Renderer& RenderSession::prepare(const std::shared_ptr<const Volume>& volume)
+{
+  if (!this->Core)
+    throw std::logic_error("RenderSession::prepare before initialize");
+  render::Renderer& r = *this->Core;
+  if (this->Uploaded != volume)
+  {
+    this->Uploaded.reset();
+    r.setVolume(volume);
+    this->Uploaded = volume;
+    this->MaterialsTime = 0;
+  }
+  if (this->Labels->GetMTime() != this->MaterialsTime)
+  {
+    r.setMaterials(this->Labels->MaterialsFor(*this->Uploaded));
+    this->MaterialsTime = this->Labels->GetMTime();
+  }
+  return r;
+}
+
+} // namespace vtkglue
+} // namespace svdag

@@ -1,0 +1,62 @@
+// What the VTK classes that drive the core renderer share (private to the Rendering module): the
+// settings and label-properties objects, the core renderer (created on first use; a failure is
+// kept and reported again, not retried), and the volume and materials it holds.
+#pragma once
+
+#include "vtkSmartPointer.h"
+#include "vtkType.h"
+
+#include <memory>
+#include <string>
+
+class vtkSegmentationSVDAGLabelProperties;
+class vtkSegmentationSVDAGRenderSettings;
+
+namespace svdag
+{
+class Volume;
+namespace render
+{
+class Renderer;
+}
+
+namespace vtkglue
+{
+
+class RenderSession
+{
+public:
+  RenderSession();
+  ~RenderSession();
+
+  vtkSegmentationSVDAGRenderSettings* settings() const { return this->Settings; }
+  // Returns whether it changed (null is ignored: the settings are never null).
+  bool setSettings(vtkSegmentationSVDAGRenderSettings* settings);
+  vtkSegmentationSVDAGLabelProperties* labels() const { return this->Labels; }
+  bool setLabels(vtkSegmentationSVDAGLabelProperties* labels);
+  // The later of the settings' and the label properties' MTimes.
+  vtkMTimeType mtime() const;
+
+  // Creates the core renderer if needed; false when no Vulkan device qualifies (error() says
+  // which devices were found and what each lacks).
+  bool initialize();
+  const std::string& error() const { return this->Error; }
+  // The core renderer, or null before a successful initialize().
+  render::Renderer* renderer() const { return this->Core.get(); }
+  // Uploads `volume` if it is not the one held and the materials if the label properties
+  // changed since the last upload; throws like the core. Needs initialize().
+  render::Renderer& prepare(const std::shared_ptr<const Volume>& volume);
+  // The volume held (null before prepare).
+  const std::shared_ptr<const Volume>& volume() const { return this->Uploaded; }
+
+private:
+  vtkSmartPointer<vtkSegmentationSVDAGRenderSettings> Settings;
+  vtkSmartPointer<vtkSegmentationSVDAGLabelProperties> Labels;
+  std::unique_ptr<render::Renderer> Core;
+  std::string Error;
+  std::shared_ptr<const Volume> Uploaded;
+  vtkMTimeType MaterialsTime = 0;
+};
+
+} // namespace vtkglue
+} // namespace svdag
