@@ -37,13 +37,16 @@ float srgbEncode(float linear)
 void main()
 {
   vec4 hdr = texture(colorTexture, texCoord);
-  if (hdr.a <= 0.0)
+  float depth = texture(depthTexture, texCoord).r;
+  // A pixel whose samples all missed may still hold the center ray's hit (a silhouette): its
+  // depth is written, with no color.
+  if (hdr.a <= 0.0 && (writeDepth == 0 || depth >= 1.0))
     discard;
-  vec3 x = max(hdr.rgb / hdr.a * exposure, vec3(0.0));
+  vec3 x = max(hdr.rgb / max(hdr.a, 1.0e-30) * exposure, vec3(0.0));
   x = x / (vec3(1.0) + x);
   float alpha = min(hdr.a, 1.0);
   gl_FragData[0] = vec4(srgbEncode(x.r) * alpha, srgbEncode(x.g) * alpha, srgbEncode(x.b) * alpha, alpha);
-  gl_FragDepth = writeDepth != 0 ? texture(depthTexture, texCoord).r : gl_FragCoord.z;
+  gl_FragDepth = writeDepth != 0 ? depth : gl_FragCoord.z;
 }
 )";
 

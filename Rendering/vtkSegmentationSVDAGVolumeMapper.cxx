@@ -18,6 +18,7 @@
 #include "vtkVolume.h"
 
 #include "svdagGLCompositor.h"
+#include "svdagRenderSession.h"
 
 #include <svdag_render/FrameBudget.h>
 #include <svdag_render/Material.h>
@@ -110,6 +111,28 @@ double imageCoordinate(int i, int n)
   return 2.0 * (i + 0.5) / n - 1.0;
 }
 
+// What identifies a frame: passes accumulate while it stays the same. The model-to-clip matrix
+// matches to 1e-6 relative (VTK recomputes the camera's key matrices in float in some paths:
+// vtkWindowToImageFilter re-renders with matrices that differ in the 8th digit, far less than a
+// pixel, which must not restart the accumulation); everything else exactly.
+struct FrameKey
+{
+  Matrix matrix{};
+  std::vector<uint64_t> ids;
+  bool matches(const FrameKey& o) const
+  {
+    if (ids.empty() || ids != o.ids)
+      return false;
+    for (size_t i = 0; i < matrix.size(); ++i)
+    {
+      const double a = matrix[i], b = o.matrix[i];
+      if (!(std::abs(a - b) <= 1e-6 * std::max({ 1.0, std::abs(a), std::abs(b) })))
+        return false;
+    }
+    return true;
+  }
+};
+
 // 64-bit FNV-1a of a float buffer (a change of what was drawn before the volume).
 uint64_t hashFloats(const std::vector<float>& values)
 {
@@ -123,20 +146,12 @@ uint64_t hashFloats(const std::vector<float>& values)
 
 struct vtkSegmentationSVDAGVolumeMapper::Internals
 {
-  vtkSmartPointer<vtkSegmentationSVDAGRenderSettings> Settings =
-    vtkSmartPointer<vtkSegmentationSVDAGRenderSettings>::New();
-  vtkSmartPointer<vtkSegmentationSVDAGLabelProperties> Labels =
-    vtkSmartPointer<vtkSegmentationSVDAGLabelProperties>::New();
-  std::unique_ptr<core::Renderer> Renderer;
-  // Why the Vulkan renderer could not be created (reported on every render, not retried).
-  std::string DeviceError;
-  std::shared_ptr<const svdag::Volume> Uploaded;
-  vtkMTimeType MaterialsTime = 0;
+  svdag::vtkglue::RenderSession Session;
   svdag::gl::Compositor Compositor;
   core::FrameBudget Budget;
 
   // The frame the accumulation belongs to: a different one restarts it.
-  std::vector<double> FrameKey;
+  FrameKey Frame;
   bool Converged = false;
   bool FullQuality = false;
   core::FrameLevel Level;
@@ -178,38 +193,30 @@ vtkSegmentationSVDAG* vtkSegmentationSVDAGVolumeMapper::GetInput()
 
 vtkMTimeType vtkSegmentationSVDAGVolumeMapper::GetMTime()
 {
-  return std::max({ this->Superclass::GetMTime(), this->Internal->Settings->GetMTime(),
-    this->Internal->Labels->GetMTime() });
+  return std::max(this->Superclass::GetMTime(), this->Internal->Session.mtime());
 }
 
 vtkSegmentationSVDAGRenderSettings* vtkSegmentationSVDAGVolumeMapper::GetSettings()
 {
-  return this->Internal->Settings;
+  return this->Internal->Session.settings();
 }
 
 void vtkSegmentationSVDAGVolumeMapper::SetSettings(vtkSegmentationSVDAGRenderSettings* settings)
 {
-  if (settings && settings != this->Internal->Settings)
-  {
-    this->Internal->Settings = settings;
+  if (this->Internal->Session.setSettings(settings))
     this->Modified();
-  }
 }
 
 vtkSegmentationSVDAGLabelProperties* vtkSegmentationSVDAGVolumeMapper::GetLabelProperties()
 {
-  return this->Internal->Labels;
+  return this->Internal->Session.labels();
 }
 
 void vtkSegmentationSVDAGVolumeMapper::SetLabelProperties(
   vtkSegmentationSVDAGLabelProperties* properties)
 {
-  if (properties && properties != this->Internal->Labels)
-  {
-    this->Internal->Labels = properties;
-    this->Internal->MaterialsTime = 0;
+  if (this->Internal->Session.setLabels(properties))
     this->Modified();
-  }
 }
 
 double* vtkSegmentationSVDAGVolumeMapper::GetBounds()
@@ -245,19 +252,7 @@ void vtkSegmentationSVDAGVolumeMapper::Render(vtkRenderer* renderer, vtkVolume* 
   in.Converged = false;
   try
   {
-    core::Renderer& r = *in.Renderer;
-    if (in.Uploaded != input->GetVolume())
-    {
-      in.Uploaded.reset();
-      r.setVolume(input->GetVolume());
-      in.Uploaded = input->GetVolume();
-      in.MaterialsTime = 0;
-    }
-    if (in.Labels->GetMTime() != in.MaterialsTime)
-    {
-      r.setMaterials(in.Labels->MaterialsFor(*in.Uploaded));
-      in.MaterialsTime = in.Labels->GetMTime();
-    }
+    core::Renderer& r = in.Session.prepare(input->GetVolume());
 
     const svdag::gl::Viewport vp = svdag::gl::Compositor::currentViewport(window);
     if (vp.width <= 0 || vp.height <= 0)
@@ -273,7 +268,7 @@ void vtkSegmentationSVDAGVolumeMapper::Render(vtkRenderer* renderer, vtkVolume* 
     const core::ViewRays rays = core::viewRaysFromClipToWorld(clipToModel);
 
     // The level: full quality unless the allocated time is too short for it.
-    const core::RenderSettings& base = in.Settings->GetCoreSettings();
+    const core::RenderSettings& base = in.Session.settings()->GetCoreSettings();
     const uint64_t viewportPixels = uint64_t(vp.width) * uint64_t(vp.height);
     const double budget = this->AutoAdjustToRenderTime ? volume->GetAllocatedRenderTime() : 0.0;
     in.Level = in.Budget.choose(base.lod, viewportPixels, budget);
@@ -322,13 +317,14 @@ void vtkSegmentationSVDAGVolumeMapper::Render(vtkRenderer* renderer, vtkVolume* 
     }
 
     // The frame's identity: while it stays the same, passes accumulate.
-    std::vector<double> key(modelToClip.begin(), modelToClip.end());
-    key.insert(key.end(), { double(vp.width), double(vp.height), double(in.Level.reduction),
-                            double(uint32_t(in.Level.lod)), double(in.Settings->GetMTime()),
-                            double(in.Labels->GetMTime()),
-                            double(reinterpret_cast<uintptr_t>(in.Uploaded.get())),
-                            double(limited ? hashFloats(limits) : 0) });
-    const bool sameFrame = key == in.FrameKey && r.accumulatedSamples() > 0 &&
+    FrameKey key;
+    key.matrix = modelToClip;
+    key.ids = { uint64_t(vp.width), uint64_t(vp.height), uint64_t(in.Level.reduction),
+      uint64_t(in.Level.lod), uint64_t(in.Session.settings()->GetMTime()),
+      uint64_t(in.Session.labels()->GetMTime()),
+      uint64_t(reinterpret_cast<uintptr_t>(in.Session.volume().get())),
+      limited ? hashFloats(limits) : 0 };
+    const bool sameFrame = key.matches(in.Frame) && r.accumulatedSamples() > 0 &&
       r.image().width == uint32_t(width) && r.image().height == uint32_t(height);
     const bool refined = sameFrame && in.FullQuality &&
       (r.accumulatedSamples() >= uint32_t(this->TargetSamplesPerPixel) ||
@@ -344,7 +340,7 @@ void vtkSegmentationSVDAGVolumeMapper::Render(vtkRenderer* renderer, vtkVolume* 
       r.setRayLimits(limited ? std::move(limits) : std::vector<float>());
       r.render();
       in.TraceMilliseconds = r.lastFrameMilliseconds();
-      in.FrameKey = std::move(key);
+      in.Frame = std::move(key);
     }
     const core::Image& image = r.image();
     in.Converged = in.FullQuality &&
@@ -413,22 +409,9 @@ void vtkSegmentationSVDAGVolumeMapper::Render(vtkRenderer* renderer, vtkVolume* 
 
 bool vtkSegmentationSVDAGVolumeMapper::InitializeDevice()
 {
-  Internals& in = *this->Internal;
-  if (in.Renderer)
+  if (this->Internal->Session.initialize())
     return true;
-  if (in.DeviceError.empty())
-  {
-    try
-    {
-      in.Renderer = std::make_unique<core::Renderer>();
-      return true;
-    }
-    catch (const std::exception& e)
-    {
-      in.DeviceError = e.what();
-    }
-  }
-  vtkErrorMacro("no Vulkan renderer: " << in.DeviceError);
+  vtkErrorMacro("no Vulkan renderer: " << this->Internal->Session.error());
   return false;
 }
 
@@ -446,7 +429,7 @@ int vtkSegmentationSVDAGVolumeMapper::RenderUntilConverged(
   {
     window->Render();
     ++renders;
-    if (!this->Internal->Renderer || this->Internal->FrameKey.empty())
+    if (!this->Internal->Session.renderer() || this->Internal->Frame.ids.empty())
       return 0; // nothing traced: the error was reported
   } while (!this->IsConverged() &&
     std::chrono::duration<double>(Clock::now() - start).count() < maximumSeconds);
@@ -460,17 +443,20 @@ bool vtkSegmentationSVDAGVolumeMapper::IsConverged()
 
 int vtkSegmentationSVDAGVolumeMapper::GetAccumulatedSamples()
 {
-  return this->Internal->Renderer ? int(this->Internal->Renderer->accumulatedSamples()) : 0;
+  const core::Renderer* r = this->Internal->Session.renderer();
+  return r ? int(r->accumulatedSamples()) : 0;
 }
 
 double vtkSegmentationSVDAGVolumeMapper::GetErrorEstimate()
 {
-  return this->Internal->Renderer ? this->Internal->Renderer->errorEstimate() : 0.0;
+  const core::Renderer* r = this->Internal->Session.renderer();
+  return r ? r->errorEstimate() : 0.0;
 }
 
 double vtkSegmentationSVDAGVolumeMapper::GetRenderSeconds()
 {
-  return this->Internal->Renderer ? this->Internal->Renderer->renderSeconds() : 0.0;
+  const core::Renderer* r = this->Internal->Session.renderer();
+  return r ? r->renderSeconds() : 0.0;
 }
 
 int vtkSegmentationSVDAGVolumeMapper::GetLastLOD()
@@ -495,20 +481,23 @@ double vtkSegmentationSVDAGVolumeMapper::GetLastFrameMilliseconds()
 
 const char* vtkSegmentationSVDAGVolumeMapper::GetDeviceName()
 {
-  return this->Internal->Renderer ? this->Internal->Renderer->deviceName().c_str() : "";
+  const core::Renderer* r = this->Internal->Session.renderer();
+  return r ? r->deviceName().c_str() : "";
 }
 
 vtkTypeInt64 vtkSegmentationSVDAGVolumeMapper::GetNumberOfBVHBuilds()
 {
-  return this->Internal->Renderer ? vtkTypeInt64(this->Internal->Renderer->bvhBuilds()) : 0;
+  const core::Renderer* r = this->Internal->Session.renderer();
+  return r ? vtkTypeInt64(r->bvhBuilds()) : 0;
 }
 
 bool vtkSegmentationSVDAGVolumeMapper::Pick(vtkRenderer* renderer, double x, double y)
 {
   Internals& in = *this->Internal;
-  if (!in.Renderer || !renderer || renderer != in.PickRenderer || !in.Uploaded)
+  const core::Renderer* core = in.Session.renderer();
+  if (!core || !renderer || renderer != in.PickRenderer || !in.Session.volume())
     return false;
-  const core::Image& image = in.Renderer->image();
+  const core::Image& image = core->image();
   const svdag::gl::Viewport& vp = in.PickViewport;
   if (!(x >= vp.x && x < vp.x + vp.width && y >= vp.y && y < vp.y + vp.height) ||
     image.width == 0)
@@ -518,7 +507,7 @@ bool vtkSegmentationSVDAGVolumeMapper::Pick(vtkRenderer* renderer, double x, dou
   const size_t i = size_t(px) + size_t(image.width) * size_t(py);
   if (image.label[i] == 0)
     return false;
-  in.PickedLabel = vtkTypeInt64(in.Uploaded->labels[image.label[i] - 1].value);
+  in.PickedLabel = vtkTypeInt64(in.Session.volume()->labels[image.label[i] - 1].value);
   const Ray ray = rayAt(in.PickRays, imageCoordinate(px, int(image.width)),
     imageCoordinate(py, int(image.height)));
   const Matrix& m = in.ModelToWorld;
@@ -566,7 +555,7 @@ void vtkSegmentationSVDAGVolumeMapper::GetPickedNormal(double normal[3])
 void vtkSegmentationSVDAGVolumeMapper::ReleaseGraphicsResources(vtkWindow* window)
 {
   this->Internal->Compositor.releaseGraphicsResources(window);
-  this->Internal->FrameKey.clear();
+  this->Internal->Frame = FrameKey();
   this->Internal->PickRenderer = nullptr;
 }
 
@@ -583,7 +572,7 @@ void vtkSegmentationSVDAGVolumeMapper::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "LastLOD: " << this->GetLastLOD() << "\n";
   os << indent << "LastReductionFactor: " << this->GetLastReductionFactor() << "\n";
   os << indent << "Settings:\n";
-  this->Internal->Settings->PrintSelf(os, indent.GetNextIndent());
+  this->Internal->Session.settings()->PrintSelf(os, indent.GetNextIndent());
   os << indent << "LabelProperties:\n";
-  this->Internal->Labels->PrintSelf(os, indent.GetNextIndent());
+  this->Internal->Session.labels()->PrintSelf(os, indent.GetNextIndent());
 }

@@ -59,8 +59,9 @@ def _label_keys(volume, values, what):
     for value in values:
         if value not in present:
             raise ValueError(f"{what} {value!r} is not a label of the volume")
-        pattern = label_pattern(value, volume.dtype, what)
-        keys.append(int(np.array(pattern, dtype=np.uint64).view(np.int64)))
+        # The 64-bit pattern (sign-extended for signed types) read as an int64.
+        pattern = int(label_pattern(value, volume.dtype, what)) & (2**64 - 1)
+        keys.append(pattern - 2**64 if pattern >= 2**63 else pattern)
     return keys
 
 
@@ -285,7 +286,8 @@ def add_segmentation(
     # Keep the Python wrapper (and so the SegmentationVolume) alive as long as the actor.
     actor._vtksvdag_volume = volume
     if reset_camera is None:
-        reset_camera = not plotter.renderer.actors
+        # Not `not renderer.actors`: pyvista puts a border actor in every subplot.
+        reset_camera = not plotter.renderer.camera_set
     plotter.add_actor(actor, name=name, reset_camera=bool(reset_camera))
     _enable_refinement(plotter)
     return actor
@@ -364,11 +366,16 @@ def refine(plotter, timeout=60.0):
         raise ValueError(f"timeout must be a number > 0, got {timeout!r}")
     mappers = _segmentation_mappers(plotter)
     start = time.perf_counter()
-    window = plotter.render_window
+    # Before its first show or screenshot, a plotter still has to put its cameras in their
+    # default place (pyvista does it on the first render request); refining at another view
+    # would be lost.
+    first_render = getattr(plotter, "_on_first_render_request", None)
+    if first_render is not None:
+        first_render()
     with vtk_errors_raised([m for _, m in mappers], RuntimeError):
-        window.Render()
+        plotter.render()
         while any(not m.IsConverged() for _, m in mappers) and time.perf_counter() - start < timeout:
-            window.Render()
+            plotter.render()
     return [
         {
             "samples": m.GetAccumulatedSamples(),

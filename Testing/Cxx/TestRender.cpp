@@ -255,3 +255,146 @@ TEST(RenderFrame, RayLimitsEndCameraRays)
   renderer.setRayLimits(wrongSize);
   EXPECT_THROW(renderer.render(), std::invalid_argument);
 }
+
+namespace
+{
+// A row-major OpenGL-style world-to-clip matrix of a pinhole camera (VTK's perspective
+// projection) with near and far planes at distances n and f, for a width x height image.
+std::array<double, 16> worldToClip(const svdag::render::Camera& c, uint32_t width, uint32_t height,
+  double n, double f)
+{
+  const auto b = svdag::render::rayBasis(c, width, height);
+  const double h = std::tan(c.viewAngle * 3.14159265358979323846 / 360);
+  const double aspect = double(width) / height;
+  Vec right = b.right, up = b.up;
+  for (int a = 0; a < 3; ++a)
+  {
+    right[a] /= h * aspect;
+    up[a] /= h;
+  }
+  const Vec back = { -b.forward[0], -b.forward[1], -b.forward[2] };
+  // View: rows right, up, back; translation -R.p etc.
+  std::array<double, 16> view{};
+  const Vec* rows[3] = { &right, &up, &back };
+  for (int r = 0; r < 3; ++r)
+  {
+    for (int k = 0; k < 3; ++k)
+      view[4 * r + k] = (*rows[r])[k];
+    view[4 * r + 3] = -dot(*rows[r], c.position);
+  }
+  view[15] = 1;
+  std::array<double, 16> proj{};
+  proj[0] = 1 / (h * aspect);
+  proj[5] = 1 / h;
+  proj[10] = -(f + n) / (f - n);
+  proj[11] = -2 * f * n / (f - n);
+  proj[14] = -1;
+  std::array<double, 16> m{};
+  for (int r = 0; r < 4; ++r)
+    for (int k = 0; k < 4; ++k)
+      for (int j = 0; j < 4; ++j)
+        m[4 * r + k] += proj[4 * r + j] * view[4 * j + k];
+  return m;
+}
+
+std::array<double, 16> inverse4(const std::array<double, 16>& m)
+{
+  // Gauss-Jordan with partial pivoting.
+  std::array<double, 32> a{};
+  for (int r = 0; r < 4; ++r)
+  {
+    for (int k = 0; k < 4; ++k)
+      a[8 * r + k] = m[4 * r + k];
+    a[8 * r + 4 + r] = 1;
+  }
+  for (int col = 0; col < 4; ++col)
+  {
+    int pivot = col;
+    for (int r = col + 1; r < 4; ++r)
+      if (std::abs(a[8 * r + col]) > std::abs(a[8 * pivot + col]))
+        pivot = r;
+    for (int k = 0; k < 8; ++k)
+      std::swap(a[8 * col + k], a[8 * pivot + k]);
+    const double p = a[8 * col + col];
+    for (int k = 0; k < 8; ++k)
+      a[8 * col + k] /= p;
+    for (int r = 0; r < 4; ++r)
+    {
+      if (r == col)
+        continue;
+      const double factor = a[8 * r + col];
+      for (int k = 0; k < 8; ++k)
+        a[8 * r + k] -= factor * a[8 * col + k];
+    }
+  }
+  std::array<double, 16> out{};
+  for (int r = 0; r < 4; ++r)
+    for (int k = 0; k < 4; ++k)
+      out[4 * r + k] = a[8 * r + 4 + k];
+  return out;
+}
+} // namespace
+
+// Rays from a projection matrix (the VTK mapper's path) equal the pinhole camera's: the same
+// directions, origins on the near plane, and so the same labels, depths shifted by the near
+// distance along each ray, and a path-traced image of the same mean.
+TEST(RenderFrame, ProjectionRaysMatchThePinholeCamera)
+{
+  const svdag::Geometry g = tiltedGeometry();
+  const auto volume = randomVolume(g, 11);
+  const auto camera = svdag::render::frameVolume(g, 25, -15, 1.5);
+  const uint32_t w = 40, h = 30;
+  svdag::render::Renderer pinhole;
+  pinhole.setVolume(volume);
+  pinhole.setImageSize(w, h);
+  pinhole.setCamera(camera);
+  for (int i = 0; i < 7; ++i)
+    pinhole.render();
+  const svdag::render::Image a = pinhole.image();
+
+  // Near and far planes hugging the volume, as vtkRenderer::ResetCameraClippingRange sets them.
+  const auto bounds = svdag::render::worldBounds(g);
+  const Vec center = { (bounds[0] + bounds[1]) / 2, (bounds[2] + bounds[3]) / 2,
+    (bounds[4] + bounds[5]) / 2 };
+  const Vec toCenter = { center[0] - camera.position[0], center[1] - camera.position[1],
+    center[2] - camera.position[2] };
+  const double radius = std::sqrt(std::pow(bounds[1] - bounds[0], 2) +
+    std::pow(bounds[3] - bounds[2], 2) + std::pow(bounds[5] - bounds[4], 2)) / 2;
+  const double n = std::sqrt(dot(toCenter, toCenter)) - 1.01 * radius;
+  const double f = std::sqrt(dot(toCenter, toCenter)) + 1.01 * radius;
+  ASSERT_GT(n, 0);
+  const auto rays = svdag::render::viewRaysFromClipToWorld(inverse4(worldToClip(camera, w, h, n, f)));
+  EXPECT_TRUE(rays.bounded);
+  svdag::render::Renderer projected;
+  projected.setVolume(volume);
+  projected.setImageSize(w, h);
+  projected.setViewRays(rays);
+  for (int i = 0; i < 7; ++i)
+    projected.render();
+  const svdag::render::Image& b = projected.image();
+  size_t same = 0, hits = 0;
+  double meanA = 0, meanB = 0;
+  size_t blackA = 0, blackB = 0;
+  for (size_t i = 0; i < size_t(w) * h; ++i)
+  {
+    same += a.label[i] == b.label[i];
+    if (a.label[i] != 0 && a.label[i] == b.label[i])
+    {
+      ++hits;
+      // The near plane is at distance n along the view axis: along the ray, n / cos.
+      EXPECT_LT(b.depth[i], a.depth[i]);
+      EXPECT_GT(b.depth[i], a.depth[i] - 2 * n);
+    }
+    for (int c = 0; c < 3; ++c)
+    {
+      meanA += a.hdr[4 * i + c];
+      meanB += b.hdr[4 * i + c];
+    }
+    blackA += a.label[i] != 0 && a.hdr[4 * i] + a.hdr[4 * i + 1] + a.hdr[4 * i + 2] == 0;
+    blackB += b.label[i] != 0 && b.hdr[4 * i] + b.hdr[4 * i + 1] + b.hdr[4 * i + 2] == 0;
+  }
+  EXPECT_GE(same, size_t(0.995 * w * h));
+  EXPECT_GT(hits, size_t(w) * h / 5);
+  EXPECT_NEAR(meanB, meanA, 0.02 * meanA);
+  EXPECT_EQ(blackB, blackA) << "pixels that hit but received no light";
+}
