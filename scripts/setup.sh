@@ -13,6 +13,8 @@ fi
 PIP=(.venv/bin/python -m pip install -q --disable-pip-version-check -c Python/constraints.txt)
 "${PIP[@]}" -r Python/requirements.txt
 "${PIP[@]}" --no-deps pyvista==0.46.5
+# pytest-pyvista's verify_image_cache (image regression); --no-deps for the same reason.
+"${PIP[@]}" --no-deps pytest-pyvista==0.3.3
 # The pure-Python package, editable, with its console script `vtksvdag`.
 "${PIP[@]}" --no-deps -e Python
 

@@ -1,0 +1,604 @@
+"""vtkSegmentationSVDAGVolumeMapper and its pyvista glue (vtksvdag.add_segmentation/refine/pick).
+
+The independent reference for picking is the CPU ray caster (vtkSegmentationSVDAGRayCaster),
+fed the world ray through each pixel center as VTK's own DisplayToWorld computes it; depth is
+checked against VTK's depth buffer and against renders of a mesh alone and the volume alone.
+Small volumes and 200x150 windows keep the file fast on lavapipe.
+"""
+import os
+import subprocess
+import sys
+import textwrap
+
+import numpy as np
+import pytest
+import vtkmodules.vtkRenderingOpenGL2  # noqa: F401 (the OpenGL factory overrides)
+from conftest import REPO, compress_zyx
+from vtkmodules.util.numpy_support import vtk_to_numpy
+from vtkmodules.vtkCommonCore import vtkFloatArray
+from vtkmodules.vtkCommonMath import vtkMatrix4x4
+from vtkmodules.vtkFiltersSources import vtkCubeSource
+from vtkmodules.vtkRenderingCore import (
+    vtkActor,
+    vtkPolyDataMapper,
+    vtkRenderer,
+    vtkRenderWindow,
+    vtkVolume,
+    vtkWindowToImageFilter,
+)
+
+from vtksvdag.vtkSVDAGCore import vtkSegmentationSVDAGRayCaster
+from vtksvdag.vtkSVDAGRendering import vtkSegmentationSVDAGVolumeMapper
+
+W, H = 200, 150
+DEPTH_STEP = 1.0 / (1 << 24)
+
+
+def two_boxes(n=40):
+    """(z, y, x) uint16 labels: two overlapping boxes, labels 3 and 7."""
+    labels = np.zeros((n, n, n), np.uint16)
+    labels[5:20, 8:30, 10:25] = 3
+    labels[15:35, 12:25, 20:38] = 7
+    return labels
+
+
+def make_scene(svdag, camera_position=(80, -60, 90), focal=(20, 20, 20), up=(0, 0, 1),
+               parallel=False, clipping=(20.0, 300.0), size=(W, H)):
+    mapper = vtkSegmentationSVDAGVolumeMapper()
+    mapper.SetInputData(svdag)
+    volume = vtkVolume()
+    volume.SetMapper(mapper)
+    renderer = vtkRenderer()
+    renderer.AddVolume(volume)
+    window = vtkRenderWindow()
+    window.SetOffScreenRendering(1)
+    window.SetSize(*size)
+    window.AddRenderer(renderer)
+    camera = renderer.GetActiveCamera()
+    camera.SetPosition(*camera_position)
+    camera.SetFocalPoint(*focal)
+    camera.SetViewUp(*up)
+    if parallel:
+        camera.ParallelProjectionOn()
+        camera.SetParallelScale(30.0)
+    camera.SetClippingRange(*clipping)
+    return window, renderer, volume, mapper
+
+
+def display_to_world(renderer, x, y, z):
+    renderer.SetDisplayPoint(x, y, z)
+    renderer.DisplayToWorld()
+    p = np.array(renderer.GetWorldPoint(), float)
+    return p[:3] / p[3]
+
+
+def pixel_ray(renderer, x, y):
+    """World origin (on the near plane) and direction of the ray through pixel (x, y)'s center."""
+    near = display_to_world(renderer, x + 0.5, y + 0.5, 0.0)
+    far = display_to_world(renderer, x + 0.5, y + 0.5, 1.0)
+    return near, far - near
+
+
+def mapper_pick(mapper, renderer, x, y):
+    if not mapper.Pick(renderer, x, y):
+        return None
+    position = [0.0] * 3
+    normal = [0.0] * 3
+    mapper.GetPickedPosition(position)
+    mapper.GetPickedNormal(normal)
+    return mapper.GetPickedLabel(), np.array(position), np.array(normal)
+
+
+def caster_pick(caster, origin, direction, to_world=None):
+    """The caster's hit as (label, world position, world normal); `to_world` maps model to world."""
+    if to_world is None:
+        model_origin, model_direction = origin, direction
+    else:
+        inverse = np.linalg.inv(to_world)
+        model_origin = (inverse @ np.append(origin, 1.0))[:3]
+        model_direction = inverse[:3, :3] @ direction
+    if not caster.CastRay(model_origin, model_direction):
+        return None
+    label = int(vtk_to_numpy(caster.GetHitLabelValue())[0])
+    position = np.array(caster.GetHitPosition())
+    normal = np.array(caster.GetHitNormal())
+    if to_world is not None:
+        position = (to_world @ np.append(position, 1.0))[:3]
+        normal = np.linalg.inv(to_world[:3, :3]).T @ normal
+        if np.linalg.norm(normal) > 0:
+            normal /= np.linalg.norm(normal)
+    return label, position, normal
+
+
+def compare_picks(mapper, renderer, svdag_reference, step=5, to_world=None, position_tol=1e-3):
+    """Fraction of grid pixels where the mapper's pick and the ray caster agree; and the hits."""
+    caster = vtkSegmentationSVDAGRayCaster()
+    caster.SetInputData(svdag_reference)
+    total = agree = hits = 0
+    labels_seen = set()
+    disagreements = []
+    for y in range(step // 2, H, step):
+        for x in range(step // 2, W, step):
+            origin, direction = pixel_ray(renderer, x, y)
+            expected = caster_pick(caster, origin, direction, to_world)
+            got = mapper_pick(mapper, renderer, x + 0.5, y + 0.5)
+            total += 1
+            if got is not None:
+                labels_seen.add(got[0])
+            if expected is None or got is None:
+                ok = expected is None and got is None
+            else:
+                hits += 1
+                ok = (expected[0] == got[0]
+                      and np.linalg.norm(expected[1] - got[1]) <= position_tol
+                      and np.allclose(expected[2], got[2], atol=1e-5))
+            agree += ok
+            if not ok and len(disagreements) < 5:
+                disagreements.append(((x, y), expected, got))
+    return agree / total, hits, labels_seen, disagreements
+
+
+def zbuffer(window):
+    data = vtkFloatArray()
+    window.GetZbufferData(0, 0, W - 1, H - 1, data)
+    return vtk_to_numpy(data).reshape(H, W).astype(np.float64)
+
+
+def rgb(window):
+    grab = vtkWindowToImageFilter()
+    grab.SetInput(window)
+    grab.SetInputBufferTypeToRGB()
+    grab.ReadFrontBufferOff()
+    grab.Update()
+    image = grab.GetOutput()
+    return vtk_to_numpy(image.GetPointData().GetScalars()).reshape(H, W, -1)[:, :, :3].astype(int)
+
+
+@pytest.fixture(scope="module")
+def boxes():
+    labels = two_boxes()
+    return labels, compress_zyx(labels)
+
+
+# 1 ---------------------------------------------------------------------------------------------
+def test_pick_matches_ray_caster(boxes):
+    labels, svdag = boxes
+    window, renderer, _, mapper = make_scene(svdag)
+    window.Render()
+    assert mapper.GetDeviceName() != ""
+    fraction, hits, seen, bad = compare_picks(mapper, renderer, svdag, step=4)
+    assert fraction >= 0.99, bad
+    assert hits > 200
+    assert seen == {3, 7}
+    # Outside the viewport and in the background: no hit.
+    assert not mapper.Pick(renderer, -5.0, 10.0)
+    assert not mapper.Pick(renderer, W + 3.0, 10.0)
+    assert not mapper.Pick(renderer, 0.5, 0.5)
+
+
+def test_pick_uses_pixel_center(boxes):
+    _, svdag = boxes
+    window, renderer, _, mapper = make_scene(svdag)
+    window.Render()
+    center = mapper_pick(mapper, renderer, 100.5, 75.5)
+    corner = mapper_pick(mapper, renderer, 100.02, 75.97)
+    assert center is not None and corner is not None
+    assert center[0] == corner[0]
+    np.testing.assert_array_equal(center[1], corner[1])
+
+
+# 2 ---------------------------------------------------------------------------------------------
+def test_depth_written_matches_pick(boxes):
+    _, svdag = boxes
+    window, renderer, _, mapper = make_scene(svdag)
+    assert mapper.GetWriteDepth()
+    window.Render()
+    depth = zbuffer(window)
+    checked = 0
+    for x, y in [(100, 75), (80, 60), (120, 90), (60, 80), (140, 70)]:
+        hit = mapper_pick(mapper, renderer, x + 0.5, y + 0.5)
+        if hit is None:
+            assert depth[y, x] == 1.0
+            continue
+        assert depth[y, x] < 1.0
+        world = display_to_world(renderer, x + 0.5, y + 0.5, depth[y, x])
+        assert np.linalg.norm(world - hit[1]) <= 1e-2, (x, y, world, hit[1])
+        checked += 1
+    assert checked >= 3
+    # Misses leave the cleared depth.
+    assert depth[2, 2] == 1.0
+
+    mapper.WriteDepthOff()
+    window.Render()
+    assert mapper.Pick(renderer, 100.5, 75.5)  # still traced
+    depth = zbuffer(window)
+    assert np.all(depth == 1.0)
+
+
+def test_depth_written_on_every_hit_pixel(boxes):
+    """After a single-sample frame, every pixel whose pick hits has depth < 1, and vice versa."""
+    _, svdag = boxes
+    window, renderer, _, mapper = make_scene(svdag)
+    window.Render()
+    assert mapper.GetAccumulatedSamples() == 1
+    depth = zbuffer(window)
+    mismatches = [(x, y, depth[y, x]) for y in range(H) for x in range(W)
+                  if mapper.Pick(renderer, x + 0.5, y + 0.5) != (depth[y, x] < 1.0)]
+    assert not mismatches, f"{len(mismatches)} pixels, e.g. (x, y, depth) {mismatches[:4]}"
+
+
+# 3 ---------------------------------------------------------------------------------------------
+@pytest.mark.parametrize("spp", [1, 16])
+@pytest.mark.parametrize("msaa", [0, 8])
+def test_depth_compositing_with_mesh(boxes, msaa, spp):
+    """Composited depth == min(mesh alone, volume alone) within one depth step, every pixel."""
+    _, svdag = boxes
+    window, renderer, volume, mapper = make_scene(svdag)
+    window.SetMultiSamples(msaa)
+    mapper.SetTargetSamplesPerPixel(spp)
+    props = mapper.GetLabelProperties()
+    props.SetColor(3, 1.0, 0.0, 0.0)
+    props.SetColor(7, 0.0, 0.0, 1.0)
+    # A slab through the middle of the volume, tilted with respect to the voxel faces.
+    cube = vtkCubeSource()
+    cube.SetCenter(0, 0, 0)
+    cube.SetXLength(60)
+    cube.SetYLength(4)
+    cube.SetZLength(60)
+    mesh_mapper = vtkPolyDataMapper()
+    mesh_mapper.SetInputConnection(cube.GetOutputPort())
+    actor = vtkActor()
+    actor.SetMapper(mesh_mapper)
+    actor.SetPosition(22, 18, 20)
+    actor.RotateZ(30)
+    prop = actor.GetProperty()
+    prop.SetColor(0.0, 1.0, 0.0)
+    prop.SetAmbient(1.0)
+    prop.SetDiffuse(0.0)
+    prop.SetSpecular(0.0)
+    renderer.AddActor(actor)
+
+    volume.SetVisibility(0)
+    window.Render()
+    mesh_depth = zbuffer(window)
+    volume.SetVisibility(1)
+    actor.SetVisibility(0)
+    mapper.RenderUntilConverged(window, 30.0)
+    assert mapper.GetAccumulatedSamples() == spp
+    volume_depth = zbuffer(window)
+    actor.SetVisibility(1)
+    mapper.RenderUntilConverged(window, 30.0)
+    assert mapper.GetAccumulatedSamples() == spp
+    depth = zbuffer(window)
+    color = rgb(window)
+
+    expected = np.minimum(mesh_depth, volume_depth)
+    error = np.abs(depth - expected)
+    worst = np.unravel_index(np.argmax(error), error.shape)
+    largest = float(error.max())
+    wrong = int((error > DEPTH_STEP * 1.01).sum())
+    assert largest <= DEPTH_STEP * 1.01, (
+        f"{wrong} pixels off; max |depth - min(mesh, volume)| = {largest / DEPTH_STEP:.0f} steps at "
+        f"(y, x) = {tuple(int(i) for i in worst)}: composite {depth[worst]}, mesh "
+        f"{mesh_depth[worst]}, volume {volume_depth[worst]}")
+    both = (mesh_depth < 1.0) & (volume_depth < 1.0)
+    mesh_front = both & (mesh_depth < volume_depth - 1e-4)
+    volume_front = both & (volume_depth < mesh_depth - 1e-4)
+    assert mesh_front.sum() > 100 and volume_front.sum() > 100
+
+    def interior(mask):
+        inner = mask.copy()
+        for dy in (-1, 0, 1):
+            for dx in (-1, 0, 1):
+                inner &= np.roll(np.roll(mask, dy, 0), dx, 1)
+        inner[[0, -1], :] = False
+        inner[:, [0, -1]] = False
+        return inner
+
+    front = interior(mesh_front)
+    assert front.sum() > 50
+    green = (color[:, :, 0] <= 2) & (color[:, :, 1] >= 253) & (color[:, :, 2] <= 2)
+    assert green[front].all(), np.argwhere(front & ~green)[:5]
+    behind = interior(volume_front)
+    assert behind.sum() > 50
+    assert not green[behind].any()
+
+
+# 4 ---------------------------------------------------------------------------------------------
+def test_hidden_label_and_opacity_zero(boxes):
+    labels, svdag = boxes
+    without7 = labels.copy()
+    without7[without7 == 7] = 0
+    reference = compress_zyx(without7)
+
+    window, renderer, _, mapper = make_scene(svdag)
+    window.Render()
+    builds = mapper.GetNumberOfBVHBuilds()
+    assert builds >= 1
+    props = mapper.GetLabelProperties()
+    props.SetVisibility(7, False)
+    assert not props.GetVisibility(7)
+    window.Render()
+    assert mapper.GetNumberOfBVHBuilds() == builds + 1
+    fraction, hits, seen, bad = compare_picks(mapper, renderer, reference, step=6)
+    assert 7 not in seen
+    assert fraction >= 0.99, bad
+    assert hits > 50
+
+    props.SetColor(3, 0.2, 0.9, 0.4)
+    window.Render()
+    assert mapper.GetNumberOfBVHBuilds() == builds + 1
+
+    # Opacity 0 hides like visibility.
+    window2, renderer2, _, mapper2 = make_scene(svdag)
+    mapper2.GetLabelProperties().SetOpacity(7, 0.0)
+    window2.Render()
+    fraction, hits, seen, bad = compare_picks(mapper2, renderer2, reference, step=6)
+    assert 7 not in seen
+    assert fraction >= 0.99, bad
+
+
+# 5 ---------------------------------------------------------------------------------------------
+@pytest.mark.parametrize("parallel", [False, True])
+def test_pick_with_volume_matrix(boxes, parallel):
+    _, svdag = boxes
+    window, renderer, volume, mapper = make_scene(
+        svdag, camera_position=(90, -70, 100), focal=(15, 25, 25), parallel=parallel,
+        clipping=(10.0, 400.0))
+    volume.SetPosition(5.0, -3.0, 2.0)
+    volume.SetScale(1.25, 0.8, 1.1)
+    volume.RotateZ(25.0)
+    user = vtkMatrix4x4()
+    user.Identity()
+    user.SetElement(2, 3, 4.0)  # a translation along z from the user matrix
+    volume.SetUserMatrix(user)
+    window.Render()
+    matrix = vtkMatrix4x4()
+    volume.GetMatrix(matrix)
+    to_world = np.array([[matrix.GetElement(i, j) for j in range(4)] for i in range(4)])
+    assert abs(to_world[2, 3] - 2.0) > 1.0  # the user matrix is part of it
+    fraction, hits, seen, bad = compare_picks(mapper, renderer, svdag, step=5, to_world=to_world,
+                                              position_tol=2e-3)
+    assert fraction >= 0.99, bad
+    assert hits > 100
+    assert seen == {3, 7}
+
+
+# 6 ---------------------------------------------------------------------------------------------
+def test_progressive_refinement(boxes):
+    _, svdag = boxes
+    window, renderer, _, mapper = make_scene(svdag)
+    mapper.SetTargetSamplesPerPixel(8)
+    assert mapper.GetTargetSamplesPerPixel() == 8
+    window.Render()
+    assert mapper.GetAccumulatedSamples() == 1
+    assert not mapper.IsConverged()
+    window.Render()
+    assert mapper.GetAccumulatedSamples() == 2
+    error2 = mapper.GetErrorEstimate()
+    assert error2 > 0
+    renders = mapper.RenderUntilConverged(window, 30.0)
+    assert renders >= 1
+    assert mapper.GetAccumulatedSamples() == 8
+    assert mapper.IsConverged()
+    error8 = mapper.GetErrorEstimate()
+    assert 0 < error8 < error2
+    window.Render()
+    assert mapper.GetAccumulatedSamples() == 8
+    assert mapper.IsConverged()
+    renderer.GetActiveCamera().Azimuth(10.0)
+    window.Render()
+    assert mapper.GetAccumulatedSamples() == 1
+    assert not mapper.IsConverged()
+
+
+# 7 ---------------------------------------------------------------------------------------------
+def test_time_budget():
+    n = 64
+    labels = np.zeros((n, n, n), np.uint16)
+    labels[4:60, 6:58, 5:59] = 2
+    labels[20:40, 10:50, 20:40] = 9
+    svdag = compress_zyx(labels)
+    window, renderer, volume, mapper = make_scene(
+        svdag, camera_position=(130, -90, 140), focal=(32, 32, 32), clipping=(20.0, 500.0))
+    assert mapper.GetAutoAdjustToRenderTime()
+    mapper.GetSettings().SetMaximumBounces(8)
+    window.SetDesiredUpdateRate(1000.0)
+    window.Render()  # a first frame measures the cost
+    camera = renderer.GetActiveCamera()
+    camera.Azimuth(5.0)
+    window.Render()
+    assert volume.GetAllocatedRenderTime() < 0.01
+    assert mapper.GetLastReductionFactor() > 1 or mapper.GetLastLOD() < 2, (
+        mapper.GetLastReductionFactor(), mapper.GetLastLOD(), mapper.GetLastTraceMilliseconds())
+    assert not mapper.IsConverged()
+
+    window.SetDesiredUpdateRate(0.0001)
+    camera.Azimuth(5.0)
+    window.Render()
+    assert mapper.GetLastReductionFactor() == 1
+    assert mapper.GetLastLOD() == 2  # the settings' LOD (voxel)
+
+    # Off: full quality whatever the budget.
+    mapper.AutoAdjustToRenderTimeOff()
+    window.SetDesiredUpdateRate(1000.0)
+    camera.Azimuth(5.0)
+    window.Render()
+    assert mapper.GetLastReductionFactor() == 1
+    assert mapper.GetLastLOD() == 2
+
+
+# 8 ---------------------------------------------------------------------------------------------
+def xyz_boxes():
+    """[x, y, z] labels for pyvista: a big label 7 box around the center and a label 3 slab."""
+    labels = np.zeros((32, 32, 32), np.uint8)
+    labels[6:26, 6:26, 6:26] = 7
+    labels[0:4, 0:32, 0:32] = 3
+    return labels
+
+
+def test_pyvista_add_refine_pick():
+    import pyvista as pv
+
+    import vtksvdag
+
+    plotter = pv.Plotter(off_screen=True, window_size=(W, H))
+    try:
+        actor = vtksvdag.add_segmentation(plotter, xyz_boxes(), colors={7: "red"}, sun=True, spp=4)
+        assert isinstance(actor, pv.Volume)
+        mapper = actor.GetMapper()
+        assert isinstance(mapper, vtkSegmentationSVDAGVolumeMapper)
+        color = [0.0] * 3
+        assert mapper.GetLabelProperties().GetColor(7, color)
+        np.testing.assert_allclose(color, (1, 0, 0))
+        assert mapper.GetSettings().GetSun()
+        assert mapper.GetTargetSamplesPerPixel() == 4
+        stats = vtksvdag.refine(plotter)
+        assert isinstance(stats, list) and len(stats) == 1
+        assert stats[0]["samples"] == 4
+        assert stats[0]["converged"] is True
+        hit = vtksvdag.pick(plotter, W / 2, H / 2)
+        assert hit is not None
+        assert type(hit["label"]) is int and hit["label"] == 7
+        assert len(hit["position"]) == 3 and len(hit["normal"]) == 3
+        assert abs(np.linalg.norm(hit["normal"]) - 1) < 1e-6
+        assert vtksvdag.pick(plotter, 1, 1) is None
+    finally:
+        plotter.close()
+
+
+@pytest.mark.parametrize("options, error", [
+    ({"lod": "fine"}, ValueError),
+    ({"spp": 0}, ValueError),
+    ({"opacity": 2}, ValueError),
+    ({"no_such_option": 1}, TypeError),
+    ({"hidden_labels": [999]}, ValueError),
+])
+def test_pyvista_bad_options(options, error):
+    import pyvista as pv
+
+    import vtksvdag
+
+    plotter = pv.Plotter(off_screen=True, window_size=(W, H))
+    try:
+        with pytest.raises(error):
+            vtksvdag.add_segmentation(plotter, xyz_boxes(), **options)
+        assert plotter.renderer.GetVolumes().GetNumberOfItems() == 0
+    finally:
+        plotter.close()
+
+
+def test_pyvista_inputs(tmp_path):
+    import nrrd
+    import pyvista as pv
+
+    import vtksvdag
+
+    labels = np.zeros((24, 24, 24), np.uint16)
+    labels[4:20, 4:20, 4:20] = 9
+    path = tmp_path / "box.nrrd"
+    nrrd.write(str(path), labels)  # [x, y, z]
+    image = pv.ImageData(dimensions=labels.shape)
+    image.point_data["labels"] = (labels * 2).ravel(order="F")  # label 18
+    cells, _ = nrrd.read(str(REPO / "examples" / "data" / "cells.nrrd"))
+    cell_labels = set(np.unique(cells).tolist()) - {0}
+
+    for data, expected in [(str(path), {9}), (path, {9}), (image, {18}),
+                           (str(REPO / "examples" / "data" / "cells.nrrd"), cell_labels)]:
+        plotter = pv.Plotter(off_screen=True, window_size=(W, H))
+        try:
+            vtksvdag.add_segmentation(plotter, data, spp=1)
+            stats = vtksvdag.refine(plotter)
+            assert stats[0]["samples"] == 1
+            hits = [vtksvdag.pick(plotter, x, y) for x, y in
+                    [(W / 2, H / 2), (W / 2 + 7, H / 2 - 5), (W / 2 - 9, H / 2 + 4)]]
+            hits = [h for h in hits if h is not None]
+            assert hits, data
+            assert {h["label"] for h in hits} <= expected, (data, hits)
+            assert vtksvdag.pick(plotter, 1, 1) is None
+        finally:
+            plotter.close()
+
+
+@pytest.mark.parametrize("reset_camera", [None, True])
+def test_pyvista_subplots(reset_camera):
+    """Default reset_camera: the segmentation is each subplot's first 3D actor."""
+    import pyvista as pv
+
+    import vtksvdag
+
+    left = np.zeros((24, 24, 24), np.uint8)
+    left[3:21, 3:21, 3:21] = 3
+    right = np.zeros((24, 24, 24), np.uint8)
+    right[3:21, 3:21, 3:21] = 5
+    plotter = pv.Plotter(off_screen=True, shape=(1, 2), window_size=(2 * W, H))
+    try:
+        plotter.subplot(0, 0)
+        vtksvdag.add_segmentation(plotter, left, spp=1, reset_camera=reset_camera)
+        plotter.subplot(0, 1)
+        vtksvdag.add_segmentation(plotter, right, spp=1, reset_camera=reset_camera)
+        stats = vtksvdag.refine(plotter)
+        assert len(stats) == 2 and all(s["samples"] == 1 for s in stats)
+        left_hit = vtksvdag.pick(plotter, W / 2, H / 2)
+        right_hit = vtksvdag.pick(plotter, W + W / 2, H / 2)
+        assert left_hit is not None and left_hit["label"] == 3, left_hit
+        assert right_hit is not None and right_hit["label"] == 5, right_hit
+        assert vtksvdag.pick(plotter, 2, 2) is None
+        assert vtksvdag.pick(plotter, W + 2, 2) is None
+    finally:
+        plotter.close()
+
+
+# 9 ---------------------------------------------------------------------------------------------
+@pytest.mark.parametrize("dtype, value", [(np.int64, -5), (np.uint64, 2**63 + 3)])
+def test_extreme_label_values(dtype, value):
+    import pyvista as pv
+
+    import vtksvdag
+
+    labels = np.zeros((20, 20, 20), dtype)
+    labels[3:17, 3:17, 3:17] = value
+    labels[0:2, :, :] = 1
+    plotter = pv.Plotter(off_screen=True, window_size=(W, H))
+    try:
+        actor = vtksvdag.add_segmentation(plotter, labels, colors={value: "blue"}, spp=1)
+        vtksvdag.refine(plotter)
+        hit = vtksvdag.pick(plotter, W / 2, H / 2)
+        assert hit is not None
+        assert type(hit["label"]) is int
+        assert hit["label"] == value
+        mapper = actor.GetMapper()
+        expected_key = int(np.array(value, dtype=dtype).view(np.int64))
+        assert mapper.GetPickedLabel() == expected_key
+        color = [0.0] * 3
+        assert mapper.GetLabelProperties().GetColor(expected_key, color)
+        np.testing.assert_allclose(color, (0, 0, 1))
+    finally:
+        plotter.close()
+
+
+# 10 --------------------------------------------------------------------------------------------
+def test_missing_device_raises():
+    script = textwrap.dedent("""
+        import numpy as np
+        import pyvista as pv
+        import vtksvdag
+        labels = np.zeros((8, 8, 8), np.uint8)
+        labels[2:6, 2:6, 2:6] = 1
+        plotter = pv.Plotter(off_screen=True, window_size=(64, 48))
+        try:
+            vtksvdag.add_segmentation(plotter, labels)
+        except RuntimeError as error:
+            print("RUNTIME-ERROR:", error)
+        else:
+            print("NO-ERROR")
+        finally:
+            plotter.close()
+    """)
+    env = dict(os.environ, SVDAG_VK_DEVICE="no-such-device")
+    result = subprocess.run([sys.executable, "-c", script], env=env, capture_output=True,
+                            text=True, timeout=60, cwd=str(REPO))
+    assert result.returncode == 0, result.stderr
+    assert "RUNTIME-ERROR:" in result.stdout, (result.stdout, result.stderr)
+    message = result.stdout.split("RUNTIME-ERROR:", 1)[1]
+    assert "no-such-device" in message
