@@ -1,0 +1,47 @@
+"""Smoke test of the VTK comparison benchmark: `bench/vtk.py --quick` runs the three routes and
+writes a complete CSV and the side-by-side image. It asserts structure, never absolute timings."""
+import csv
+import os
+import pathlib
+import subprocess
+import sys
+
+import pytest
+
+REPO = pathlib.Path(__file__).resolve().parents[2]
+SCRIPT = REPO / "bench" / "vtk.py"
+SHARED_DATA = REPO.parent / "shared" / "data"
+ROUTES = {"ours", "gpu-raycast", "surfaces"}
+
+
+@pytest.fixture(scope="module")
+def quick_run(tmp_path_factory):
+    if not (SHARED_DATA / "fib25_64.nrrd").is_file():
+        pytest.skip(f"the shared test data {SHARED_DATA / 'fib25_64.nrrd'} is missing")
+    out = tmp_path_factory.mktemp("bench_vtk")
+    completed = subprocess.run(
+        [sys.executable, str(SCRIPT), "--quick", "--out", str(out)],
+        capture_output=True, text=True, cwd=REPO, env=os.environ.copy(), timeout=600,
+    )
+    assert completed.returncode == 0, completed.stdout[-3000:] + completed.stderr[-3000:]
+    with open(out / "vtk.csv", newline="") as f:
+        return out, completed.stdout, list(csv.DictReader(f))
+
+
+def test_csv_has_three_routes_with_positive_times(quick_run):
+    out, stdout, rows = quick_run
+    assert {r["route"] for r in rows} == ROUTES and len(rows) == 3
+    for r in rows:
+        assert r["volume"] == "fib25_64" and r["dims_xyz"] == "64x64x64"
+        assert float(r["first_image_s"]) > 0
+        assert float(r["interact_ms_median"]) > 0 and int(r["interact_frames"]) == 3
+        assert float(r["still_ms_median"]) > 0 and int(r["still_frames"]) == 3
+        assert float(r["peak_rss_mb"]) >= float(r["baseline_mb"]) > 0
+    by_route = {r["route"]: r for r in rows}
+    assert int(by_route["surfaces"]["triangles"]) > 0
+    ours = by_route["ours"]
+    # Still frames restart the accumulation: one sample per pixel, voxel LOD, full resolution.
+    assert (ours["still_lod"], ours["still_reduction"], ours["still_spp"]) == ("2", "1", "1")
+    assert len(ours["interact_lods"].split()) == 3
+    assert (out / "vtk_fib25_64.png").stat().st_size > 0
+    assert "Ratios ours / gpu-raycast" in stdout
