@@ -160,6 +160,8 @@ struct vtkSegmentationSVDAGVolumeMapper::Internals
 
   // What Pick reads: the last traced frame.
   vtkRenderer* PickRenderer = nullptr;
+  // The renderer's viewport in display pixels (not GL_VIEWPORT: a render pass such as
+  // vtkSSAAPass draws into a larger framebuffer of its own).
   svdag::gl::Viewport PickViewport;
   core::ViewRays PickRays;
   Matrix ModelToWorld{};
@@ -311,7 +313,10 @@ void vtkSegmentationSVDAGVolumeMapper::Render(vtkRenderer* renderer, vtkVolume* 
         double t = 0;
         for (int a = 0; a < 3; ++a)
           t += (p[a] / p[3] - ray.origin[a]) * ray.direction[a];
-        limits[size_t(x) + size_t(width) * size_t(y)] = float(std::max(t, 0.0));
+        // A little past the surface (1e-5 relative, far below a pixel): where the volume's and
+        // the surface's depths meet, the exact min in window depth below decides, not the
+        // rounding of the depth buffer into a ray distance.
+        limits[size_t(x) + size_t(width) * size_t(y)] = float(std::max(t, 0.0) * (1 + 1e-5));
         limited = true;
       }
     }
@@ -326,27 +331,32 @@ void vtkSegmentationSVDAGVolumeMapper::Render(vtkRenderer* renderer, vtkVolume* 
       limited ? hashFloats(limits) : 0 };
     const bool sameFrame = key.matches(in.Frame) && r.accumulatedSamples() > 0 &&
       r.image().width == uint32_t(width) && r.image().height == uint32_t(height);
-    const bool refined = sameFrame && in.FullQuality &&
-      (r.accumulatedSamples() >= uint32_t(this->TargetSamplesPerPixel) ||
+    auto refined = [&]() {
+      return r.accumulatedSamples() >= uint32_t(this->TargetSamplesPerPixel) ||
         (this->ErrorTarget > 0 && r.accumulatedSamples() >= 2 &&
-          r.errorEstimate() <= this->ErrorTarget));
+          r.errorEstimate() <= this->ErrorTarget);
+    };
+    // A tile of a tiled capture (vtkWindowToImageFilter scale, pyvista screenshot(scale=)) is
+    // drawn once: it is refined to the targets within this render.
+    const int* tiles = window->GetTileScale();
+    const bool tiled = tiles[0] > 1 || tiles[1] > 1;
     in.TraceMilliseconds = 0;
-    if (!refined)
+    if (!(sameFrame && in.FullQuality && refined()))
     {
       if (!sameFrame)
         r.resetAccumulation();
       r.setImageSize(uint32_t(width), uint32_t(height));
       r.setViewRays(rays);
       r.setRayLimits(limited ? std::move(limits) : std::vector<float>());
-      r.render();
-      in.TraceMilliseconds = r.lastFrameMilliseconds();
+      do
+      {
+        r.render();
+        in.TraceMilliseconds += r.lastFrameMilliseconds();
+      } while (tiled && in.FullQuality && !refined());
       in.Frame = std::move(key);
     }
     const core::Image& image = r.image();
-    in.Converged = in.FullQuality &&
-      (r.accumulatedSamples() >= uint32_t(this->TargetSamplesPerPixel) ||
-        (this->ErrorTarget > 0 && r.accumulatedSamples() >= 2 &&
-          r.errorEstimate() <= this->ErrorTarget));
+    in.Converged = in.FullQuality && refined();
 
     // Depth out: the window depth of each traced pixel's hit, the nearer of it and the scene's.
     std::vector<float> depth;
@@ -390,7 +400,8 @@ void vtkSegmentationSVDAGVolumeMapper::Render(vtkRenderer* renderer, vtkVolume* 
       window, vp, image.hdr.data(), width, height, depth, float(base.exposure));
 
     in.PickRenderer = renderer;
-    in.PickViewport = vp;
+    renderer->GetTiledSizeAndOrigin(
+      &in.PickViewport.width, &in.PickViewport.height, &in.PickViewport.x, &in.PickViewport.y);
     in.PickRays = rays;
     in.ModelToWorld = modelToWorld;
     const double total = std::chrono::duration<double>(Clock::now() - start).count();

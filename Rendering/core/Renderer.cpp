@@ -228,7 +228,7 @@ void Renderer::applyVisibility()
   this->timeSetup(rebuilt, std::chrono::duration<double>(Clock::now() - start).count());
 }
 
-void Renderer::setPrimitivesPerBlasLimit(uint32_t limit)
+void Renderer::setMaximumBlocksPerBlas(uint32_t limit)
 {
   this->Settings.maximumBlocksPerBlas = limit;
   if (!this->Device->scene)
@@ -291,7 +291,7 @@ void Renderer::setSettings(const RenderSettings& settings)
   next.maximumBlocksPerBlas = this->Settings.maximumBlocksPerBlas;
   next.environmentMap = this->Settings.environmentMap;
   this->Settings = next;
-  this->setPrimitivesPerBlasLimit(blasLimit);
+  this->setMaximumBlocksPerBlas(blasLimit);
   if (environmentChanged)
     this->setEnvironmentMap(environment);
 }
@@ -332,7 +332,7 @@ void Renderer::setSamplesPerPixel(uint32_t samples)
     edited(this->Settings, [samples](RenderSettings& s) { s.samplesPerPixel = samples; });
 }
 
-void Renderer::setMaxBounces(uint32_t bounces)
+void Renderer::setMaximumBounces(uint32_t bounces)
 {
   this->Settings =
     edited(this->Settings, [bounces](RenderSettings& s) { s.maximumBounces = bounces; });

@@ -199,7 +199,7 @@ int main(int argc, char** argv)
     renderer.setCamera(
       svdag::render::frameVolume(volume->geometry, o.azimuth, o.elevation, o.zoom, o.viewAngle));
     renderer.setSamplesPerPixel(o.spp);
-    renderer.setMaxBounces(o.bounces);
+    renderer.setMaximumBounces(o.bounces);
     renderer.setSeed(o.seed);
     renderer.setNextEventEstimation(o.nee);
     if (!o.environment.empty())

@@ -76,8 +76,9 @@ public:
   // Label indices left out of the BVH; rebuilds it when the set changes (setupSeconds then
   // measures the rebuild).
   void setHiddenLabels(const std::vector<uint32_t>& labelIndices);
-  // Caps the primitives per BLAS (0: the driver's limit); see Scene::setPrimitivesPerBlasLimit.
-  void setPrimitivesPerBlasLimit(uint32_t limit);
+  // Caps the blocks (primitives) per BLAS (0: the driver's limit); see
+  // Scene::setPrimitivesPerBlasLimit.
+  void setMaximumBlocksPerBlas(uint32_t limit);
   size_t blasCount() const;
   // The primary rays: a pinhole camera (its rays follow the image's aspect), or explicit rays
   // (ViewRays, for example from a VTK camera's projection); the last call wins.
@@ -108,8 +109,8 @@ public:
   void setSamplesPerPixel(uint32_t samples);
   uint32_t samplesPerPixel() const { return this->Settings.samplesPerPixel; }
   // Scattering events per path, 0 (direct view of emission only) .. 64.
-  void setMaxBounces(uint32_t bounces);
-  uint32_t maxBounces() const { return this->Settings.maximumBounces; }
+  void setMaximumBounces(uint32_t bounces);
+  uint32_t maximumBounces() const { return this->Settings.maximumBounces; }
   void setSeed(uint32_t seed) { this->Settings.seed = seed; }
   uint32_t seed() const { return this->Settings.seed; }
   // Next-event estimation with MIS (default) or the plain estimator that finds light only when
