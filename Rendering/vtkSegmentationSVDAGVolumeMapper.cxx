@@ -254,6 +254,8 @@ void vtkSegmentationSVDAGVolumeMapper::Render(vtkRenderer* renderer, vtkVolume* 
   in.Converged = false;
   try
   {
+    const core::Renderer* before = in.Session.renderer();
+    const uint64_t buildsBefore = before->bvhBuilds() + before->pipelineBuilds();
     core::Renderer& r = in.Session.prepare(input->GetVolume());
 
     const svdag::gl::Viewport vp = svdag::gl::Compositor::currentViewport(window);
@@ -405,9 +407,12 @@ void vtkSegmentationSVDAGVolumeMapper::Render(vtkRenderer* renderer, vtkVolume* 
     in.PickRays = rays;
     in.ModelToWorld = modelToWorld;
     const double total = std::chrono::duration<double>(Clock::now() - start).count();
-    if (in.TraceMilliseconds > 0)
+    // A frame that built the BVH or the pipeline (uploads, shader compilation) overestimates what
+    // the next one costs: provisional. A tile traced several passes: no measure at all.
+    const bool warm = r.bvhBuilds() + r.pipelineBuilds() == buildsBefore;
+    if (in.TraceMilliseconds > 0 && !tiled)
       in.Budget.record(in.Level.lod, uint64_t(width) * uint64_t(height),
-        in.TraceMilliseconds / 1000, total - in.TraceMilliseconds / 1000);
+        in.TraceMilliseconds / 1000, total - in.TraceMilliseconds / 1000, !warm);
   }
   catch (const std::exception& e)
   {

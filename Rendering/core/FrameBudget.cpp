@@ -83,16 +83,25 @@ FrameLevel FrameBudget::choose(Lod finest, uint64_t pixels, double budgetSeconds
 }
 
 void FrameBudget::record(
-  Lod lod, uint64_t tracedPixels, double traceSeconds, double overheadSeconds)
+  Lod lod, uint64_t tracedPixels, double traceSeconds, double overheadSeconds, bool provisional)
 {
   if (tracedPixels == 0 || !(traceSeconds >= 0) || !std::isfinite(traceSeconds))
     return;
+  const size_t i = size_t(lod);
+  double& cost = this->CostPerPixel[i];
+  if (provisional && cost >= 0)
+    return;
   // An exponential average: adapts within a few frames, smooths the noise of shared machines.
   const double measured = traceSeconds / double(tracedPixels);
-  double& cost = this->CostPerPixel[size_t(lod)];
-  cost = cost < 0 ? measured : 0.5 * cost + 0.5 * measured;
-  if (overheadSeconds >= 0 && std::isfinite(overheadSeconds))
-    this->OverheadSeconds = 0.5 * this->OverheadSeconds + 0.5 * overheadSeconds;
+  cost = (cost < 0 || this->Provisional[i]) ? measured : 0.5 * cost + 0.5 * measured;
+  this->Provisional[i] = provisional;
+  if (overheadSeconds >= 0 && std::isfinite(overheadSeconds) &&
+    (!provisional || this->OverheadProvisional))
+  {
+    this->OverheadSeconds = this->OverheadProvisional
+      ? overheadSeconds : 0.5 * this->OverheadSeconds + 0.5 * overheadSeconds;
+    this->OverheadProvisional = provisional;
+  }
 }
 
 } // namespace render

@@ -4,6 +4,7 @@
 #include <svdag/Builder.h>
 #include <svdag/RayCaster.h>
 #include <svdag_render/Camera.h>
+#include <svdag_render/FrameBudget.h>
 #include <svdag_render/Renderer.h>
 #include <svdag_render/Scene.h>
 
@@ -397,4 +398,49 @@ TEST(RenderFrame, ProjectionRaysMatchThePinholeCamera)
   EXPECT_GT(hits, size_t(w) * h / 5);
   EXPECT_NEAR(meanB, meanA, 0.02 * meanA);
   EXPECT_EQ(blackB, blackA) << "pixels that hit but received no light";
+}
+
+// The time budget's choice of LOD and reduction (FrameBudget.h), from recorded costs.
+TEST(FrameBudget, ChoosesTheFirstLevelThatFits)
+{
+  using svdag::render::FrameBudget;
+  using svdag::render::Lod;
+  FrameBudget budget;
+  const uint64_t pixels = 512 * 512;
+  // Nothing known, or no budget: full quality.
+  EXPECT_EQ(budget.choose(Lod::Voxel, pixels, 0.1).reduction, 1u);
+  EXPECT_EQ(budget.choose(Lod::Voxel, pixels, 0.0).lod, Lod::Voxel);
+  // Voxel LOD: 1 us per pixel, 10 ms overhead -> 272 ms at full size.
+  budget.record(Lod::Voxel, pixels, 1e-6 * pixels, 0.010);
+  EXPECT_NEAR(budget.predict({ Lod::Voxel, 1 }, pixels), 0.010 + 1e-6 * pixels, 1e-9);
+  EXPECT_EQ(budget.choose(Lod::Voxel, pixels, 1.0).reduction, 1u);
+  // 100 ms: leaf (0.8x, 220 ms) and block (0.6x, 167 ms) at full size do not fit; voxel at
+  // reduction 2 does (10 + 65.5 ms).
+  const auto level = budget.choose(Lod::Voxel, pixels, 0.1);
+  EXPECT_EQ(level.lod, Lod::Voxel);
+  EXPECT_EQ(level.reduction, 2u);
+  EXPECT_LE(budget.predict(level, pixels), 0.1);
+  // Nothing fits: the coarsest level.
+  const auto coarsest = budget.choose(Lod::Voxel, pixels, 1e-6);
+  EXPECT_EQ(coarsest.lod, Lod::Block);
+  EXPECT_EQ(coarsest.reduction, FrameBudget::MaximumReduction);
+  // Never finer than asked.
+  EXPECT_EQ(budget.choose(Lod::Leaf, pixels, 10.0).lod, Lod::Leaf);
+}
+
+TEST(FrameBudget, ProvisionalFramesCountOnlyUntilMeasured)
+{
+  using svdag::render::FrameBudget;
+  using svdag::render::Lod;
+  FrameBudget budget;
+  // A warm-up frame (shader compilation) 10x too slow is used while nothing else is known ...
+  budget.record(Lod::Voxel, 1000, 0.010, 0.0, true);
+  EXPECT_NEAR(budget.predict({ Lod::Voxel, 1 }, 1000), 0.010, 1e-12);
+  // ... then replaced, not averaged, by the first real measurement; later ones are averaged.
+  budget.record(Lod::Voxel, 1000, 0.001, 0.0);
+  EXPECT_NEAR(budget.predict({ Lod::Voxel, 1 }, 1000), 0.001, 1e-12);
+  budget.record(Lod::Voxel, 1000, 0.010, 0.0, true);
+  EXPECT_NEAR(budget.predict({ Lod::Voxel, 1 }, 1000), 0.001, 1e-12);
+  budget.record(Lod::Voxel, 1000, 0.003, 0.0);
+  EXPECT_NEAR(budget.predict({ Lod::Voxel, 1 }, 1000), 0.002, 1e-12);
 }

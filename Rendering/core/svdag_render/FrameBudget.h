@@ -34,15 +34,20 @@ public:
   // no budget), never finer than `finest`.
   FrameLevel choose(Lod finest, uint64_t pixels, double budgetSeconds) const;
   // Records a traced frame: tracing `tracedPixels` at `lod` took `traceSeconds`, and everything
-  // else of the frame (depth read, upload, compositing) `overheadSeconds`.
-  void record(Lod lod, uint64_t tracedPixels, double traceSeconds, double overheadSeconds);
+  // else of the frame (depth read, upload, compositing) `overheadSeconds`. A `provisional` frame
+  // (one that also built the BVH or compiled shaders) counts only while nothing else is known,
+  // and the first real measurement replaces it.
+  void record(Lod lod, uint64_t tracedPixels, double traceSeconds, double overheadSeconds,
+    bool provisional = false);
   // The predicted seconds of a frame at a level (0 while nothing is known).
   double predict(const FrameLevel& level, uint64_t pixels) const;
 
 private:
   // Seconds per traced pixel, per LOD (block, leaf, voxel, auto); < 0: never measured.
   std::array<double, 4> CostPerPixel{ { -1, -1, -1, -1 } };
+  std::array<bool, 4> Provisional{ { false, false, false, false } };
   double OverheadSeconds = 0;
+  bool OverheadProvisional = true;
 };
 
 } // namespace render
