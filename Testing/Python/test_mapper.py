@@ -602,3 +602,84 @@ def test_missing_device_raises():
     assert "RUNTIME-ERROR:" in result.stdout, (result.stdout, result.stderr)
     message = result.stdout.split("RUNTIME-ERROR:", 1)[1]
     assert "no-such-device" in message
+
+
+# Pipeline, bounds, resizes, graphics resources -------------------------------------------------
+def test_pipeline_input_follows_upstream_changes():
+    """Connected to the builder filter, the mapper re-renders what the filter's input becomes."""
+    from vtkmodules.util.numpy_support import numpy_to_vtk
+    from vtkmodules.vtkCommonDataModel import vtkImageData
+
+    from vtksvdag.vtkSVDAGCore import vtkImageDataToSegmentationSVDAG
+
+    labels = two_boxes()
+    image = vtkImageData()
+    image.SetDimensions(labels.shape[2], labels.shape[1], labels.shape[0])
+    image.GetPointData().SetScalars(numpy_to_vtk(labels.ravel(), deep=True))
+    builder = vtkImageDataToSegmentationSVDAG()
+    builder.SetInputData(image)
+    window, renderer, volume, mapper = make_scene(None)
+    mapper.SetInputConnection(builder.GetOutputPort())
+    window.Render()
+    assert mapper.GetInput() is not None
+    assert np.allclose(volume.GetBounds(), [-0.5, 39.5] * 3)
+    hits = {mapper_pick(mapper, renderer, x, y)[0] for y in range(0, H, 10) for x in range(0, W, 10)
+            if mapper_pick(mapper, renderer, x, y) is not None}
+    assert hits == {3, 7}
+    # Relabel upstream: 7 becomes 9; the next render shows it without touching the mapper.
+    changed = np.where(labels == 7, 9, labels).astype(np.uint16)
+    image.GetPointData().SetScalars(numpy_to_vtk(changed.ravel(), deep=True))
+    image.Modified()
+    window.Render()
+    hits = {mapper_pick(mapper, renderer, x, y)[0] for y in range(0, H, 10) for x in range(0, W, 10)
+            if mapper_pick(mapper, renderer, x, y) is not None}
+    assert hits == {3, 9}
+    assert mapper.GetAccumulatedSamples() == 1  # a new volume restarts the accumulation
+
+
+def test_reader_connection_and_bounds():
+    """The reader's output through SetInputConnection; bounds as the image's voxel boxes."""
+    from vtksvdag.vtkSVDAGIO import vtkSegmentationVolumeReader
+
+    reader = vtkSegmentationVolumeReader()
+    reader.SetFileName(str(REPO / "examples" / "data" / "cells.nrrd"))
+    window, renderer, volume, mapper = make_scene(None)
+    mapper.SetInputConnection(reader.GetOutputPort())
+    bounds = mapper.GetBounds()  # updates the pipeline
+    svdag = mapper.GetInput()
+    dims, spacing, origin = [0] * 3, [0.0] * 3, [0.0] * 3
+    svdag.GetDimensions(dims)
+    svdag.GetSpacing(spacing)
+    svdag.GetOrigin(origin)
+    expected = []
+    for a in range(3):
+        expected += [origin[a] - 0.5 * spacing[a], origin[a] + (dims[a] - 0.5) * spacing[a]]
+    assert np.allclose(bounds, expected)
+    renderer.ResetCamera()
+    window.Render()
+    assert mapper.Pick(renderer, W / 2, H / 2)
+
+
+def test_window_resize_and_release(boxes):
+    """A resized window is traced at its new size; released graphics resources come back."""
+    _, svdag = boxes
+    window, renderer, volume, mapper = make_scene(svdag)
+    window.Render()
+    before = mapper_pick(mapper, renderer, W / 2, H / 2)
+    window.SetSize(2 * W, 2 * H)
+    window.Render()
+    after = mapper_pick(mapper, renderer, W, H)  # the same view point, at twice the size
+    assert before is not None and after is not None
+    assert before[0] == after[0]
+    assert np.allclose(before[1], after[1], atol=1.0)
+    # Every pixel of the new size is traced: the far corner pixels pick like the ray caster.
+    caster = vtkSegmentationSVDAGRayCaster()
+    caster.SetInputData(svdag)
+    for x, y in ((2 * W - 1, 2 * H - 1), (3, 5), (W + 17, H - 9)):
+        expected = caster_pick(caster, *pixel_ray(renderer, x, y))
+        got = mapper_pick(mapper, renderer, x + 0.5, y + 0.5)
+        assert (expected is None) == (got is None)
+    volume.ReleaseGraphicsResources(window)
+    renderer.ReleaseGraphicsResources(window)
+    window.Render()
+    assert mapper_pick(mapper, renderer, W, H)[0] == after[0]
