@@ -150,7 +150,8 @@ def worker(spec):
     if route == "ours":
         result["read_s"] = time.perf_counter() - start
         t = time.perf_counter()
-        actor = vtksvdag.add_segmentation(plotter, volume, sun=True, spp=1, lod="voxel")
+        actor = vtksvdag.add_segmentation(plotter, volume, sun=True, spp=1, lod="voxel",
+                                          bounces=spec.get("bounces", 4))
         mapper = actor.GetMapper()
         result["prep_s"] = time.perf_counter() - t  # device creation, upload happens at render
     else:
@@ -373,7 +374,7 @@ def budget_all(args, out):
     for path in sorted(SHARED_DATA.glob("*.nrrd")):
         name = path.name[: -len(".nrrd")]
         spec = dict(route="ours", path=str(path), size=args.size, frames=args.frames,
-                    still_frames=0, mode="interact", image="")
+                    bounces=args.bounces, still_frames=0, mode="interact", image="")
         result = run_worker(spec, args.timeout)
         median = statistics.median(result["interact_ms"])
         row = dict(volume=name, dims_xyz=result["dims_xyz"], labels=result["labels"],
@@ -407,6 +408,9 @@ def main(argv=None) -> int:
     parser.add_argument("--frames", type=int, default=8, help="interaction frames (median)")
     parser.add_argument("--still-frames", type=int, default=5, help="still frames (median)")
     parser.add_argument("--size", type=int, default=512, help="window width and height")
+    parser.add_argument("--bounces", type=int, default=4,
+                        help="our path tracer's scattering events per path (1: direct light only, "
+                             "the nearest to the ray cast's local shading)")
     parser.add_argument("--timeout", type=float, default=900, help="seconds per route subprocess")
     parser.add_argument("--budget-all", action="store_true",
                         help="only route (a) interacting, on every shared volume")
@@ -445,6 +449,7 @@ def main(argv=None) -> int:
         with tempfile.TemporaryDirectory() as tmp:
             for route in args.routes:
                 spec = dict(route=route, path=str(path), size=args.size, frames=args.frames,
+                            bounces=args.bounces,
                             still_frames=args.still_frames, mode="full",
                             image=str(pathlib.Path(tmp) / f"{route}.npy"))
                 result = run_worker(spec, args.timeout)
