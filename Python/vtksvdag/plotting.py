@@ -5,10 +5,18 @@ window, depth-composited with every mesh in the scene.
 """
 import numbers
 import os
+import time
 
 import numpy as np
 
+from ._labels import label_pattern, numpy_dtype_of_vtk_type
 from ._vtkrun import vtk_errors_raised
+from .build import from_image, from_numpy
+from .fileio import read
+from .volume import SegmentationVolume
+
+# pyvista and the rendering module are imported where they are used: the rest of the package
+# works without them (a machine without Vulkan, a script that only compresses).
 
 _LODS = {"block": 0, "leaf": 1, "voxel": 2, "auto": 3}
 
@@ -19,10 +27,6 @@ _EXTRA_OPTIONS = ("exposure", "seed", "next_event_estimation", "write_depth", "e
 
 def _segmentation_volume(data):
     """A SegmentationVolume from any of the inputs add_segmentation accepts."""
-    from .build import from_image, from_numpy
-    from .fileio import read
-    from .volume import SegmentationVolume
-
     if isinstance(data, SegmentationVolume):
         return data
     if isinstance(data, (str, os.PathLike)):
@@ -58,8 +62,6 @@ def _check_fraction(value, what):
 
 def _label_keys(volume, values, what):
     """Label values as the mapper's int64 keys; values the volume does not hold are errors."""
-    from ._labels import label_pattern
-
     keys = []
     present = set(volume.labels.tolist())
     for value in values:
@@ -366,8 +368,6 @@ def refine(plotter, timeout=60.0):
     >>> stats[0]["samples"]  # doctest: +SKIP
     64
     """
-    import time
-
     if not (isinstance(timeout, numbers.Real) and timeout > 0):
         raise ValueError(f"timeout must be a number > 0, got {timeout!r}")
     mappers = _segmentation_mappers(plotter)
@@ -433,6 +433,4 @@ def pick(plotter, x, y):
 
 
 def _label_dtype(mapper):
-    from ._labels import numpy_dtype_of_vtk_type
-
     return numpy_dtype_of_vtk_type(mapper.GetInput().GetLabelScalarType())
