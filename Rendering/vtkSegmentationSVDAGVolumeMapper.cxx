@@ -111,17 +111,99 @@ double imageCoordinate(int i, int n)
   return 2.0 * (i + 0.5) / n - 1.0;
 }
 
-// What identifies a frame: passes accumulate while it stays the same. The model-to-clip matrix
-// matches to 1e-6 relative (VTK recomputes the camera's key matrices in float in some paths:
+// Per traced pixel (width x height over the viewport), the ray distance to the surface drawn
+// before the volume (from the viewport's window depth); empty where nothing was drawn anywhere.
+std::vector<float> rayLimits(const std::vector<float>& sceneDepth, const svdag::gl::Viewport& vp,
+  int width, int height, const Matrix& clipToModel, const core::ViewRays& rays)
+{
+  std::vector<float> limits(size_t(width) * size_t(height), 3.402823466e38f);
+  bool limited = false;
+  for (int y = 0; y < height; ++y)
+  {
+    const double v = imageCoordinate(y, height);
+    const int fy = std::min(int((y + 0.5) * vp.height / height), vp.height - 1);
+    for (int x = 0; x < width; ++x)
+    {
+      const int fx = std::min(int((x + 0.5) * vp.width / width), vp.width - 1);
+      const float d = sceneDepth[size_t(fx) + size_t(vp.width) * size_t(fy)];
+      if (!(d < 1.0f))
+        continue;
+      const double u = imageCoordinate(x, width);
+      const double clip[4] = { u, v, 2.0 * d - 1.0, 1.0 };
+      double p[4] = { 0, 0, 0, 0 };
+      for (int row = 0; row < 4; ++row)
+      {
+        for (int c = 0; c < 4; ++c)
+          p[row] += clipToModel[4 * row + c] * clip[c];
+      }
+      const Ray ray = rayAt(rays, u, v);
+      double t = 0;
+      for (int a = 0; a < 3; ++a)
+        t += (p[a] / p[3] - ray.origin[a]) * ray.direction[a];
+      // A little past the surface (1e-5 relative, far below a pixel): where the volume's and
+      // the surface's depths meet, the exact min in window depth (compositedDepth) decides, not
+      // the rounding of the depth buffer into a ray distance.
+      limits[size_t(x) + size_t(width) * size_t(y)] = float(std::max(t, 0.0) * (1 + 1e-5));
+      limited = true;
+    }
+  }
+  return limited ? limits : std::vector<float>();
+}
+
+// The window depth to write over the viewport: per pixel, the nearer of the scene's and that of
+// the traced hit covering it (VTK's depth 0.5 z_clip / w_clip + 0.5, in double precision).
+std::vector<float> compositedDepth(const core::Image& image, const core::ViewRays& rays,
+  const Matrix& modelToClip, const std::vector<float>& sceneDepth, const svdag::gl::Viewport& vp)
+{
+  const int width = int(image.width), height = int(image.height);
+  std::vector<float> traced(size_t(width) * size_t(height), 1.0f);
+  for (int y = 0; y < height; ++y)
+  {
+    for (int x = 0; x < width; ++x)
+    {
+      const size_t i = size_t(x) + size_t(width) * size_t(y);
+      if (image.label[i] == 0)
+        continue;
+      const Ray ray = rayAt(rays, imageCoordinate(x, width), imageCoordinate(y, height));
+      double p[4];
+      for (int a = 0; a < 3; ++a)
+        p[a] = ray.origin[a] + double(image.depth[i]) * ray.direction[a];
+      p[3] = 1;
+      double z = 0, w = 0;
+      for (int c = 0; c < 4; ++c)
+      {
+        z += modelToClip[8 + c] * p[c];
+        w += modelToClip[12 + c] * p[c];
+      }
+      traced[i] = float(std::min(std::max(0.5 * z / w + 0.5, 0.0), 1.0));
+    }
+  }
+  std::vector<float> depth = sceneDepth;
+  for (int fy = 0; fy < vp.height; ++fy)
+  {
+    const int y = std::min(int(int64_t(fy) * height / vp.height), height - 1);
+    for (int fx = 0; fx < vp.width; ++fx)
+    {
+      const int x = std::min(int(int64_t(fx) * width / vp.width), width - 1);
+      float& d = depth[size_t(fx) + size_t(vp.width) * size_t(fy)];
+      d = std::min(d, traced[size_t(x) + size_t(width) * size_t(y)]);
+    }
+  }
+  return depth;
+}
+
+// What identifies a frame: passes accumulate while it stays the same (an exposure change only
+// re-composites). The model-to-clip matrix matches to 1e-6 relative (VTK recomputes the camera's key matrices in float in some paths:
 // vtkWindowToImageFilter re-renders with matrices that differ in the 8th digit, far less than a
 // pixel, which must not restart the accumulation); everything else exactly.
 struct FrameKey
 {
   Matrix matrix{};
+  core::RenderSettings settings;
   std::vector<uint64_t> ids;
   bool matches(const FrameKey& o) const
   {
-    if (ids.empty() || ids != o.ids)
+    if (ids.empty() || ids != o.ids || !core::tracesSameImage(settings, o.settings))
       return false;
     for (size_t i = 0; i < matrix.size(); ++i)
     {
@@ -288,46 +370,14 @@ void vtkSegmentationSVDAGVolumeMapper::Render(vtkRenderer* renderer, vtkVolume* 
 
     // Depth in: each traced pixel's ray ends at the surface drawn there before the volume.
     const std::vector<float> sceneDepth = in.Compositor.readDepth(window, vp);
-    std::vector<float> limits(size_t(width) * size_t(height), 3.402823466e38f);
-    bool limited = false;
-    auto viewportPixel = [&](int x, int y) {
-      const int fx = std::min(int((x + 0.5) * vp.width / width), vp.width - 1);
-      const int fy = std::min(int((y + 0.5) * vp.height / height), vp.height - 1);
-      return size_t(fx) + size_t(vp.width) * size_t(fy);
-    };
-    for (int y = 0; y < height; ++y)
-    {
-      const double v = imageCoordinate(y, height);
-      for (int x = 0; x < width; ++x)
-      {
-        const float d = sceneDepth[viewportPixel(x, y)];
-        if (!(d < 1.0f))
-          continue;
-        const double u = imageCoordinate(x, width);
-        const double clip[4] = { u, v, 2.0 * d - 1.0, 1.0 };
-        double p[4] = { 0, 0, 0, 0 };
-        for (int row = 0; row < 4; ++row)
-        {
-          for (int c = 0; c < 4; ++c)
-            p[row] += clipToModel[4 * row + c] * clip[c];
-        }
-        const Ray ray = rayAt(rays, u, v);
-        double t = 0;
-        for (int a = 0; a < 3; ++a)
-          t += (p[a] / p[3] - ray.origin[a]) * ray.direction[a];
-        // A little past the surface (1e-5 relative, far below a pixel): where the volume's and
-        // the surface's depths meet, the exact min in window depth below decides, not the
-        // rounding of the depth buffer into a ray distance.
-        limits[size_t(x) + size_t(width) * size_t(y)] = float(std::max(t, 0.0) * (1 + 1e-5));
-        limited = true;
-      }
-    }
+    std::vector<float> limits = rayLimits(sceneDepth, vp, width, height, clipToModel, rays);
+    const bool limited = !limits.empty();
 
     // The frame's identity: while it stays the same, passes accumulate.
     FrameKey key;
     key.matrix = modelToClip;
+    key.settings = settings;
     key.ids = { uint64_t(vp.width), uint64_t(vp.height), uint64_t(in.Level.reduction),
-      uint64_t(in.Level.lod), uint64_t(in.Session.settings()->GetMTime()),
       uint64_t(in.Session.labels()->GetMTime()),
       uint64_t(reinterpret_cast<uintptr_t>(in.Session.volume().get())),
       limited ? hashFloats(limits) : 0 };
@@ -360,44 +410,9 @@ void vtkSegmentationSVDAGVolumeMapper::Render(vtkRenderer* renderer, vtkVolume* 
     const core::Image& image = r.image();
     in.Converged = in.FullQuality && refined();
 
-    // Depth out: the window depth of each traced pixel's hit, the nearer of it and the scene's.
-    std::vector<float> depth;
-    if (this->WriteDepth)
-    {
-      std::vector<float> traced(size_t(width) * size_t(height), 1.0f);
-      for (int y = 0; y < height; ++y)
-      {
-        for (int x = 0; x < width; ++x)
-        {
-          const size_t i = size_t(x) + size_t(width) * size_t(y);
-          if (image.label[i] == 0)
-            continue;
-          const Ray ray = rayAt(rays, imageCoordinate(x, width), imageCoordinate(y, height));
-          double p[4];
-          for (int a = 0; a < 3; ++a)
-            p[a] = ray.origin[a] + double(image.depth[i]) * ray.direction[a];
-          p[3] = 1;
-          double z = 0, w = 0;
-          for (int c = 0; c < 4; ++c)
-          {
-            z += modelToClip[8 + c] * p[c];
-            w += modelToClip[12 + c] * p[c];
-          }
-          traced[i] = float(std::min(std::max(0.5 * z / w + 0.5, 0.0), 1.0));
-        }
-      }
-      depth = sceneDepth;
-      for (int fy = 0; fy < vp.height; ++fy)
-      {
-        const int y = std::min(int(int64_t(fy) * height / vp.height), height - 1);
-        for (int fx = 0; fx < vp.width; ++fx)
-        {
-          const int x = std::min(int(int64_t(fx) * width / vp.width), width - 1);
-          float& d = depth[size_t(fx) + size_t(vp.width) * size_t(fy)];
-          d = std::min(d, traced[size_t(x) + size_t(width) * size_t(y)]);
-        }
-      }
-    }
+    const std::vector<float> depth = this->WriteDepth
+      ? compositedDepth(image, rays, modelToClip, sceneDepth, vp)
+      : std::vector<float>();
     in.Compositor.draw(
       window, vp, image.hdr.data(), width, height, depth, float(base.exposure));
 

@@ -49,6 +49,18 @@ bool nonNegative(const std::array<float, N>& values)
 }
 } // namespace
 
+bool tracesSameImage(const RenderSettings& a, const RenderSettings& b)
+{
+  return a.lod == b.lod && a.autoLodPixels == b.autoLodPixels &&
+    a.maximumBounces == b.maximumBounces && a.seed == b.seed &&
+    a.nextEventEstimation == b.nextEventEstimation && a.background == b.background &&
+    a.environmentColor == b.environmentColor && a.environmentMap == b.environmentMap &&
+    a.sun.on == b.sun.on && a.sun.direction == b.sun.direction &&
+    a.sun.irradiance == b.sun.irradiance &&
+    a.sun.angularRadiusDegrees == b.sun.angularRadiusDegrees &&
+    a.maximumBlocksPerBlas == b.maximumBlocksPerBlas;
+}
+
 void validate(const RenderSettings& s)
 {
   require(uint32_t(s.lod) <= uint32_t(Lod::Auto), "LOD must be block, leaf, voxel or auto");

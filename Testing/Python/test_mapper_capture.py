@@ -100,3 +100,23 @@ def test_show_refines_on_the_interactor_timer():
     interactor.InvokeEvent("TimerEvent")
     assert mapper.GetRenderSeconds() == before
     plotter.close()
+
+
+def test_exposure_recomposites_without_tracing():
+    plotter, mapper = scene()
+    vtksvdag.refine(plotter)
+    before = plotter.screenshot().astype(float)
+    samples = mapper.GetAccumulatedSamples()
+    mapper.GetSettings().SetExposure(4.0)
+    plotter.render()
+    after = plotter.screenshot().astype(float)
+    assert mapper.GetLastTraceMilliseconds() == 0.0  # only re-composited
+    assert mapper.GetAccumulatedSamples() == samples
+    volume_pixels = np.abs(after - before).sum(axis=2) > 0
+    assert volume_pixels.sum() > 100
+    assert (after.sum(axis=2) >= before.sum(axis=2) - 1e-9).all()  # brighter, never darker
+    # Any other setting traces anew.
+    mapper.GetSettings().SetMaximumBounces(2)
+    plotter.render()
+    assert mapper.GetAccumulatedSamples() == 1
+    plotter.close()

@@ -66,6 +66,10 @@ struct RenderSettings
   uint32_t maximumBlocksPerBlas = 0;
 };
 
+// Whether two settings trace the same image: every member but exposure (applied to the traced
+// image) and samplesPerPixel (how many samples a pass adds).
+bool tracesSameImage(const RenderSettings& a, const RenderSettings& b);
+
 // The valid ranges, checked in one place: throws std::invalid_argument naming the setting and
 // its range (samplesPerPixel 1 .. MaximumSamplesPerPixel, maximumBounces 0 .. MaximumBounces,
 // exposure and autoLodPixels finite > 0, colors finite >= 0, a finite non-zero sun direction,
