@@ -14,10 +14,35 @@ _INT64 = np.iinfo(np.int64)
 _UINT64 = np.iinfo(np.uint64)
 
 
+class LabelRangeError(ValueError):
+    """A label value (background, excluded label) that the volume's dtype cannot hold.
+
+    Attributes
+    ----------
+    what : str
+        The argument's name ("background", "excluded label").
+    value : int
+        The value given.
+    low, high : int
+        The range of the dtype.
+    type_name : str
+        "dtype uint8" (or "a 64-bit integer" when the dtype is not known yet).
+    where : str
+        Appended to the message, e.g. " (the labels of x.nrrd)".
+    """
+
+    def __init__(self, what, value, low, high, type_name, where=""):
+        self.what, self.value, self.low, self.high = what, value, low, high
+        self.type_name, self.where = type_name, where
+        super().__init__(f"{what} {value} is out of range for {type_name} [{low}, {high}]{where}")
+
+
 def check_label_dtype(dtype, what="label array"):
     """Return the integer dtype labels are stored as, or raise TypeError.
 
     ``bool`` is accepted and stored as ``uint8`` (a mask is a volume with the single label 1).
+    The dtype returned is in native byte order (``>u2`` gives ``uint16``): VTK arrays hold
+    native values, so a big-endian array must be converted, never reinterpreted.
     """
     dtype = np.dtype(dtype)
     if dtype == np.bool_:
@@ -33,7 +58,7 @@ def check_label_dtype(dtype, what="label array"):
             f"the {what} has dtype {dtype}; segmentation labels must be integers "
             f"(int8..int64, uint8..uint64 or bool).{hint}"
         )
-    return dtype
+    return dtype.newbyteorder("=")
 
 
 def numpy_dtype_of_vtk_type(vtk_type):
@@ -73,12 +98,31 @@ def label_pattern(value, dtype, what="label"):
         low, high = info.min, info.max
         type_name = f"dtype {np.dtype(dtype)}"
     if not low <= value <= high:
-        raise ValueError(f"{what} {value} is out of range for {type_name} [{low}, {high}]")
+        raise LabelRangeError(what, value, low, high, type_name)
     return value - (1 << 64) if value > _INT64.max else value
+
+
+def label_list(values, what="excluded label"):
+    """``values`` (one integer, or any iterable of them: list, set, range, array, generator) as
+    a list; TypeError for a string or a non-iterable. The items are checked by
+    :func:`label_pattern`."""
+    if values is None:
+        return []
+    if isinstance(values, (numbers.Integral, np.integer)):
+        return [values]
+    if isinstance(values, np.ndarray):
+        return values.ravel().tolist() if values.dtype.kind in "iub" else list(values.ravel())
+    if isinstance(values, (str, bytes)):
+        raise TypeError(f"{what}s must be integers, not {type(values).__name__} ({values!r})")
+    try:
+        return list(values)
+    except TypeError:
+        raise TypeError(
+            f"{what}s must be an integer or an iterable of integers, not "
+            f"{type(values).__name__} ({values!r})"
+        ) from None
 
 
 def label_patterns(values, dtype, what="excluded label"):
     """:func:`label_pattern` for each of ``values`` (an iterable of integers, or one integer)."""
-    if isinstance(values, (numbers.Integral, np.integer)):
-        values = [values]
-    return [label_pattern(v, dtype, what) for v in np.asarray(values, dtype=object).ravel()]
+    return [label_pattern(v, dtype, what) for v in label_list(values, what)]

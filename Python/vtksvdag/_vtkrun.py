@@ -7,6 +7,7 @@ file or bad input surfaces as one exception carrying VTK's own message.
 """
 import contextlib
 import re
+import warnings
 
 from vtkmodules.util.misc import calldata_type
 from vtkmodules.vtkCommonCore import VTK_STRING, vtkCommand
@@ -79,7 +80,8 @@ def run_algorithm(algorithm, *, action="Update", progress=None, error=ValueError
     action : str, default: "Update"
         The method to call ("Update" for filters and readers, "Write" for writers).
     progress : callable, optional
-        Called with the algorithm's progress, a float in [0, 1], on every ProgressEvent.
+        Called with the algorithm's progress, a float in [0, 1], on every ProgressEvent. An
+        exception it raises aborts the algorithm and is raised from here.
     error : type, default: ValueError
         Exception raised for errors that are not about a file.
     what : str, optional
@@ -87,6 +89,10 @@ def run_algorithm(algorithm, *, action="Update", progress=None, error=ValueError
 
     Raises
     ------
+    TypeError
+        ``progress`` is not callable.
+    Exception
+        Whatever ``progress`` raised (the algorithm is aborted).
     FileNotFoundError
         The algorithm reports ``vtkErrorCode::FileNotFoundError``.
     OSError
@@ -94,6 +100,8 @@ def run_algorithm(algorithm, *, action="Update", progress=None, error=ValueError
     error
         Any other error message from the algorithm or its executive.
     """
+    if progress is not None and not callable(progress):
+        raise TypeError(f"progress must be a callable taking a fraction, not {progress!r}")
     messages = []
     on_error = _error_collector(messages)
     observed = [algorithm]
@@ -101,20 +109,39 @@ def run_algorithm(algorithm, *, action="Update", progress=None, error=ValueError
     if executive is not None:
         observed.append(executive)  # "returned failure for request" comes from the executive
     tags = [(obj, obj.AddObserver(vtkCommand.ErrorEvent, on_error)) for obj in observed]
+    # An exception raised in an observer cannot travel through VTK's C++: VTK would print it and
+    # carry on. The progress observer keeps it, asks the algorithm to stop, and it is raised
+    # below once the call has returned.
+    failures = []
     if progress is not None:
+
+        def on_progress(caller, event):
+            if failures:
+                return
+            try:
+                progress(caller.GetProgress())
+            except BaseException as e:  # noqa: B902 (KeyboardInterrupt too: Ctrl-C must stop it)
+                failures.append(e)
+                caller.SetAbortExecute(1)
+
+        warnings_seen = []
+        tags.append((algorithm, algorithm.AddObserver(vtkCommand.ProgressEvent, on_progress)))
+        # The algorithm's "was aborted" warning is about the abort asked for here.
         tags.append(
-            (
-                algorithm,
-                algorithm.AddObserver(
-                    vtkCommand.ProgressEvent, lambda caller, event: progress(caller.GetProgress())
-                ),
-            )
+            (algorithm, algorithm.AddObserver(vtkCommand.WarningEvent, _error_collector(warnings_seen)))
         )
     try:
         getattr(algorithm, action)()
     finally:
         for obj, tag in tags:
             obj.RemoveObserver(tag)
+        if failures:
+            algorithm.SetAbortExecute(0)  # the next update must run
+    if failures:
+        raise failures[0]
+    if progress is not None:
+        for message in warnings_seen:
+            warnings.warn(message, RuntimeWarning, stacklevel=3)
 
     code = algorithm.GetErrorCode() if hasattr(algorithm, "GetErrorCode") else 0
     if not messages and code == vtkErrorCode.NoError:

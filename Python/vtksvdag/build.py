@@ -5,10 +5,15 @@ import numpy as np
 from vtkmodules.util.numpy_support import numpy_to_vtk
 from vtkmodules.vtkCommonDataModel import vtkDataObject, vtkImageData
 
-from ._labels import check_label_dtype, label_pattern, label_patterns, numpy_dtype_of_vtk_type
+from ._labels import (
+    check_label_dtype, label_list, label_pattern, label_patterns, numpy_dtype_of_vtk_type,
+)
 from ._vtkrun import run_algorithm
 from .volume import SegmentationVolume, check_axis_order
 from .vtkSVDAGCore import vtkImageDataToSegmentationSVDAG
+
+
+_MAX_DIMENSION = 2**31 - 1  # vtkImageData dimensions are C ints
 
 
 def _check_vector(values, name, positive=False):
@@ -71,8 +76,8 @@ def from_numpy(
     Parameters
     ----------
     array : numpy.ndarray
-        3D array of integer labels (int8..int64, uint8..uint64; ``bool`` is stored as
-        ``uint8``). A 2D slice must be given as 3D, e.g. ``array[:, :, np.newaxis]``: guessing
+        3D array of integer labels (int8..int64, uint8..uint64, either byte order, any
+        memory layout; ``bool`` is stored as ``uint8``). A 2D slice must be given as 3D, e.g. ``array[:, :, np.newaxis]``: guessing
         which axis is missing would be wrong half of the time.
     spacing : sequence of float, default: (1, 1, 1)
         Positive voxel size along x, y, z.
@@ -100,10 +105,13 @@ def from_numpy(
     Raises
     ------
     TypeError
-        The array is not an integer or bool array, or a label value is not an integer.
+        The array is not an integer or bool array (or is a masked array), or a label value
+        is not an integer.
     ValueError
         The array is not 3D or is empty, a label value does not fit the dtype, or the
         geometry is invalid.
+    Exception
+        Whatever ``progress`` raised (compression stops).
 
     Examples
     --------
@@ -116,8 +124,14 @@ def from_numpy(
     >>> np.array_equal(volume.to_numpy(), labels)
     True
     """
+    if isinstance(array, np.ma.MaskedArray):
+        # np.asarray would drop the mask and store whatever lies under it.
+        raise TypeError(
+            "a masked array cannot be compressed as it is: fill the masked voxels first, "
+            "e.g. array.filled(background)"
+        )
     array = np.asarray(array)
-    dtype = check_label_dtype(array.dtype)
+    dtype = check_label_dtype(array.dtype)  # native byte order
     if array.ndim != 3:
         raise ValueError(
             f"a label volume must be a 3D array, not {array.ndim}D with shape {array.shape}"
@@ -125,10 +139,16 @@ def from_numpy(
         )
     if array.size == 0:
         raise ValueError(f"the label array is empty (shape {array.shape})")
+    if max(array.shape) > _MAX_DIMENSION:
+        raise ValueError(
+            f"the label array has shape {array.shape}; VTK images have at most "
+            f"{_MAX_DIMENSION} voxels along an axis"
+        )
     check_axis_order(axis_order)
     spacing = _check_vector(spacing, "spacing", positive=True)
     origin = _check_vector(origin, "origin")
     direction = _check_direction(direction)
+    exclude = label_list(exclude)  # a generator is read once
     label_pattern(background, dtype, "background")  # fail before any copy of a big array
     label_patterns(exclude, dtype)
 
@@ -137,7 +157,8 @@ def from_numpy(
     # other layouts are copied once here.
     flat = np.ravel(xyz, order="F")
     if flat.dtype != dtype:
-        flat = flat.astype(dtype)  # bool -> uint8
+        # bool -> uint8, and big-endian -> native: a value conversion, not a reinterpretation
+        flat = flat.astype(dtype)
     image = vtkImageData()
     image.SetDimensions(*xyz.shape)
     image.SetSpacing(spacing)
@@ -174,7 +195,8 @@ def from_image(image, scalars=None, background=0, exclude=(), progress=None):
     Raises
     ------
     TypeError
-        ``image`` is not image data, or its labels are not integers.
+        ``image`` is not image data, its labels are not integers, or ``scalars`` is not a
+        string.
     KeyError
         There is no point data array called ``scalars`` (or no active scalars).
 
@@ -188,6 +210,9 @@ def from_image(image, scalars=None, background=0, exclude=(), progress=None):
     """
     if not isinstance(image, vtkImageData):
         raise TypeError(f"expected a vtkImageData or pyvista.ImageData, not {type(image).__name__}")
+    if scalars is not None and not isinstance(scalars, str):
+        # vtkPointData.GetArray(0) would take an index, and the builder an attribute type.
+        raise TypeError(f"scalars must be the name of a point data array, not {scalars!r}")
     point_data = image.GetPointData()
     array = point_data.GetArray(scalars) if scalars is not None else point_data.GetScalars()
     if array is None:
@@ -200,4 +225,7 @@ def from_image(image, scalars=None, background=0, exclude=(), progress=None):
     dtype = check_label_dtype(numpy_dtype_of_vtk_type(array.GetDataType()))
     if image.GetNumberOfPoints() == 0:
         raise ValueError("the image is empty")
+    exclude = label_list(exclude)
+    label_pattern(background, dtype, "background")
+    label_patterns(exclude, dtype)
     return _compress(image, dtype, background, exclude, scalars, progress)

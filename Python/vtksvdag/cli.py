@@ -8,6 +8,7 @@ import sys
 
 from . import __version__
 from .commands import compress, decompress, info, render
+from .commands._common import UsageError
 
 #: Every subcommand, in the order ``--help`` lists them. A new command is a module in
 #: ``vtksvdag/commands/`` plus one entry here.
@@ -63,12 +64,19 @@ def main(argv=None):
         return stop.code if isinstance(stop.code, int) else 2
     try:
         return args.run(args)
-    except (OSError, ValueError, TypeError, KeyError, MemoryError) as error:
+    except UsageError as error:  # an option that does not fit the input (found once read)
+        print(f"{PROG}: error: {error} (see '{PROG} {args.command} --help')", file=sys.stderr)
+        return 2
+    except (OSError, ValueError, TypeError, KeyError, MemoryError, RuntimeError) as error:
         print(f"{PROG}: error: {_describe(error)}", file=sys.stderr)
         return 1
     except KeyboardInterrupt:
         print(f"{PROG}: interrupted", file=sys.stderr)
         return 130
+    except Exception as error:  # noqa: BLE001 (a bug, but still one line and no traceback)
+        print(f"{PROG}: error: internal error: {type(error).__name__}: {_describe(error)}",
+              file=sys.stderr)
+        return 1
 
 
 if __name__ == "__main__":

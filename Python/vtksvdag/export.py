@@ -11,12 +11,12 @@ LABEL_VOLUME_SUFFIXES = (".nrrd", ".nhdr", ".vti", ".npy")
 
 def label_volume_suffix(path):
     """The suffix of ``path`` that selects its format; ValueError for unsupported ones."""
-    lower = os.fspath(path).lower()
+    lower = os.fsdecode(path).lower()
     for suffix in LABEL_VOLUME_SUFFIXES:
         if lower.endswith(suffix):
             return suffix
     raise ValueError(
-        f"cannot write {os.fspath(path)!r}: unsupported format "
+        f"cannot write {os.fsdecode(path)!r}: unsupported format "
         f"(use one of {', '.join(LABEL_VOLUME_SUFFIXES)})"
     )
 
@@ -57,7 +57,7 @@ def write_label_volume(volume, path, progress=None):
     ----------
     volume : SegmentationVolume
         The compressed volume.
-    path : str or os.PathLike
+    path : str, bytes or os.PathLike
         ``.nrrd`` (gzip encoding, space directions and origin), ``.nhdr`` (detached NRRD
         header plus gzip data file), ``.vti`` (VTK XML image data, zlib) or ``.npy`` (numpy
         array indexed ``[x, y, z]``, Fortran order, the original dtype; no geometry).
@@ -78,7 +78,7 @@ def write_label_volume(volume, path, progress=None):
     >>> volume = vtksvdag.from_numpy(np.ones((4, 4, 4), dtype=np.uint8))
     >>> write_label_volume(volume, "labels.nrrd")  # doctest: +SKIP
     """
-    path = os.fspath(path)
+    path = os.fsdecode(path)
     suffix = label_volume_suffix(path)
     if suffix in (".nrrd", ".nhdr"):
         _write_nrrd(volume, path)

@@ -4,12 +4,17 @@ import time
 
 import numpy as np
 
-from ._labels import label_pattern, label_patterns
+from ._labels import (
+    LabelRangeError, label_list, label_pattern, label_patterns, numpy_dtype_of_vtk_type,
+)
 from ._vtkrun import run_algorithm
 from .volume import SegmentationVolume
 
 def _check_input_file(path):
-    path = os.fspath(path)
+    try:
+        path = os.fsdecode(path)  # str, bytes or os.PathLike
+    except TypeError:
+        raise TypeError(f"path must be a str, bytes or os.PathLike, not {type(path).__name__}") from None
     if not os.path.exists(path):
         raise FileNotFoundError(2, "No such file or directory", path)
     if os.path.isdir(path):
@@ -28,16 +33,18 @@ def read(path, background=0, exclude=(), dataset=None, progress=None):
 
     Parameters
     ----------
-    path : str or os.PathLike
+    path : str, bytes or os.PathLike
         The file.
     background : int, default: 0
-        Label value that is not stored (ignored for ``.svdag`` files, which carry their own).
+        Label value that is not stored; it must fit the file's label dtype. A ``.svdag`` file
+        whose own background differs is compressed again with this one.
     exclude : sequence of int, default: ()
-        Labels left out; they decode as background (ignored for ``.svdag`` files).
+        Labels left out; they decode as background (each must fit the file's label dtype).
     dataset : str, optional
-        Name of the dataset inside an HDF5 file.
+        Name of the dataset inside an HDF5 file (an error for other files).
     progress : callable, optional
-        Called with the reading progress in [0, 1].
+        Called with the reading progress in [0, 1]; an exception it raises stops the reading
+        and is raised from here.
 
     Returns
     -------
@@ -52,7 +59,8 @@ def read(path, background=0, exclude=(), dataset=None, progress=None):
     OSError
         The file cannot be read (unknown format, truncated, corrupt).
     ValueError
-        The file holds no integer label volume.
+        The file holds no integer label volume, ``background`` or an excluded label does not
+        fit the file's dtype, or ``dataset`` is given for a file that is not HDF5.
 
     Examples
     --------
@@ -62,8 +70,14 @@ def read(path, background=0, exclude=(), dataset=None, progress=None):
     (64, 64, 64)
     """
     path = _check_input_file(path)
+    exclude = label_list(exclude)  # a generator is read once
+    if dataset is not None and not isinstance(dataset, str):
+        raise TypeError(f"dataset must be a str (an HDF5 dataset path), not {dataset!r}")
     if path.lower().endswith(".npy"):
         from .build import from_numpy
+
+        if dataset is not None:
+            raise ValueError(f"{path}: dataset={dataset!r} is only for HDF5 files, not .npy")
 
         try:
             array = np.load(path, mmap_mode="r", allow_pickle=False)
@@ -79,13 +93,28 @@ def read(path, background=0, exclude=(), dataset=None, progress=None):
     for value in label_patterns(exclude, None):
         reader.AddExcludedLabel(value)
     if dataset is not None:
-        reader.SetDatasetName(str(dataset))
+        reader.SetDatasetName(dataset)
     start = time.perf_counter()
     run_algorithm(reader, progress=progress, error=ValueError, what=path)
     seconds = time.perf_counter() - start
     output = reader.GetOutput()
     if output is None or not output.HasVolume():
         raise OSError(f"{path}: the reader produced no volume")
+    if dataset is not None and reader.GetFileFormat() != "HDF5":
+        raise ValueError(
+            f"{path}: dataset={dataset!r} is only for HDF5 files, not {reader.GetFileFormat()}"
+        )
+    # The reader takes label values as 64-bit patterns and learns the dtype only from the file:
+    # 300 would become 44 in a uint8 volume. Check them against the dtype read (the volume built
+    # with a wrapped value is thrown away).
+    dtype = numpy_dtype_of_vtk_type(output.GetLabelScalarType())
+    try:
+        label_pattern(background, dtype, "background")
+        label_patterns(exclude, dtype)
+    except LabelRangeError as e:
+        raise LabelRangeError(
+            e.what, e.value, e.low, e.high, e.type_name, f" (the labels of {path})"
+        ) from None
     # The reader detects formats by content, so ask it rather than trusting the suffix.
     if reader.GetFileFormat() == "SVDAG":
         return SegmentationVolume(output, load_seconds=seconds)

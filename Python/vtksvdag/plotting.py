@@ -29,7 +29,7 @@ def _segmentation_volume(data):
     """A SegmentationVolume from any of the inputs add_segmentation accepts."""
     if isinstance(data, SegmentationVolume):
         return data
-    if isinstance(data, (str, os.PathLike)):
+    if isinstance(data, (str, bytes, os.PathLike)):
         return read(data)
     if isinstance(data, np.ndarray):
         return from_numpy(data)

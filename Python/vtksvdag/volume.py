@@ -1,5 +1,5 @@
 """`SegmentationVolume`: the Python face of a compressed segmentation (vtkSegmentationSVDAG)."""
-import os
+import numbers
 
 import numpy as np
 from vtkmodules.util.numpy_support import vtk_to_numpy
@@ -156,8 +156,16 @@ class SegmentationVolume:
         numpy scalar
             The label in :attr:`dtype`; the background label where no label is stored.
 
+        Parameters
+        ----------
+        i, j, k : int
+            The voxel index along x, y and z (Python or numpy integers; no negative indices
+            counted from the end).
+
         Raises
         ------
+        TypeError
+            An index is not an integer (``1.7`` is not truncated).
         IndexError
             The index is outside the volume.
 
@@ -168,6 +176,9 @@ class SegmentationVolume:
         >>> int(volume.label_at(1, 0, 1))
         5
         """
+        for name, v in zip("ijk", (i, j, k)):
+            if not isinstance(v, (numbers.Integral, np.integer)) or isinstance(v, (bool, np.bool_)):
+                raise TypeError(f"label_at: index {name} must be an integer, not {v!r}")
         index = tuple(int(v) for v in (i, j, k))
         dims = self.dims
         if any(not 0 <= v < d for v, d in zip(index, dims)):
@@ -312,15 +323,21 @@ class SegmentationVolume:
 
         Parameters
         ----------
-        path : str or os.PathLike
-            Output file name.
+        path : str, bytes or os.PathLike
+            Output file name; it must end in ``.svdag``.
         compression_level : int, default: 3
-            zstd compression level of the file's sections.
+            zstd compression level of the file's sections, 1 (fastest) to 22 (smallest); 0
+            stores them uncompressed.
         progress : callable, optional
-            Called with the writing progress in [0, 1].
+            Called with the writing progress in [0, 1]; an exception it raises is raised from
+            here (and a file this call created is removed).
 
         Raises
         ------
+        TypeError
+            ``compression_level`` is not an integer.
+        ValueError
+            ``path`` does not end in ``.svdag``, or ``compression_level`` is not in 0..22.
         OSError
             The file cannot be written.
 
@@ -330,7 +347,7 @@ class SegmentationVolume:
         >>> volume = vtksvdag.from_numpy(np.eye(8, dtype=np.uint8)[:, :, None])
         >>> volume.save("eye.svdag")  # doctest: +SKIP
         """
-        write_svdag(self, os.fspath(path), compression_level=compression_level, progress=progress)
+        write_svdag(self, path, compression_level=compression_level, progress=progress)
 
     def __repr__(self):
         s = self.stats()

@@ -234,3 +234,71 @@ def test_progress_bar_only_on_a_terminal(small_nrrd):
     assert "read [" in drawn and "100%" in drawn
     assert stderr_on_a_tty("info", path, "--no-progress") == ""
     assert stderr_on_a_tty("info", path, "--json") == ""
+
+
+@pytest.fixture(scope="module")
+def uint8_nrrd(tmp_path_factory):
+    labels = (np.arange(6 * 5 * 4) % 7).astype(np.uint8).reshape(6, 5, 4)
+    path = tmp_path_factory.mktemp("cli_u8") / "u8.nrrd"
+    nrrd.write(str(path), labels, index_order="F")
+    return path, labels
+
+
+@pytest.mark.parametrize(
+    "args, match",
+    [
+        (["--level", "23"], "argument --level: must be in 0..22, got 23"),
+        (["--level", "-1"], "argument --level: must be in 0..22, got -1"),
+        (["--level", "100"], "argument --level: must be in 0..22"),
+        (["--background", str(2**64)], "argument --background: must be in"),
+        (["--background", str(-(2**63) - 1)], "argument --background: must be in"),
+        (["--exclude", "1", str(2**64)], "argument --exclude: must be in"),
+        (["--background", "nan"], "argument --background: must be an integer"),
+    ],
+)
+def test_compress_numeric_options_are_range_checked(uint8_nrrd, tmp_path, args, match):
+    path, _ = uint8_nrrd
+    out = tmp_path / "x.svdag"
+    assert_one_line_error(run_cli("compress", path, "-o", out, *args), 2, match)
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("command", ["compress", "info"])
+@pytest.mark.parametrize(
+    "args, match",
+    [
+        (["--background", "300"], "argument --background: 300 is out of range for the labels of"),
+        (["--background", "-1"], "argument --background: -1 is out of range"),
+        (["--exclude", "2", "256"], "argument --exclude: 256 is out of range"),
+    ],
+)
+def test_labels_outside_the_files_dtype_exit_2(uint8_nrrd, tmp_path, command, args, match):
+    path, _ = uint8_nrrd
+    out = tmp_path / "x.svdag"
+    extra = ["-o", out] if command == "compress" else []
+    result = run_cli(command, path, *extra, *args)
+    assert_one_line_error(result, 2, match)
+    assert "uint8: 0..255" in result.stderr and "u8.nrrd" in result.stderr
+    assert not out.exists()
+    # the extremes of the dtype are accepted
+    ok = run_cli(command, path, *extra, "--background", "255", "--exclude", "0", "--json")
+    assert ok.returncode == 0, ok.stderr
+    assert json.loads(ok.stdout)["background"] == 255
+
+
+@pytest.mark.parametrize("name", ["x.nrrd", "x.npy", "x.vti", "x.svdag.gz", "x"])
+def test_compress_refuses_an_output_that_is_not_svdag(uint8_nrrd, tmp_path, name):
+    path, _ = uint8_nrrd
+    result = run_cli("compress", path, "-o", tmp_path / name)
+    suffix = os.path.splitext(name)[1]
+    assert_one_line_error(result, 2, "argument -o/--output")
+    assert (f"suffix '{suffix}'" if suffix else "no suffix") in result.stderr
+    assert "compress writes .svdag files" in result.stderr
+    assert not (tmp_path / name).exists()
+    # any case of .svdag is fine
+    assert run_cli("compress", path, "-o", tmp_path / "X.SVDAG").returncode == 0
+
+
+def test_dataset_for_a_file_that_is_not_hdf5(uint8_nrrd):
+    path, _ = uint8_nrrd
+    assert_one_line_error(run_cli("info", path, "--dataset", "labels"), 1, "only for HDF5")

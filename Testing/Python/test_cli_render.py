@@ -20,11 +20,12 @@ def run_cli(*args, env=None):
                           env=env)
 
 
-def assert_one_line_error(result, match):
-    assert result.returncode == 1, (result.stdout, result.stderr)
+def assert_one_line_error(result, match, code=1):
+    assert result.returncode == code, (result.stdout, result.stderr)
     lines = result.stderr.strip().splitlines()
     assert len(lines) == 1, result.stderr
     assert lines[0].startswith("vtksvdag: error: ") and match in lines[0], lines[0]
+    assert "Traceback" not in result.stderr
 
 
 @pytest.fixture(scope="module")
@@ -94,11 +95,12 @@ def test_hide_and_exr_and_svdag_input(volume_file, tmp_path):
 
 
 def test_errors(volume_file, tmp_path):
-    assert_one_line_error(run_cli("render", volume_file, "-o", tmp_path / "x.jpg"), ".png or .exr")
+    assert_one_line_error(run_cli("render", volume_file, "-o", tmp_path / "x.jpg"),
+                          "render writes .png or .exr files", code=2)
     assert_one_line_error(run_cli("render", volume_file, "-o", tmp_path / "x.png", "--hide", 99),
                           "label 99")
     assert_one_line_error(run_cli("render", volume_file, "-o", tmp_path / "x.png", "--bounces", 99),
-                          "--bounces")
+                          "argument --bounces: must be in 0..64, got 99", code=2)
     assert_one_line_error(run_cli("render", volume_file, "-o", tmp_path / "x.png",
                                   "--environment", tmp_path / "missing.exr", "--width", 8,
                                   "--height", 8), "missing.exr")
@@ -107,3 +109,48 @@ def test_errors(volume_file, tmp_path):
                      env=env)
     assert_one_line_error(result, "no Vulkan ray-tracing device")
     assert not (tmp_path / "x.png").exists()
+
+
+@pytest.mark.parametrize(
+    "args, match",
+    [
+        (["--width", "20000"], "argument --width: must be in 1..16384, got 20000"),
+        (["--width", str(2**31)], "argument --width: must be in 1..16384"),
+        (["--width", "0"], "argument --width: must be in 1..16384"),
+        (["--width", "1.5"], "argument --width: must be an integer in 1..16384"),
+        (["--height", "16385"], "argument --height: must be in 1..16384"),
+        (["--height", "-3"], "argument --height: must be in 1..16384"),
+        (["--spp", "65537"], "argument --spp: must be in 1..65536"),
+        (["--spp", "0"], "argument --spp: must be in 1..65536"),
+        (["--bounces", "-1"], "argument --bounces: must be in 0..64"),
+        (["--bounces", "65"], "argument --bounces: must be in 0..64"),
+        (["--seed", "-1"], "argument --seed: must be in 0..4294967295"),
+        (["--seed", str(2**32)], "argument --seed: must be in 0..4294967295"),
+        (["--zoom", "0"], "argument --zoom: must be a finite number > 0"),
+        (["--zoom", "inf"], "argument --zoom: must be a finite number > 0"),
+        (["--zoom", "nan"], "argument --zoom: must be a finite number > 0"),
+        (["--azimuth", "inf"], "argument --azimuth: must be a finite number"),
+        (["--elevation", "nan"], "argument --elevation: must be a finite number"),
+        (["--sun", "inf", "0"], "argument --sun: must be a finite number"),
+        (["--sun", "0", "nan"], "argument --sun: must be a finite number"),
+        (["--sky", "1", "-1", "1"], "argument --sky: must be a finite number >= 0"),
+        (["--sky", "1", "nan", "1"], "argument --sky: must be a finite number >= 0"),
+        (["--hide", str(2**64)], "argument --hide: must be in"),
+        (["--background", str(2**64)], "argument --background: must be in"),
+        (["--background", "70000"], "argument --background: 70000 is out of range for the labels"),
+        (["--exclude", "-1"], "argument --exclude: -1 is out of range for the labels"),
+    ],
+)
+def test_numeric_options_are_range_checked(volume_file, tmp_path, args, match):
+    out = tmp_path / "x.png"
+    result = run_cli("render", volume_file, "-o", out, "--width", 8, "--height", 8, *args)
+    assert_one_line_error(result, match, code=2)
+    assert not out.exists()
+
+
+def test_the_largest_width_is_rendered_as_reported(volume_file, tmp_path):
+    out = tmp_path / "wide.png"
+    info = render(volume_file, out, "--spp", 1, "--width", 16384, "--height", 1, "--seed",
+                  2**32 - 1, "--bounces", 0)
+    assert (info["width"], info["height"], info["seed"]) == (16384, 1, 2**32 - 1)
+    assert np.asarray(Image.open(out)).shape == (1, 16384, 4)

@@ -1,10 +1,82 @@
 """Pieces shared by the subcommands: options, input loading, progress and output formatting."""
+import argparse
 import json
+import math
 import os
 import sys
 
+from .._labels import LabelRangeError
 from ..fileio import read
 from ..progress import ProgressBar
+
+INT64_MIN = -(2**63)
+UINT64_MAX = 2**64 - 1
+
+
+class UsageError(Exception):
+    """A bad option value found only once the input was read (a background that does not fit
+    the file's dtype): reported like argparse's errors, with exit code 2."""
+
+
+# -- option types: each names the range in its message; argparse adds "argument --name: " and
+# exits with code 2.
+def int_in(low, high):
+    """An argparse type: an integer in low..high."""
+
+    def parse(text):
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"must be an integer in {low}..{high}, got {text!r}") from None
+        if not low <= value <= high:
+            raise argparse.ArgumentTypeError(f"must be in {low}..{high}, got {value}")
+        return value
+
+    parse.__name__ = f"integer in {low}..{high}"
+    return parse
+
+
+def finite_float(minimum=None, exclusive=False):
+    """An argparse type: a finite number, optionally > minimum (exclusive) or >= minimum."""
+    if minimum is None:
+        wanted = "a finite number"
+    else:
+        wanted = f"a finite number {'>' if exclusive else '>='} {minimum:g}"
+
+    def parse(text):
+        try:
+            value = float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"must be {wanted}, got {text!r}") from None
+        ok = math.isfinite(value) and (
+            minimum is None or (value > minimum if exclusive else value >= minimum)
+        )
+        if not ok:
+            raise argparse.ArgumentTypeError(f"must be {wanted}, got {text}")
+        return value
+
+    parse.__name__ = wanted
+    return parse
+
+
+#: A label value: what fits int64 or uint64 (the volume's own dtype is checked after reading).
+label_value = int_in(INT64_MIN, UINT64_MAX)
+
+
+def output_path(suffixes, what):
+    """An argparse type: a file name ending in one of ``suffixes`` (case-insensitive)."""
+
+    def parse(text):
+        if not text.lower().endswith(tuple(suffixes)):
+            suffix = os.path.splitext(text)[1]
+            found = f"suffix {suffix!r}" if suffix else "no suffix"
+            raise argparse.ArgumentTypeError(
+                f"{text!r} has {found}; {what} writes {' or '.join(suffixes)} files"
+            )
+        return text
+
+    parse.__name__ = "output file"
+    return parse
 
 
 def add_output_options(parser):
@@ -18,11 +90,12 @@ def add_output_options(parser):
 def add_input_options(parser):
     """Options that decide what is read from a label volume file."""
     parser.add_argument(
-        "--background", type=int, default=0, metavar="N", help="label that is not stored (default: 0)"
+        "--background", type=label_value, default=0, metavar="N",
+        help="label that is not stored; it must fit the file's label type (default: 0)",
     )
     parser.add_argument(
-        "--exclude", type=int, nargs="+", default=[], metavar="N",
-        help="labels left out (they decode as background)",
+        "--exclude", type=label_value, nargs="+", default=[], metavar="N",
+        help="labels left out (they decode as background); each must fit the file's label type",
     )
     parser.add_argument("--dataset", metavar="NAME", help="dataset name inside an HDF5 file")
 
@@ -44,19 +117,32 @@ def run_with_progress(args, label, task):
             bar.close()
 
 
+_OPTION_OF = {"background": "--background", "excluded label": "--exclude"}
+
+
 def load(args, path):
-    """Read ``path`` (a label volume or a .svdag file) with the input options of ``args``."""
-    return run_with_progress(
-        args,
-        "read",
-        lambda progress: read(
-            path,
-            background=getattr(args, "background", 0),
-            exclude=getattr(args, "exclude", ()),
-            dataset=getattr(args, "dataset", None),
-            progress=progress,
-        ),
-    )
+    """Read ``path`` (a label volume or a .svdag file) with the input options of ``args``.
+
+    Raises UsageError when --background or --exclude does not fit the file's label dtype.
+    """
+    try:
+        return run_with_progress(
+            args,
+            "read",
+            lambda progress: read(
+                path,
+                background=getattr(args, "background", 0),
+                exclude=getattr(args, "exclude", ()),
+                dataset=getattr(args, "dataset", None),
+                progress=progress,
+            ),
+        )
+    except LabelRangeError as e:
+        option = _OPTION_OF.get(e.what, e.what)
+        raise UsageError(
+            f"argument {option}: {e.value} is out of range for the labels of {path} "
+            f"({e.type_name}: {e.low}..{e.high})"
+        ) from None
 
 
 def file_bytes(path):

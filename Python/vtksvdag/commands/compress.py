@@ -1,7 +1,8 @@
 """``vtksvdag compress INPUT -o OUT.svdag``: compress a label volume file into a .svdag file."""
+from .._svdagfile import COMPRESSION_LEVELS
 from ._common import (
-    add_input_options, add_output_options, file_bytes, load, print_json, print_table,
-    run_with_progress, stats_rows,
+    add_input_options, add_output_options, file_bytes, int_in, load, output_path, print_json,
+    print_table, run_with_progress, stats_rows,
 )
 
 NAME = "compress"
@@ -10,10 +11,16 @@ HELP = "compress a label volume file (NRRD, MetaImage, VTI, NIfTI, TIFF, HDF5, .
 
 def add_arguments(parser):
     parser.add_argument("input", metavar="INPUT", help="label volume file")
-    parser.add_argument("-o", "--output", required=True, metavar="OUT.svdag", help="output file")
-    add_input_options(parser)
     parser.add_argument(
-        "--level", type=int, default=3, metavar="L", help="zstd compression level of the file (default: 3)"
+        "-o", "--output", required=True, type=output_path((".svdag",), "compress"),
+        metavar="OUT.svdag", help="output file (.svdag)",
+    )
+    add_input_options(parser)
+    low, high = COMPRESSION_LEVELS.start, COMPRESSION_LEVELS.stop - 1
+    parser.add_argument(
+        "--level", type=int_in(low, high), default=3, metavar="L",
+        help=f"zstd compression level of the file, {low + 1}..{high}; {low} stores it "
+        "uncompressed (default: 3)",
     )
     add_output_options(parser)
 

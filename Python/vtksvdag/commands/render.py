@@ -13,7 +13,10 @@ import time
 import numpy as np
 
 from .._vtkrun import vtk_errors_raised
-from ._common import add_input_options, load, print_json, print_table
+from ._common import (
+    add_input_options, finite_float, int_in, label_value, load, output_path, print_json,
+    print_table,
+)
 
 NAME = "render"
 HELP = "path-trace a label volume or .svdag file to a PNG or EXR image (Vulkan ray tracing)"
@@ -21,43 +24,45 @@ HELP = "path-trace a label volume or .svdag file to a PNG or EXR image (Vulkan r
 LODS = ("block", "leaf", "voxel", "auto")
 
 
-def _positive_int(text):
-    value = int(text)
-    if value < 1:
-        raise ValueError(text)
-    return value
-
-
-_positive_int.__name__ = "positive integer"
+#: Ranges of the numeric options (the renderer would clamp the image size silently).
+MAX_SIZE = 16384
+MAX_SPP = 65536
+MAX_BOUNCES = 64
 
 
 def add_arguments(parser):
     parser.add_argument("input", metavar="INPUT", help="label volume file or .svdag file")
-    parser.add_argument("-o", "--output", required=True, metavar="OUT.png|OUT.exr",
-                        help="output image")
+    parser.add_argument("-o", "--output", required=True, type=output_path((".png", ".exr"), "render"),
+                        metavar="OUT.png|OUT.exr", help="output image")
     add_input_options(parser)
-    parser.add_argument("--width", type=_positive_int, default=512, help="pixels (default: 512)")
-    parser.add_argument("--height", type=_positive_int, default=512, help="pixels (default: 512)")
-    parser.add_argument("--spp", type=_positive_int, default=16,
-                        help="samples per pixel, one per pass (default: 16)")
-    parser.add_argument("--bounces", type=int, default=4, help="maximum bounces, 0-64 (default: 4)")
+    parser.add_argument("--width", type=int_in(1, MAX_SIZE), default=512,
+                        help=f"pixels, 1-{MAX_SIZE} (default: 512)")
+    parser.add_argument("--height", type=int_in(1, MAX_SIZE), default=512,
+                        help=f"pixels, 1-{MAX_SIZE} (default: 512)")
+    parser.add_argument("--spp", type=int_in(1, MAX_SPP), default=16,
+                        help=f"samples per pixel, one per pass, 1-{MAX_SPP} (default: 16)")
+    parser.add_argument("--bounces", type=int_in(0, MAX_BOUNCES), default=4,
+                        help=f"maximum bounces, 0-{MAX_BOUNCES} (default: 4)")
     parser.add_argument("--lod", choices=LODS, default="voxel", help="level of detail (default: voxel)")
-    parser.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
-    parser.add_argument("--azimuth", type=float, default=30.0, help="camera orbit, degrees (default: 30)")
-    parser.add_argument("--elevation", type=float, default=20.0,
+    parser.add_argument("--seed", type=int_in(0, 2**32 - 1), default=0,
+                        help=f"random seed, 0-{2**32 - 1} (default: 0)")
+    parser.add_argument("--azimuth", type=finite_float(), default=30.0,
+                        help="camera orbit, degrees (default: 30)")
+    parser.add_argument("--elevation", type=finite_float(), default=20.0,
                         help="camera orbit, degrees (default: 20)")
-    parser.add_argument("--zoom", type=float, default=1.0, help="dolly factor > 0 (default: 1)")
-    parser.add_argument("--hide", type=int, nargs="+", default=[], metavar="LABEL",
+    parser.add_argument("--zoom", type=finite_float(0.0, exclusive=True), default=1.0,
+                        help="dolly factor > 0 (default: 1)")
+    parser.add_argument("--hide", type=label_value, nargs="+", default=[], metavar="LABEL",
                         help="label VALUES left out of the image")
     parser.add_argument("--no-nee", action="store_true",
                         help="no next-event estimation (light only where paths escape)")
     parser.add_argument("--environment", metavar="EXR", help="equirectangular OpenEXR environment map")
-    parser.add_argument("--sun", type=float, nargs=2, metavar=("AZ", "EL"),
+    parser.add_argument("--sun", type=finite_float(), nargs=2, metavar=("AZ", "EL"),
                         help="a sun at azimuth AZ (degrees from +x towards +y) and elevation EL "
                              "(degrees above the xy plane, +z up)")
-    parser.add_argument("--sky", type=float, nargs=3, metavar=("R", "G", "B"),
-                        help="constant environment radiance (default: 1 1 1, or a dim 0.25 0.27 0.3 "
-                             "sky with --sun so that the sun shapes the image)")
+    parser.add_argument("--sky", type=finite_float(0.0), nargs=3, metavar=("R", "G", "B"),
+                        help="constant environment radiance, finite and >= 0 (default: 1 1 1, or a "
+                             "dim 0.25 0.27 0.3 sky with --sun so that the sun shapes the image)")
     parser.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
     parser.add_argument("--no-progress", action="store_true", help="(no progress bar is shown)")
 
@@ -69,19 +74,15 @@ def _fail(message):
 
 def run(args):
     # Imported here: the other commands must work where the rendering module cannot load.
-    from ..vtkSVDAGRendering import vtkSegmentationSVDAGRenderer
-
-    if not args.output.lower().endswith((".png", ".exr")):
-        raise ValueError(f"the output file must end in .png or .exr, got '{args.output}'")
-    if not 0 <= args.bounces <= 64:
-        raise ValueError(f"--bounces must be in 0..64, got {args.bounces}")
-    if not 0 <= args.seed < 2 ** 32:
-        raise ValueError(f"--seed must be in 0..{2 ** 32 - 1}, got {args.seed}")
-    if not (args.zoom > 0 and math.isfinite(args.zoom)):
-        raise ValueError(f"--zoom must be a finite number > 0, got {args.zoom}")
+    try:
+        from ..vtkSVDAGRendering import vtkSegmentationSVDAGRenderer
+    except ImportError as error:
+        print(f"vtksvdag: error: the rendering module cannot be loaded: {_fail(str(error))}",
+              file=sys.stderr)
+        return 1
 
     volume = load(args, args.input)
-    values = list(volume.labels)
+    values = {int(v) for v in volume.labels}  # exact: numpy compares uint64 with int via float
     for value in args.hide:
         if value not in values:
             raise ValueError(f"--hide: label {value} is not in the volume")
@@ -113,8 +114,6 @@ def run(args):
     if args.environment:
         settings.SetEnvironmentMap(args.environment)
     sky = args.sky if args.sky else ((0.25, 0.27, 0.3) if args.sun else (1.0, 1.0, 1.0))
-    if min(sky) < 0 or not all(math.isfinite(c) for c in sky):
-        raise ValueError(f"--sky must be three finite values >= 0, got {sky}")
     settings.SetEnvironmentColor(*sky)
     if args.sun:
         az, el = (math.radians(a) for a in args.sun)
