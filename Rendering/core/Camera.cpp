@@ -111,6 +111,59 @@ ViewRays viewRaysFromClipToWorld(const std::array<double, 16>& m)
   return rays;
 }
 
+ViewRays advanceRays(const ViewRays& rays, double s)
+{
+  ViewRays out = rays;
+  for (int a = 0; a < 3; ++a)
+  {
+    out.origin[a] += s * rays.direction[a];
+    out.originU[a] += s * rays.directionU[a];
+    out.originV[a] += s * rays.directionV[a];
+    if (rays.bounded)
+    {
+      out.direction[a] *= 1 - s;
+      out.directionU[a] *= 1 - s;
+      out.directionV[a] *= 1 - s;
+    }
+  }
+  return out;
+}
+
+double spanLength(const ViewRays& r, double u, double v)
+{
+  Vec span;
+  for (int a = 0; a < 3; ++a)
+    span[a] = r.direction[a] + u * r.directionU[a] + v * r.directionV[a];
+  return length(span);
+}
+
+double approachParameter(const ViewRays& r, const std::array<double, 3>& center, double radius)
+{
+  double s = INFINITY;
+  for (double u : { -1.0, 0.0, 1.0 })
+  {
+    for (double v : { -1.0, 0.0, 1.0 })
+    {
+      Vec origin;
+      for (int a = 0; a < 3; ++a)
+        origin[a] = r.origin[a] + u * r.originU[a] + v * r.originV[a];
+      const double span = spanLength(r, u, v);
+      if (!(span > 0))
+        return 0;
+      Vec direction;
+      for (int a = 0; a < 3; ++a)
+        direction[a] = (r.direction[a] + u * r.directionU[a] + v * r.directionV[a]) / span;
+      const Vec toCenter = sub(center, origin);
+      const double along = toCenter[0] * direction[0] + toCenter[1] * direction[1] +
+        toCenter[2] * direction[2];
+      s = std::min(s, (along - 2 * radius) / span);
+    }
+  }
+  if (!(s > 0) || !std::isfinite(s))
+    return 0;
+  return r.bounded ? std::min(s, 0.999) : s;
+}
+
 PixelFootprint pixelFootprint(const ViewRays& rays, uint32_t height)
 {
   const double pixel = 2.0 / std::max<uint32_t>(height, 1);

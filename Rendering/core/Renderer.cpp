@@ -492,7 +492,27 @@ const Image& Renderer::render()
   if (!g.scene->ready())
     throw std::runtime_error("the scene's BVH is not built: its last build failed");
   const RenderSettings& settings = this->Settings;
-  const ViewRays rays = this->viewRays();
+  // The rays start near the volume (in double precision): from a camera far away, a float
+  // direction's rounding would move them by more than a voxel (see advanceRays). Depths and ray
+  // limits stay relative to the rays as given: the advance is added back, per pixel, in double.
+  const ViewRays given = this->viewRays();
+  const auto volumeBounds = worldBounds(g.scene->volume().geometry);
+  std::array<double, 3> center;
+  double radius = 0;
+  for (int a = 0; a < 3; ++a)
+  {
+    center[a] = (volumeBounds[2 * a] + volumeBounds[2 * a + 1]) / 2;
+    const double half = (volumeBounds[2 * a + 1] - volumeBounds[2 * a]) / 2;
+    radius += half * half;
+  }
+  const double advance = approachParameter(given, center, std::sqrt(radius));
+  const ViewRays rays = advance > 0 ? advanceRays(given, advance) : given;
+  // Per pixel center, how much closer the traced rays start (world units).
+  auto advanced = [&](uint32_t x, uint32_t y) {
+    return advance > 0 ? advance * spanLength(given, 2 * (x + 0.5) / this->Width - 1,
+                                      2 * (y + 0.5) / this->Height - 1)
+                       : 0.0;
+  };
   const uint32_t pixels = this->Width * this->Height;
   if (!this->RayLimits.empty() && this->RayLimits.size() != pixels)
     throw std::invalid_argument("the ray limits hold " + std::to_string(this->RayLimits.size()) +
@@ -576,7 +596,17 @@ const Image& Renderer::render()
     ++this->MaterialGeneration;
   }
   if (!this->RayLimits.empty())
-    std::memcpy(g.rayLimits.mapped(), this->RayLimits.data(), pixels * sizeof(float));
+  {
+    float* limits = static_cast<float*>(g.rayLimits.mapped());
+    for (uint32_t y = 0; y < this->Height; ++y)
+    {
+      for (uint32_t x = 0; x < this->Width; ++x)
+      {
+        const size_t i = x + size_t(this->Width) * y;
+        limits[i] = float(std::max(0.0, double(this->RayLimits[i]) - advanced(x, y)));
+      }
+    }
+  }
   g.pipeline.setFeatures(features);
 
   // Everything that changes the image, besides the per-pass fields (samples, exposure): a
@@ -630,6 +660,18 @@ const Image& Renderer::render()
   };
   read(out.label, g.label, pixels);
   read(out.depth, g.depth, pixels);
+  if (advance > 0)
+  {
+    for (uint32_t y = 0; y < this->Height; ++y)
+    {
+      for (uint32_t x = 0; x < this->Width; ++x)
+      {
+        const size_t i = x + size_t(this->Width) * y;
+        if (out.label[i] != 0)
+          out.depth[i] = float(double(out.depth[i]) + advanced(x, y));
+      }
+    }
+  }
   read(out.normal, g.normal, size_t(pixels) * 3);
   read(out.hdr, g.hdr, size_t(pixels) * 4);
   read(out.color, g.color, pixels);

@@ -60,6 +60,18 @@ ViewRays viewRays(const Camera& camera, uint32_t width, uint32_t height);
 // for one whose w varies across the image (not a projection of this form).
 ViewRays viewRaysFromClipToWorld(const std::array<double, 16>& clipToWorld);
 
+// The same rays started `s` (in units of their span) further along: origin + s * span, ending
+// where they ended if bounded (0 <= s < 1 then). Tracing from near the volume keeps float
+// precision when the camera is far away: a float direction's rounding times the distance
+// travelled is what moves a ray.
+ViewRays advanceRays(const ViewRays& rays, double s);
+// How far (in units of span) the rays may be advanced and still start in front of a sphere of
+// `radius` around `center` (every ray checked at the image's corners, edge midpoints and center,
+// with a margin of one more radius); 0 when the camera is close or inside.
+double approachParameter(const ViewRays& rays, const std::array<double, 3>& center, double radius);
+// Length of span(u, v) (the distance to the far plane of bounded rays).
+double spanLength(const ViewRays& rays, double u, double v);
+
 // World size of one image pixel (along v) at the ray origin, and its growth per unit of distance
 // along the ray: a pixel at distance t covers footprint0 + t * footprintSlope world units.
 struct PixelFootprint
