@@ -47,7 +47,8 @@ except ImportError:  # an older build without the IO module
 
 REPO = pathlib.Path(__file__).resolve().parents[1]
 SHARED = REPO.parent / "shared"
-DATA = SHARED / "data"
+# The real volumes: ../shared/data, or where VTKSVDAG_SHARED_DATA points (as the tests).
+DATA = pathlib.Path(os.environ.get("VTKSVDAG_SHARED_DATA") or SHARED / "data")
 ANCHORS = SHARED / "notes" / "anchors.md"
 MB = 1e6
 SLAB_DEPTH = 16  # z-slices per slab of the streaming builder (svdag::Builder::SlabDepth)

@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import os
 import pathlib
 import statistics
 import sys
@@ -39,7 +40,8 @@ import time
 import numpy as np
 
 REPO = pathlib.Path(__file__).resolve().parents[1]
-SHARED_DATA = REPO.parent / "shared" / "data"
+# The real volumes: ../shared/data, or where VTKSVDAG_SHARED_DATA points (as the tests).
+SHARED_DATA = pathlib.Path(os.environ.get("VTKSVDAG_SHARED_DATA") or REPO.parent / "shared" / "data")
 
 COLUMNS = [
     "kind", "volume", "device", "width", "height", "lod", "bounces", "nee", "spp", "frames",

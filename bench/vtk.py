@@ -60,7 +60,8 @@ import tempfile
 import time
 
 REPO = pathlib.Path(__file__).resolve().parents[1]
-SHARED_DATA = REPO.parent / "shared" / "data"
+# The real volumes: ../shared/data, or where VTKSVDAG_SHARED_DATA points (as the tests).
+SHARED_DATA = pathlib.Path(os.environ.get("VTKSVDAG_SHARED_DATA") or REPO.parent / "shared" / "data")
 
 ROUTES = ["ours", "gpu-raycast", "surfaces"]
 ROUTE_TITLES = {

@@ -1,29 +1,57 @@
-"""Shared fixtures for the Python test suites."""
+"""Shared fixtures and helpers for the Python test suites (and Testing/Python/extreme_cases.py)."""
+import math
+import os
 import pathlib
 
 import numpy as np
 import pytest
 from vtkmodules.util.misc import calldata_type
-from vtkmodules.util.numpy_support import numpy_to_vtk
+from vtkmodules.util.numpy_support import numpy_to_vtk, vtk_to_numpy
 from vtkmodules.util.vtkConstants import VTK_STRING
 from vtkmodules.vtkCommonDataModel import vtkImageData
 
 from vtksvdag.vtkSVDAGCore import vtkImageDataToSegmentationSVDAG
 
 REPO = pathlib.Path(__file__).resolve().parents[2]
-SHARED_DATA = REPO.parent / "shared" / "data"
+# The real segmentation volumes: ../shared/data next to the repository, or wherever the
+# environment variable VTKSVDAG_SHARED_DATA points (a fresh clone has no ../shared).
+SHARED_DATA = pathlib.Path(os.environ.get("VTKSVDAG_SHARED_DATA") or REPO.parent / "shared" / "data")
+
+
+def under_ci():
+    """True where CI runs the tests (it sets CI=true): there missing shared data is a failure."""
+    return os.environ.get("CI", "").strip().lower() in ("true", "1", "yes")
+
+
+def shared_data_missing_message(path=None):
+    path = SHARED_DATA if path is None else path
+    return (f"the shared test data {path} is missing (a clone without ../shared/data; "
+            f"set VTKSVDAG_SHARED_DATA to its location)")
+
+
+def require_shared_data(path=None):
+    """The shared data folder (or a file in it); skips the calling test when it is missing,
+    except under CI (CI=true), where that is a failure."""
+    path = SHARED_DATA if path is None else pathlib.Path(path)
+    if not path.exists():
+        if under_ci():
+            pytest.fail(shared_data_missing_message(path) + " under CI")
+        pytest.skip(shared_data_missing_message(path))
+    return path
 
 
 def shared_volumes():
-    """Names of the real segmentation volumes in ../shared/data (see its README)."""
+    """Names of the real segmentation volumes in the shared data folder (see its README); with
+    the folder missing one placeholder name, so that each test parametrized over them still runs
+    and skips (or fails under CI) through the shared_data fixture instead of vanishing."""
+    if not SHARED_DATA.is_dir():
+        return ["shared-data-missing"]
     return sorted(p.name[: -len(".nrrd")] for p in SHARED_DATA.glob("*.nrrd"))
 
 
 @pytest.fixture(scope="session")
 def shared_data():
-    if not SHARED_DATA.is_dir():
-        pytest.fail(f"the shared test data folder {SHARED_DATA} is missing")
-    return SHARED_DATA
+    return require_shared_data()
 
 
 @pytest.fixture
@@ -58,3 +86,72 @@ def capture_errors(vtk_object):
 
     vtk_object.AddObserver("ErrorEvent", on_error)
     return messages
+
+
+# --- Rays and pixels: the renderer's documented pixel-center convention and VTK's display rays.
+
+def primary_rays(renderer):
+    """World-space origin and unit directions (pixels in output order) of the rays of a
+    vtkSegmentationSVDAGRenderer (GpuLayout.h: pixel (x, y), y = 0 the bottom row, at index
+    x + width * y), generated here in double precision from the camera, independently."""
+    position = np.array(renderer.GetCameraPosition(), float)
+    forward = np.array(renderer.GetCameraFocalPoint(), float) - position
+    forward /= np.linalg.norm(forward)
+    right = np.cross(forward, renderer.GetCameraViewUp())
+    right /= np.linalg.norm(right)
+    up = np.cross(right, forward)
+    h = math.tan(math.radians(renderer.GetCameraViewAngle()) / 2)
+    width, height = renderer.GetWidth(), renderer.GetHeight()
+    x, y = np.meshgrid(np.arange(width), np.arange(height))  # y = 0 first: the bottom row
+    u = 2 * (x.ravel() + 0.5) / width - 1
+    v = 2 * (y.ravel() + 0.5) / height - 1
+    dirs = forward + (u * h * width / height)[:, None] * right + (v * h)[:, None] * up
+    return position, dirs / np.linalg.norm(dirs, axis=1, keepdims=True)
+
+
+def display_to_world(renderer, x, y, z):
+    """World point of display point (x, y, z) of a vtkRenderer (z = 0 near plane, 1 far plane)."""
+    renderer.SetDisplayPoint(x, y, z)
+    renderer.DisplayToWorld()
+    p = np.array(renderer.GetWorldPoint(), float)
+    return p[:3] / p[3]
+
+
+def pixel_ray(renderer, x, y):
+    """World origin (on the near plane) and direction (to the far plane, not normalized) of the
+    ray through display pixel (x, y)'s center, as VTK's own DisplayToWorld computes it."""
+    near = display_to_world(renderer, x + 0.5, y + 0.5, 0.0)
+    far = display_to_world(renderer, x + 0.5, y + 0.5, 1.0)
+    return near, far - near
+
+
+def mapper_pick(mapper, renderer, x, y):
+    """vtkSegmentationSVDAGVolumeMapper.Pick as (label, world position, world normal) or None."""
+    if not mapper.Pick(renderer, x, y):
+        return None
+    position = [0.0] * 3
+    normal = [0.0] * 3
+    mapper.GetPickedPosition(position)
+    mapper.GetPickedNormal(normal)
+    return mapper.GetPickedLabel(), np.array(position), np.array(normal)
+
+
+def caster_pick(caster, origin, direction, to_world=None):
+    """The caster's hit as (label, world position, world normal); `to_world` maps model to world."""
+    if to_world is None:
+        model_origin, model_direction = origin, direction
+    else:
+        inverse = np.linalg.inv(to_world)
+        model_origin = (inverse @ np.append(origin, 1.0))[:3]
+        model_direction = inverse[:3, :3] @ direction
+    if not caster.CastRay(model_origin, model_direction):
+        return None
+    label = int(vtk_to_numpy(caster.GetHitLabelValue())[0])
+    position = np.array(caster.GetHitPosition())
+    normal = np.array(caster.GetHitNormal())
+    if to_world is not None:
+        position = (to_world @ np.append(position, 1.0))[:3]
+        normal = np.linalg.inv(to_world[:3, :3]).T @ normal
+        if np.linalg.norm(normal) > 0:
+            normal /= np.linalg.norm(normal)
+    return label, position, normal

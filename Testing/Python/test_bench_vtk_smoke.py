@@ -7,17 +7,16 @@ import subprocess
 import sys
 
 import pytest
+from conftest import SHARED_DATA, require_shared_data
 
 REPO = pathlib.Path(__file__).resolve().parents[2]
 SCRIPT = REPO / "bench" / "vtk.py"
-SHARED_DATA = REPO.parent / "shared" / "data"
 ROUTES = {"ours", "gpu-raycast", "surfaces"}
 
 
 @pytest.fixture(scope="module")
 def quick_run(tmp_path_factory):
-    if not (SHARED_DATA / "fib25_64.nrrd").is_file():
-        pytest.skip(f"the shared test data {SHARED_DATA / 'fib25_64.nrrd'} is missing")
+    require_shared_data(SHARED_DATA / "fib25_64.nrrd")  # skips (fails under CI) without it
     out = tmp_path_factory.mktemp("bench_vtk")
     completed = subprocess.run(
         [sys.executable, str(SCRIPT), "--quick", "--out", str(out)],

@@ -13,7 +13,7 @@ import textwrap
 import numpy as np
 import pytest
 import vtkmodules.vtkRenderingOpenGL2  # noqa: F401 (the OpenGL factory overrides)
-from conftest import REPO, compress_zyx
+from conftest import REPO, caster_pick, compress_zyx, display_to_world, mapper_pick, pixel_ray
 from vtkmodules.util.numpy_support import vtk_to_numpy
 from vtkmodules.vtkCommonCore import vtkFloatArray
 from vtkmodules.vtkCommonMath import vtkMatrix4x4
@@ -63,51 +63,6 @@ def make_scene(svdag, camera_position=(80, -60, 90), focal=(20, 20, 20), up=(0, 
         camera.SetParallelScale(30.0)
     camera.SetClippingRange(*clipping)
     return window, renderer, volume, mapper
-
-
-def display_to_world(renderer, x, y, z):
-    renderer.SetDisplayPoint(x, y, z)
-    renderer.DisplayToWorld()
-    p = np.array(renderer.GetWorldPoint(), float)
-    return p[:3] / p[3]
-
-
-def pixel_ray(renderer, x, y):
-    """World origin (on the near plane) and direction of the ray through pixel (x, y)'s center."""
-    near = display_to_world(renderer, x + 0.5, y + 0.5, 0.0)
-    far = display_to_world(renderer, x + 0.5, y + 0.5, 1.0)
-    return near, far - near
-
-
-def mapper_pick(mapper, renderer, x, y):
-    if not mapper.Pick(renderer, x, y):
-        return None
-    position = [0.0] * 3
-    normal = [0.0] * 3
-    mapper.GetPickedPosition(position)
-    mapper.GetPickedNormal(normal)
-    return mapper.GetPickedLabel(), np.array(position), np.array(normal)
-
-
-def caster_pick(caster, origin, direction, to_world=None):
-    """The caster's hit as (label, world position, world normal); `to_world` maps model to world."""
-    if to_world is None:
-        model_origin, model_direction = origin, direction
-    else:
-        inverse = np.linalg.inv(to_world)
-        model_origin = (inverse @ np.append(origin, 1.0))[:3]
-        model_direction = inverse[:3, :3] @ direction
-    if not caster.CastRay(model_origin, model_direction):
-        return None
-    label = int(vtk_to_numpy(caster.GetHitLabelValue())[0])
-    position = np.array(caster.GetHitPosition())
-    normal = np.array(caster.GetHitNormal())
-    if to_world is not None:
-        position = (to_world @ np.append(position, 1.0))[:3]
-        normal = np.linalg.inv(to_world[:3, :3]).T @ normal
-        if np.linalg.norm(normal) > 0:
-            normal /= np.linalg.norm(normal)
-    return label, position, normal
 
 
 def compare_picks(mapper, renderer, svdag_reference, step=5, to_world=None, position_tol=1e-3):

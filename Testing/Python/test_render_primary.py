@@ -12,12 +12,10 @@ Pixels whose ray passes within float rounding of a voxel edge or corner may legi
 another label, so labels must agree on >= 99.9% of the pixels, and depths to 1e-4 (relative)
 where both hit the same label.
 """
-import math
-
 import nrrd
 import numpy as np
 import pytest
-from conftest import capture_errors, compress_zyx as build
+from conftest import capture_errors, compress_zyx as build, primary_rays
 from vtkmodules.util.numpy_support import vtk_to_numpy
 
 from vtksvdag.vtkSVDAGCore import vtkSegmentationSVDAGRayCaster
@@ -125,23 +123,6 @@ def valid_coarse_labels(labels, volume, origin, dirs, lod):
     nearest = enter.min(axis=1)
     tied = hit & (enter <= nearest[:, None] + 1e-4 * (1 + nearest[:, None]))
     return [set(values[row]) for row in tied]
-
-
-def primary_rays(renderer):
-    """World-space origin and unit directions (pixels in output order) of the renderer's rays."""
-    position = np.array(renderer.GetCameraPosition(), float)
-    forward = np.array(renderer.GetCameraFocalPoint(), float) - position
-    forward /= np.linalg.norm(forward)
-    right = np.cross(forward, renderer.GetCameraViewUp())
-    right /= np.linalg.norm(right)
-    up = np.cross(right, forward)
-    h = math.tan(math.radians(renderer.GetCameraViewAngle()) / 2)
-    width, height = renderer.GetWidth(), renderer.GetHeight()
-    x, y = np.meshgrid(np.arange(width), np.arange(height))  # y = 0 first: the bottom row
-    u = 2 * (x.ravel() + 0.5) / width - 1
-    v = 2 * (y.ravel() + 0.5) / height - 1
-    dirs = forward + (u * h * width / height)[:, None] * right + (v * h)[:, None] * up
-    return position, dirs / np.linalg.norm(dirs, axis=1, keepdims=True)
 
 
 def cpu_reference(volume, renderer, lod):
