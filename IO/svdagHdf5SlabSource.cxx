@@ -1,5 +1,7 @@
 #include "svdagHdf5SlabSource.h"
 
+#include "svdagVoxelStream.h"
+
 #include "vtkErrorCode.h"
 #include "vtk_hdf5.h"
 
@@ -199,6 +201,32 @@ svdagHdf5SlabSource::svdagHdf5SlabSource(const std::string& fileName, const std:
     this->Geometry.dims[a] = int32_t(dims[2 - a]);
   }
   this->checkGeometry(fileName);
+
+  // A contiguous dataset is one block of the file: it must be exactly the voxels and lie inside
+  // the file. (Chunked datasets are checked chunk by chunk by HDF5 as it reads them.)
+  Handle plist(H5Dget_create_plist(impl->dataset.get()), H5Pclose);
+  if (plist.valid() && H5Pget_layout(plist.get()) == H5D_CONTIGUOUS)
+  {
+    H5D_space_status_t status = H5D_SPACE_STATUS_ERROR;
+    H5Dget_space_status(impl->dataset.get(), &status);
+    if (status == H5D_SPACE_STATUS_ALLOCATED)
+    {
+      const uint64_t expected = this->Geometry.voxelCount() * uint64_t(bytes);
+      const uint64_t stored = uint64_t(H5Dget_storage_size(impl->dataset.get()));
+      const haddr_t offset = H5Dget_offset(impl->dataset.get());
+      const uint64_t size = svdagVoxelStream::fileSize(fileName);
+      if (stored != expected)
+        throw svdagReadError(stored < expected ? vtkErrorCode::PrematureEndOfFileError
+                                               : vtkErrorCode::FileFormatError,
+          fileName + ":" + impl->datasetName + " stores " + std::to_string(stored) +
+            " bytes, its dimensions and type describe " + std::to_string(expected));
+      if (offset != HADDR_UNDEF && (offset > size || stored > size - offset))
+        throw svdagReadError(vtkErrorCode::PrematureEndOfFileError,
+          fileName + ":" + impl->datasetName + ": its " + std::to_string(stored) +
+            " bytes at byte " + std::to_string(uint64_t(offset)) + " run past the end of the file (" +
+            std::to_string(size) + " bytes; truncated file?)");
+    }
+  }
 }
 
 svdagHdf5SlabSource::~svdagHdf5SlabSource()

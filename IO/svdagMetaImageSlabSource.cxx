@@ -247,6 +247,19 @@ svdagMetaImageSlabSource::svdagMetaImageSlabSource(const std::string& fileName)
         offset = uint64_t(v[0]);
     }
   }
+  if (const std::string* stored = compressed ? field("compresseddatasize") : nullptr)
+  {
+    // The size of the zlib stream: it must be what the data file holds after the header.
+    const auto v = numbers(*stored, "CompressedDataSize");
+    const uint64_t size = svdagVoxelStream::fileSize(dataFileName);
+    const uint64_t held = size > offset ? size - offset : 0;
+    if (v.size() != 1 || v[0] < 0 || v[0] != std::floor(v[0]) || uint64_t(v[0]) != held)
+      throw svdagReadError(uint64_t(v.empty() ? 0 : v[0]) > held
+          ? vtkErrorCode::PrematureEndOfFileError
+          : vtkErrorCode::FileFormatError,
+        fileName + ": CompressedDataSize = " + *stored + ", but " + dataFileName + " holds " +
+          std::to_string(held) + " compressed bytes");
+  }
   impl->voxels.reset(new svdagVoxelStream(dataFileName,
     compressed ? svdagVoxelStream::Encoding::Compressed : svdagVoxelStream::Encoding::Raw, offset,
     this->Geometry, this->Type, bigEndian));

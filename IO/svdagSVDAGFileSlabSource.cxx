@@ -2,28 +2,41 @@
 
 #include "vtkErrorCode.h"
 
-#include "svdag/Builder.h"
+#include "svdag/Decoder.h"
 #include "svdag/File.h"
 
+struct svdagSVDAGFileSlabSource::Impl
+{
+  std::shared_ptr<const svdag::Volume> volume;
+};
+
 svdagSVDAGFileSlabSource::svdagSVDAGFileSlabSource(const std::string& fileName)
+  : impl(new Impl)
 {
   try
   {
-    this->Volume = std::make_shared<const svdag::Volume>(svdag::readFile(fileName));
+    impl->volume = std::make_shared<const svdag::Volume>(svdag::readFile(fileName));
   }
   catch (const svdag::FileError& e)
   {
     throw svdagReadError(vtkErrorCode::FileFormatError, fileName + ": " + e.what());
   }
-  this->Geometry = this->Volume->geometry;
-  this->Type = this->Volume->scalarType;
+  this->Geometry = impl->volume->geometry;
+  this->Type = impl->volume->scalarType;
   this->checkGeometry(fileName);
+}
+
+svdagSVDAGFileSlabSource::~svdagSVDAGFileSlabSource() = default;
+
+std::shared_ptr<const svdag::Volume> svdagSVDAGFileSlabSource::compressedVolume() const
+{
+  return impl->volume;
 }
 
 void svdagSVDAGFileSlabSource::readSlab(int32_t z0, int32_t nz, void* dst)
 {
   this->checkSlab(z0, nz);
-  svdag::decodeSlab(*this->Volume, z0, nz, dst);
+  svdag::decodeSlab(*impl->volume, z0, nz, dst);
 }
 
 bool svdagSVDAGFileSlabSource::hasMagic(const std::string& fileName)

@@ -6,17 +6,21 @@
 
 #include "svdagSlabSource.h"
 
+#include <memory>
+
 class svdagSVDAGFileSlabSource : public svdagSlabSource
 {
 public:
   explicit svdagSVDAGFileSlabSource(const std::string& fileName);
+  ~svdagSVDAGFileSlabSource() override;
   const char* formatName() const override { return "SVDAG"; }
   void readSlab(int32_t z0, int32_t nz, void* dst) override;
-  std::shared_ptr<const svdag::Volume> compressedVolume() const override { return this->Volume; }
+  std::shared_ptr<const svdag::Volume> compressedVolume() const override;
   static bool hasMagic(const std::string& fileName);
 
 private:
-  std::shared_ptr<const svdag::Volume> Volume;
+  struct Impl;
+  std::unique_ptr<Impl> impl;
 };
 
 #endif

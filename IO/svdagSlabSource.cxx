@@ -2,7 +2,7 @@
 
 #include "vtkErrorCode.h"
 
-#include "svdag/Builder.h"
+#include "svdag/Volume.h"
 
 #include <algorithm>
 #include <cctype>
@@ -11,6 +11,19 @@
 
 void svdagSlabSource::checkGeometry(const std::string& fileName) const
 {
+  // Before anything multiplies the dimensions: their product must not overflow, and a volume
+  // of more than 2^40 voxels is not a label volume anyone can compress here.
+  using Wide = unsigned __int128;
+  Wide voxels = 1;
+  for (int a = 0; a < 3; ++a)
+    voxels *= Wide(std::max<int64_t>(this->Geometry.dims[a], 0));
+  if (voxels > Wide(svdagMaxVoxels))
+  {
+    throw svdagReadError(vtkErrorCode::FileFormatError,
+      fileName + ": volume too large: " + std::to_string(this->Geometry.dims[0]) + " x " +
+        std::to_string(this->Geometry.dims[1]) + " x " + std::to_string(this->Geometry.dims[2]) +
+        " voxels, more than 2^40");
+  }
   const std::string problem = svdag::checkGeometry(this->Geometry);
   if (!problem.empty())
   {

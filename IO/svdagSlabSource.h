@@ -54,7 +54,8 @@ protected:
   svdagSlabSource() = default;
 
   // Throws a FileFormatError naming the file when the geometry cannot be compressed (absurd
-  // dimensions, zero spacing, ...). Every source calls it before it allocates anything.
+  // dimensions: more than svdagMaxVoxels, zero spacing, ...). Every source calls it before it
+  // allocates anything or multiplies the dimensions.
   void checkGeometry(const std::string& fileName) const;
   // Throws a FileFormatError when (z0, nz) is not a slab inside the volume.
   void checkSlab(int32_t z0, int32_t nz) const;
@@ -62,6 +63,9 @@ protected:
   svdag::Geometry Geometry;
   svdag::ScalarType Type = svdag::ScalarType::UInt8;
 };
+
+// The most voxels a volume may have (2^40); checkGeometry refuses more.
+constexpr uint64_t svdagMaxVoxels = uint64_t(1) << 40;
 
 // The label type with this signedness and size in bytes (1, 2, 4 or 8); throws a
 // FileFormatError naming `what` (for example "FILE has float32") for anything else.

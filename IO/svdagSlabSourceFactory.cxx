@@ -12,33 +12,66 @@
 
 #include <sys/stat.h>
 
-std::string svdagDetectFileFormat(const std::string& fileName)
+namespace
+{
+// One entry per format: its name (GetFileFormat()), how its files are recognised from their
+// content, and how they are opened. Detection tries the entries in this order: binary
+// signatures first, text headers last. To add a format, add its source and one line here.
+struct Format
+{
+  const char* name;
+  bool (*detect)(const std::string& fileName);
+  std::unique_ptr<svdagSlabSource> (*open)(
+    const std::string& fileName, const svdagSlabSourceOptions& options);
+};
+
+template <typename Source>
+std::unique_ptr<svdagSlabSource> openPlain(const std::string& fileName, const svdagSlabSourceOptions&)
+{
+  return std::unique_ptr<svdagSlabSource>(new Source(fileName));
+}
+
+std::unique_ptr<svdagSlabSource> openHdf5(
+  const std::string& fileName, const svdagSlabSourceOptions& options)
+{
+  return std::unique_ptr<svdagSlabSource>(new svdagHdf5SlabSource(fileName, options.datasetName));
+}
+
+const Format Formats[] = {
+  { "NRRD", svdagNrrdSlabSource::hasMagic, openPlain<svdagNrrdSlabSource> },
+  { "SVDAG", svdagSVDAGFileSlabSource::hasMagic, openPlain<svdagSVDAGFileSlabSource> },
+  { "HDF5", svdagHdf5SlabSource::hasMagic, openHdf5 },
+  { "TIFF", svdagTiffSlabSource::hasMagic, openPlain<svdagTiffSlabSource> },
+  { "NIfTI", svdagNiftiSlabSource::canRead, openPlain<svdagNiftiSlabSource> },
+  { "VTKImageData", svdagVTIImageSlabSource::canRead, openPlain<svdagVTIImageSlabSource> },
+  { "MetaImage", svdagMetaImageSlabSource::canRead, openPlain<svdagMetaImageSlabSource> },
+};
+
+// The entry for the file's content, or null. Never throws.
+const Format* detect(const std::string& fileName)
 {
   try
   {
     struct stat st;
     if (stat(fileName.c_str(), &st) != 0 || !S_ISREG(st.st_mode))
-      return "";
-    // Binary signatures first, text headers last.
-    if (svdagNrrdSlabSource::hasMagic(fileName))
-      return "NRRD";
-    if (svdagSVDAGFileSlabSource::hasMagic(fileName))
-      return "SVDAG";
-    if (svdagHdf5SlabSource::hasMagic(fileName))
-      return "HDF5";
-    if (svdagTiffSlabSource::hasMagic(fileName))
-      return "TIFF";
-    if (svdagNiftiSlabSource::canRead(fileName))
-      return "NIfTI";
-    if (svdagVTIImageSlabSource::canRead(fileName))
-      return "VTKImageData";
-    if (svdagMetaImageSlabSource::canRead(fileName))
-      return "MetaImage";
+      return nullptr;
+    for (const Format& format : Formats)
+    {
+      if (format.detect(fileName))
+        return &format;
+    }
   }
   catch (const std::exception&)
   {
   }
-  return "";
+  return nullptr;
+}
+}
+
+std::string svdagDetectFileFormat(const std::string& fileName)
+{
+  const Format* format = detect(fileName);
+  return format ? format->name : "";
 }
 
 std::unique_ptr<svdagSlabSource> svdagOpenSlabSource(
@@ -49,25 +82,10 @@ std::unique_ptr<svdagSlabSource> svdagOpenSlabSource(
     throw svdagReadError(vtkErrorCode::FileNotFoundError, "file not found: " + fileName);
   if (!S_ISREG(st.st_mode))
     throw svdagReadError(vtkErrorCode::CannotOpenFileError, fileName + " is not a regular file");
-  const std::string format = svdagDetectFileFormat(fileName);
-  std::unique_ptr<svdagSlabSource> source;
-  if (format == "NRRD")
-    source.reset(new svdagNrrdSlabSource(fileName));
-  else if (format == "SVDAG")
-    source.reset(new svdagSVDAGFileSlabSource(fileName));
-  else if (format == "HDF5")
-    source.reset(new svdagHdf5SlabSource(fileName, options.datasetName));
-  else if (format == "TIFF")
-    source.reset(new svdagTiffSlabSource(fileName));
-  else if (format == "NIfTI")
-    source.reset(new svdagNiftiSlabSource(fileName));
-  else if (format == "VTKImageData")
-    source.reset(new svdagVTIImageSlabSource(fileName));
-  else if (format == "MetaImage")
-    source.reset(new svdagMetaImageSlabSource(fileName));
-  else
+  const Format* format = detect(fileName);
+  if (!format)
     throw svdagReadError(vtkErrorCode::UnrecognizedFileTypeError,
       fileName + " is not a label volume in a known format (NRRD, MetaImage, VTK image data, "
                  "NIfTI, TIFF, HDF5, .svdag)");
-  return source;
+  return format->open(fileName, options);
 }

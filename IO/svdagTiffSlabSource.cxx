@@ -1,5 +1,8 @@
 #include "svdagTiffSlabSource.h"
 
+#include "svdagInflateStream.h"
+#include "svdagVoxelStream.h"
+
 #include "vtkErrorCode.h"
 #include "vtk_tiff.h"
 
@@ -24,9 +27,46 @@ int storeTiffError(TIFF*, void* userData, const char* module, const char* fmt, v
   }
   return 1;
 }
-int ignoreTiffWarning(TIFF*, void*, const char*, const char*, va_list)
+// Warnings are kept (not printed): the one saying that libtiff replaced a page's byte counts
+// by its own estimate is an error here (the file does not say where its pixels end).
+int storeTiffWarning(TIFF*, void* userData, const char*, const char* fmt, va_list ap)
 {
+  auto* text = static_cast<std::string*>(userData);
+  char buffer[512];
+  std::vsnprintf(buffer, sizeof(buffer), fmt, ap);
+  if (text->empty() && std::strstr(buffer, "ByteCounts"))
+    *text = buffer;
   return 1;
+}
+
+template <typename T>
+void accumulate(uint8_t* data, size_t bytes, uint32_t rowSamples)
+{
+  const size_t samples = bytes / sizeof(T);
+  for (size_t row = 0; row + rowSamples <= samples; row += rowSamples)
+  {
+    T previous;
+    std::memcpy(&previous, data + row * sizeof(T), sizeof(T));
+    for (size_t i = 1; i < rowSamples; ++i)
+    {
+      T v;
+      std::memcpy(&v, data + (row + i) * sizeof(T), sizeof(T));
+      previous = T(previous + v);
+      std::memcpy(data + (row + i) * sizeof(T), &previous, sizeof(T));
+    }
+  }
+}
+
+// TIFF predictor 2 (horizontal differencing), on native-order samples of `size` bytes.
+void undoHorizontalPredictor(uint8_t* data, size_t bytes, uint32_t rowSamples, int size)
+{
+  switch (size)
+  {
+    case 1: accumulate<uint8_t>(data, bytes, rowSamples); break;
+    case 2: accumulate<uint16_t>(data, bytes, rowSamples); break;
+    case 4: accumulate<uint32_t>(data, bytes, rowSamples); break;
+    default: accumulate<uint64_t>(data, bytes, rowSamples); break;
+  }
 }
 }
 
@@ -35,6 +75,7 @@ struct svdagTiffSlabSource::Impl
   std::string fileName;
   TIFF* tiff = nullptr;
   std::string errorText;
+  std::string byteCountWarning;
   int32_t directory = 0; // page libtiff is on
   std::vector<uint8_t> chunk; // one decoded strip or tile
 
@@ -53,6 +94,69 @@ struct svdagTiffSlabSource::Impl
     throw svdagReadError(code, message);
   }
 
+  uint64_t fileSize = 0;
+  std::vector<uint8_t> raw; // one compressed strip or tile
+
+  // Decodes strip or tile `index` of the current page (`page`) into out: exactly `bytes` bytes,
+  // in native byte order. Checks that the chunk lies inside the file; an uncompressed chunk must
+  // hold exactly `bytes` bytes (or `paddedBytes`, a last strip stored at full height); deflate
+  // chunks are inflated here and verified (Adler-32, exact length); other codecs go through
+  // libtiff, which must deliver exactly `bytes` bytes. `rowSamples` is the samples per row (for
+  // the horizontal predictor).
+  void decode(bool tile, uint32_t index, uint8_t* out, size_t bytes, size_t paddedBytes,
+    uint32_t rowSamples, int32_t page)
+  {
+    const std::string what = std::string(tile ? "tile " : "strip ") + std::to_string(index) +
+      " of page " + std::to_string(page);
+    const uint32_t count = tile ? TIFFNumberOfTiles(this->tiff) : TIFFNumberOfStrips(this->tiff);
+    uint64_t* offsets = nullptr;
+    uint64_t* sizes = nullptr;
+    if (index >= count ||
+      !TIFFGetField(this->tiff, tile ? TIFFTAG_TILEOFFSETS : TIFFTAG_STRIPOFFSETS, &offsets) ||
+      !TIFFGetField(this->tiff, tile ? TIFFTAG_TILEBYTECOUNTS : TIFFTAG_STRIPBYTECOUNTS, &sizes) ||
+      !offsets || !sizes)
+      this->fail(vtkErrorCode::FileFormatError, "no offset or byte count for " + what);
+    const uint64_t offset = offsets[index], stored = sizes[index];
+    if (offset > this->fileSize || stored > this->fileSize - offset)
+      this->fail(vtkErrorCode::PrematureEndOfFileError,
+        what + " (" + std::to_string(stored) + " bytes at byte " + std::to_string(offset) +
+          ") runs past the end of the file (" + std::to_string(this->fileSize) +
+          " bytes; truncated file?)");
+    uint16_t compression = COMPRESSION_NONE, predictor = PREDICTOR_NONE, fillOrder = FILLORDER_MSB2LSB;
+    TIFFGetFieldDefaulted(this->tiff, TIFFTAG_COMPRESSION, &compression);
+    TIFFGetFieldDefaulted(this->tiff, TIFFTAG_FILLORDER, &fillOrder);
+    if (compression != COMPRESSION_NONE)
+      TIFFGetFieldDefaulted(this->tiff, TIFFTAG_PREDICTOR, &predictor);
+    if (compression == COMPRESSION_NONE && stored != bytes && stored != paddedBytes)
+      this->fail(stored < bytes ? vtkErrorCode::PrematureEndOfFileError : vtkErrorCode::FileFormatError,
+        what + " holds " + std::to_string(stored) + " bytes, its pixels take " +
+          std::to_string(bytes));
+    const bool deflate = compression == COMPRESSION_ADOBE_DEFLATE || compression == COMPRESSION_DEFLATE;
+    if (deflate && fillOrder == FILLORDER_MSB2LSB &&
+      (predictor == PREDICTOR_NONE || predictor == PREDICTOR_HORIZONTAL))
+    {
+      this->raw.resize(size_t(stored));
+      const tmsize_t got = tile ? TIFFReadRawTile(this->tiff, index, this->raw.data(), tmsize_t(stored))
+                                : TIFFReadRawStrip(this->tiff, index, this->raw.data(), tmsize_t(stored));
+      if (got != tmsize_t(stored))
+        this->fail(vtkErrorCode::PrematureEndOfFileError, "cannot read " + what);
+      svdagInflateStream::inflateAll(this->raw.data(), this->raw.size(), out, bytes,
+        this->fileName + ": " + what);
+      const int size = this->sampleBytes;
+      if (size > 1 && TIFFIsByteSwapped(this->tiff))
+        svdagSwapBytes(out, bytes / size_t(size), size);
+      if (predictor == PREDICTOR_HORIZONTAL)
+        undoHorizontalPredictor(out, bytes, rowSamples, size);
+      return;
+    }
+    const tmsize_t got = tile ? TIFFReadEncodedTile(this->tiff, index, out, tmsize_t(bytes))
+                              : TIFFReadEncodedStrip(this->tiff, index, out, tmsize_t(bytes));
+    if (got != tmsize_t(bytes))
+      this->fail(vtkErrorCode::PrematureEndOfFileError, "cannot read " + what);
+  }
+
+  int sampleBytes = 1;
+
   void goTo(int32_t page)
   {
     if (page == this->directory)
@@ -62,6 +166,15 @@ struct svdagTiffSlabSource::Impl
     if (!ok)
       this->fail(vtkErrorCode::PrematureEndOfFileError, "cannot read page " + std::to_string(page));
     this->directory = page;
+    this->checkByteCounts();
+  }
+
+  void checkByteCounts()
+  {
+    if (!this->byteCountWarning.empty())
+      this->fail(vtkErrorCode::FileFormatError,
+        "the strip or tile byte counts of page " + std::to_string(this->directory) +
+          " do not match its pixels (libtiff: " + this->byteCountWarning + ")");
   }
 };
 
@@ -86,11 +199,12 @@ svdagTiffSlabSource::svdagTiffSlabSource(const std::string& fileName)
   impl->fileName = fileName;
   TIFFOpenOptions* options = TIFFOpenOptionsAlloc();
   TIFFOpenOptionsSetErrorHandlerExtR(options, storeTiffError, &impl->errorText);
-  TIFFOpenOptionsSetWarningHandlerExtR(options, ignoreTiffWarning, nullptr);
+  TIFFOpenOptionsSetWarningHandlerExtR(options, storeTiffWarning, &impl->byteCountWarning);
   impl->tiff = TIFFOpenExt(fileName.c_str(), "r", options);
   TIFFOpenOptionsFree(options);
   if (!impl->tiff)
     impl->fail(vtkErrorCode::FileFormatError, "cannot open as TIFF");
+  impl->checkByteCounts();
 
   // Every page must agree on size and sample layout.
   // libtiff counts pages by following the chain of directory offsets; in a truncated file the
@@ -144,6 +258,8 @@ svdagTiffSlabSource::svdagTiffSlabSource(const std::string& fileName)
     impl->fail(vtkErrorCode::FileFormatError, "absurd page size");
   this->Geometry.dims = { { int32_t(width0), int32_t(height0), int32_t(pages) } };
   this->checkGeometry(fileName);
+  impl->sampleBytes = svdag::scalarSize(this->Type);
+  impl->fileSize = svdagVoxelStream::fileSize(fileName);
 }
 
 svdagTiffSlabSource::~svdagTiffSlabSource() = default;
@@ -165,16 +281,23 @@ void svdagTiffSlabSource::readSlab(int32_t z0, int32_t nz, void* dst)
       TIFFGetField(tiff, TIFFTAG_TILEWIDTH, &tw);
       TIFFGetField(tiff, TIFFTAG_TILELENGTH, &th);
       const tmsize_t tileBytes = TIFFTileSize(tiff);
-      if (tw == 0 || th == 0 || tileBytes < tmsize_t(size_t(tw) * th * size))
+      if (tw == 0 || th == 0 || tileBytes != tmsize_t(size_t(tw) * th * size))
         impl->fail(vtkErrorCode::FileFormatError, "bad tile size on page " + std::to_string(z));
+      // No codec TIFF uses expands data more than 4096-fold (LZW's longest string per 9-bit
+      // code; deflate's limit is about 1032), and an uncompressed tile is stored whole: a tile
+      // larger than that cannot come from this file, and is refused before it is allocated.
+      if (uint64_t(tileBytes) > 4096 * impl->fileSize + 65536)
+        impl->fail(vtkErrorCode::FileFormatError,
+          "tiles of " + std::to_string(tw) + " x " + std::to_string(th) + " pixels (" +
+            std::to_string(uint64_t(tileBytes)) + " bytes) on page " + std::to_string(z) +
+            " cannot be stored in a file of " + std::to_string(impl->fileSize) + " bytes");
       impl->chunk.resize(size_t(tileBytes));
       for (uint32_t y = 0; y < height; y += th)
       {
         for (uint32_t x = 0; x < width; x += tw)
         {
-          if (TIFFReadTile(tiff, impl->chunk.data(), x, y, 0, 0) < 0)
-            impl->fail(vtkErrorCode::PrematureEndOfFileError,
-              "cannot read a tile of page " + std::to_string(z));
+          impl->decode(true, TIFFComputeTile(tiff, x, y, 0, 0), impl->chunk.data(),
+            size_t(tileBytes), size_t(tileBytes), tw, z);
           const size_t w = std::min<size_t>(tw, width - x);
           const size_t h = std::min<size_t>(th, height - y);
           for (size_t row = 0; row < h; ++row)
@@ -193,13 +316,11 @@ void svdagTiffSlabSource::readSlab(int32_t z0, int32_t nz, void* dst)
       for (uint32_t s = 0; s < strips; ++s)
       {
         const size_t rows = std::min<size_t>(rowsPerStrip, height - size_t(s) * rowsPerStrip);
-        const tmsize_t want = tmsize_t(rows * rowBytes);
-        // Decode straight into the slice: a strip is whole rows.
-        const tmsize_t got = TIFFReadEncodedStrip(
-          tiff, TIFFComputeStrip(tiff, s * rowsPerStrip, 0), slice + size_t(s) * rowsPerStrip * rowBytes, want);
-        if (got != want)
-          impl->fail(vtkErrorCode::PrematureEndOfFileError,
-            "cannot read strip " + std::to_string(s) + " of page " + std::to_string(z));
+        // Decode straight into the slice: a strip is whole rows. An uncompressed last strip
+        // may be stored padded to the full strip height.
+        impl->decode(false, TIFFComputeStrip(tiff, s * rowsPerStrip, 0),
+          slice + size_t(s) * rowsPerStrip * rowBytes, rows * rowBytes,
+          size_t(rowsPerStrip) * rowBytes, uint32_t(width), z);
       }
     }
   }

@@ -6,7 +6,7 @@
 svdagVTIImageSlabSource::svdagVTIImageSlabSource(const std::string& fileName)
   : svdagVTKImageSlabSource(vtkSmartPointer<vtkXMLImageDataReader>::New(), fileName)
 {
-  vtkXMLImageDataReader::SafeDownCast(this->Reader)->SetFileName(fileName.c_str());
+  vtkXMLImageDataReader::SafeDownCast(this->reader())->SetFileName(fileName.c_str());
   this->open();
   this->checkGeometry(fileName);
 }

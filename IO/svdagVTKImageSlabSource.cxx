@@ -37,56 +37,70 @@ std::string messageOf(const std::string& text)
 }
 }
 
+struct svdagVTKImageSlabSource::Impl
+{
+  vtkSmartPointer<vtkAlgorithm> reader;
+  std::string fileName;
+  vtkSmartPointer<vtkCallbackCommand> errorObserver;
+  std::string errorText;
+  int wholeExtent[6] = { 0, -1, 0, -1, 0, -1 };
+  int vtkScalarType = 0;
+
+  // Throws the error the wrapped reader reported since the last call, if any.
+  void throwReaderError(const char* during);
+};
+
 svdagVTKImageSlabSource::svdagVTKImageSlabSource(
   vtkSmartPointer<vtkAlgorithm> reader, const std::string& fileName)
-  : Reader(std::move(reader))
-  , FileName(fileName)
+  : impl(new Impl)
 {
-  this->ErrorObserver = vtkSmartPointer<vtkCallbackCommand>::New();
-  this->ErrorObserver->SetCallback(storeErrorText);
-  this->ErrorObserver->SetClientData(&this->ErrorText);
-  this->Reader->AddObserver(vtkCommand::ErrorEvent, this->ErrorObserver);
+  impl->reader = std::move(reader);
+  impl->fileName = fileName;
+  impl->errorObserver = vtkSmartPointer<vtkCallbackCommand>::New();
+  impl->errorObserver->SetCallback(storeErrorText);
+  impl->errorObserver->SetClientData(&impl->errorText);
+  impl->reader->AddObserver(vtkCommand::ErrorEvent, impl->errorObserver);
   // The executive reports the reader's failures on itself, as errors too.
-  this->Reader->GetExecutive()->AddObserver(vtkCommand::ErrorEvent, this->ErrorObserver);
+  impl->reader->GetExecutive()->AddObserver(vtkCommand::ErrorEvent, impl->errorObserver);
 }
 
 svdagVTKImageSlabSource::~svdagVTKImageSlabSource()
 {
-  this->Reader->GetExecutive()->RemoveObserver(this->ErrorObserver);
-  this->Reader->RemoveObserver(this->ErrorObserver);
+  impl->reader->GetExecutive()->RemoveObserver(impl->errorObserver);
+  impl->reader->RemoveObserver(impl->errorObserver);
 }
 
-void svdagVTKImageSlabSource::throwReaderError(const char* during)
+void svdagVTKImageSlabSource::Impl::throwReaderError(const char* during)
 {
-  const unsigned long code = this->Reader->GetErrorCode();
-  if (this->ErrorText.empty() && code == vtkErrorCode::NoError)
+  const unsigned long code = this->reader->GetErrorCode();
+  if (this->errorText.empty() && code == vtkErrorCode::NoError)
     return;
-  std::string message = this->FileName + ": " + during;
-  if (!this->ErrorText.empty())
-    message += ": " + messageOf(this->ErrorText);
+  std::string message = this->fileName + ": " + during;
+  if (!this->errorText.empty())
+    message += ": " + messageOf(this->errorText);
   else
     message += std::string(": ") + vtkErrorCode::GetStringFromErrorCode(code);
-  this->ErrorText.clear();
+  this->errorText.clear();
   throw svdagReadError(code != vtkErrorCode::NoError ? code : vtkErrorCode::FileFormatError,
     message);
 }
 
 void svdagVTKImageSlabSource::open()
 {
-  this->Reader->UpdateInformation();
-  this->throwReaderError("cannot read the header");
-  vtkInformation* info = this->Reader->GetOutputInformation(0);
+  impl->reader->UpdateInformation();
+  impl->throwReaderError("cannot read the header");
+  vtkInformation* info = impl->reader->GetOutputInformation(0);
   if (!info || !info->Has(vtkStreamingDemandDrivenPipeline::WHOLE_EXTENT()))
-    throw svdagReadError(vtkErrorCode::FileFormatError, this->FileName + ": no image extent");
-  info->Get(vtkStreamingDemandDrivenPipeline::WHOLE_EXTENT(), this->WholeExtent);
+    throw svdagReadError(vtkErrorCode::FileFormatError, impl->fileName + ": no image extent");
+  info->Get(vtkStreamingDemandDrivenPipeline::WHOLE_EXTENT(), impl->wholeExtent);
   for (int a = 0; a < 3; ++a)
   {
     // Extents are int: the difference of two extreme values would overflow.
     const long long n =
-      (long long)this->WholeExtent[2 * a + 1] - (long long)this->WholeExtent[2 * a] + 1;
+      (long long)impl->wholeExtent[2 * a + 1] - (long long)impl->wholeExtent[2 * a] + 1;
     if (n < 1 || n > INT32_MAX)
       throw svdagReadError(vtkErrorCode::FileFormatError,
-        this->FileName + ": empty or absurd image extent along axis " + std::to_string(a));
+        impl->fileName + ": empty or absurd image extent along axis " + std::to_string(a));
     this->Geometry.dims[a] = static_cast<int32_t>(n);
   }
   if (info->Has(vtkDataObject::SPACING()))
@@ -105,74 +119,56 @@ void svdagVTKImageSlabSource::open()
   {
     for (int a = 0; a < 3; ++a)
       this->Geometry.origin[r] += this->Geometry.direction[3 * r + a] *
-        this->Geometry.spacing[a] * this->WholeExtent[2 * a];
+        this->Geometry.spacing[a] * impl->wholeExtent[2 * a];
   }
 
   vtkInformation* scalars = vtkDataObject::GetActiveFieldInformation(
     info, vtkDataObject::FIELD_ASSOCIATION_POINTS, vtkDataSetAttributes::SCALARS);
   if (!scalars || !scalars->Has(vtkDataObject::FIELD_ARRAY_TYPE()))
     throw svdagReadError(vtkErrorCode::FileFormatError,
-      this->FileName + ": the image has no point scalars");
-  this->VTKScalarType = scalars->Get(vtkDataObject::FIELD_ARRAY_TYPE());
+      impl->fileName + ": the image has no point scalars");
+  impl->vtkScalarType = scalars->Get(vtkDataObject::FIELD_ARRAY_TYPE());
   const int components = scalars->Has(vtkDataObject::FIELD_NUMBER_OF_COMPONENTS())
     ? scalars->Get(vtkDataObject::FIELD_NUMBER_OF_COMPONENTS())
     : 1;
-  const int coreType = vtkSegmentationSVDAG::FromVTKScalarType(this->VTKScalarType);
+  const int coreType = vtkSegmentationSVDAG::FromVTKScalarType(impl->vtkScalarType);
   if (coreType < 0)
-    svdagThrowNotIntegerLabels(this->FileName, vtkImageScalarTypeNameMacro(this->VTKScalarType));
+    svdagThrowNotIntegerLabels(impl->fileName, vtkImageScalarTypeNameMacro(impl->vtkScalarType));
   if (components != 1)
     throw svdagReadError(vtkErrorCode::FileFormatError,
-      "label volumes need one component per voxel; " + this->FileName + " has " +
+      "label volumes need one component per voxel; " + impl->fileName + " has " +
         std::to_string(components));
   this->Type = static_cast<svdag::ScalarType>(coreType);
 }
 
-void svdagVTKImageSlabSource::readWhole()
+vtkAlgorithm* svdagVTKImageSlabSource::reader() const
 {
-  // The wrapped reader allocates the whole image: refuse what cannot fit in memory.
-  const uint64_t bytes = this->Geometry.voxelCount() * uint64_t(svdag::scalarSize(this->Type));
-  const uint64_t memory = svdagPhysicalMemoryBytes();
-  if (memory > 0 && bytes > memory)
-    throw svdagReadError(vtkErrorCode::OutOfDiskSpaceError,
-      this->FileName + ": the image takes " + std::to_string(bytes) +
-        " bytes, more than this machine's memory (it must be read whole)");
-  this->WholeRead = true;
+  return impl->reader;
 }
 
 void svdagVTKImageSlabSource::readSlab(int32_t z0, int32_t nz, void* dst)
 {
   this->checkSlab(z0, nz);
-  const int32_t first = this->readerSlice(z0);
-  const int32_t last = this->readerSlice(z0 + nz - 1);
-  const int* whole = this->WholeExtent;
-  if (!this->WholeRead)
-  {
-    int extent[6] = { whole[0], whole[1], whole[2], whole[3],
-      whole[4] + std::min(first, last), whole[4] + std::max(first, last) };
-    this->Reader->UpdateExtent(extent);
-  }
-  else if (!this->WholeReadDone)
-  {
-    this->Reader->Update();
-    this->WholeReadDone = true;
-  }
-  this->throwReaderError("cannot read the voxels");
+  const int* whole = impl->wholeExtent;
+  int update[6] = { whole[0], whole[1], whole[2], whole[3], whole[4] + z0, whole[4] + z0 + nz - 1 };
+  impl->reader->UpdateExtent(update);
+  impl->throwReaderError("cannot read the voxels");
 
-  vtkImageData* image = vtkImageData::SafeDownCast(this->Reader->GetOutputDataObject(0));
+  vtkImageData* image = vtkImageData::SafeDownCast(impl->reader->GetOutputDataObject(0));
   vtkDataArray* array = image ? image->GetPointData()->GetScalars() : nullptr;
   int extent[6] = { 0, -1, 0, -1, 0, -1 };
   if (image)
     image->GetExtent(extent);
-  const int sliceLow = whole[4] + std::min(first, last);
-  const int sliceHigh = whole[4] + std::max(first, last);
-  if (!array || array->GetDataType() != this->VTKScalarType ||
+  const int sliceLow = update[4];
+  const int sliceHigh = update[5];
+  if (!array || array->GetDataType() != impl->vtkScalarType ||
     array->GetNumberOfComponents() != 1 || extent[0] != whole[0] || extent[1] != whole[1] ||
     extent[2] != whole[2] || extent[3] != whole[3] || extent[4] > sliceLow ||
     extent[5] < sliceHigh ||
     array->GetNumberOfTuples() != vtkIdType(extent[1] - extent[0] + 1) *
         vtkIdType(extent[3] - extent[2] + 1) * vtkIdType(extent[5] - extent[4] + 1))
     throw svdagReadError(vtkErrorCode::FileFormatError,
-      this->FileName + ": the reader did not deliver z-slices " + std::to_string(z0) + ".." +
+      impl->fileName + ": the reader did not deliver z-slices " + std::to_string(z0) + ".." +
         std::to_string(z0 + nz - 1) + " as its header describes them");
 
   const size_t sliceBytes = size_t(this->Geometry.dims[0]) * size_t(this->Geometry.dims[1]) *
@@ -181,7 +177,7 @@ void svdagVTKImageSlabSource::readSlab(int32_t z0, int32_t nz, void* dst)
   auto* out = static_cast<uint8_t*>(dst);
   for (int32_t z = 0; z < nz; ++z)
   {
-    const int slice = whole[4] + this->readerSlice(z0 + z) - extent[4];
+    const int slice = sliceLow + z - extent[4];
     std::memcpy(out + size_t(z) * sliceBytes, source + size_t(slice) * sliceBytes, sliceBytes);
   }
 }

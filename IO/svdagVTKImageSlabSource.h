@@ -1,5 +1,4 @@
-// Common part of the sources that read through a VTK image reader (vtkXMLImageDataReader,
-// vtkNIFTIImageReader, vtkMetaImageReader): geometry and scalar type from the reader's
+// Common part of the sources that read through a VTK image reader (today vtkXMLImageDataReader): geometry and scalar type from the reader's
 // information pass, then one update per slab with an update extent covering that slab's slices.
 // The wrapped reader's errors are caught with an ErrorEvent observer and rethrown as
 // svdagReadError, so they reach the user through vtkSegmentationVolumeReader.
@@ -10,10 +9,10 @@
 
 #include "vtkSmartPointer.h"
 
+#include <memory>
 #include <string>
 
 class vtkAlgorithm;
-class vtkCallbackCommand;
 
 class svdagVTKImageSlabSource : public svdagSlabSource
 {
@@ -27,24 +26,12 @@ protected:
   // Runs the information pass and fills Geometry and Type. Subclasses call it from their
   // constructor, adjust the geometry if their format needs to, then call checkGeometry().
   void open();
-  // Slice of the reader's output (counted from its whole extent's first slice) that holds
-  // slice z of the volume; NIfTI overrides it where vtkNIFTIImageReader reverses the slices.
-  virtual int32_t readerSlice(int32_t z) const { return z; }
-  // Switches to whole-image reads (call after open()); throws if the image cannot fit in memory.
-  void readWhole();
-  // Throws the error the wrapped reader reported since the last call, if any.
-  void throwReaderError(const char* during);
-
-  vtkSmartPointer<vtkAlgorithm> Reader;
-  std::string FileName;
+  // The wrapped reader.
+  vtkAlgorithm* reader() const;
 
 private:
-  vtkSmartPointer<vtkCallbackCommand> ErrorObserver;
-  std::string ErrorText;
-  bool WholeRead = false; // update the whole image once and copy slabs out of it
-  bool WholeReadDone = false;
-  int WholeExtent[6] = { 0, -1, 0, -1, 0, -1 };
-  int VTKScalarType = 0;
+  struct Impl;
+  std::unique_ptr<Impl> impl;
 };
 
 #endif

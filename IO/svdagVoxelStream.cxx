@@ -58,10 +58,18 @@ svdagVoxelStream::svdagVoxelStream(const std::string& fileName, Encoding encodin
   const uint64_t size = fileSize(fileName);
   if (encoding == Encoding::Raw)
   {
-    if (size < dataOffset || size - dataOffset < total)
+    // The body must be exactly the voxels: a shorter one is truncated, a longer one is not
+    // what its header says (wrong sizes or type, or another file's data appended).
+    const uint64_t held = size > dataOffset ? size - dataOffset : 0;
+    if (held < total)
       throw svdagReadError(vtkErrorCode::PrematureEndOfFileError,
-        fileName + " holds " + std::to_string(size > dataOffset ? size - dataOffset : 0) +
-          " data bytes, the header describes " + std::to_string(total) + " (truncated file?)");
+        fileName + " holds " + std::to_string(held) + " data bytes, the header describes " +
+          std::to_string(total) + " (truncated file?)");
+    if (held > total)
+      throw svdagReadError(vtkErrorCode::FileFormatError,
+        fileName + " holds " + std::to_string(held) + " data bytes, " +
+          std::to_string(held - total) + " more than the " + std::to_string(total) +
+          " the header describes");
   }
   else
   {
@@ -94,6 +102,9 @@ void svdagVoxelStream::readSlab(int32_t z0, int32_t nz, void* dst)
         impl->fileName + ": compressed slabs must be read in order");
     impl->inflater->read(dst, bytes);
     impl->nextZ = z0 + nz;
+    // After the last slab the stream must end: trailer checksums, no data left over.
+    if (impl->nextZ == impl->depth)
+      impl->inflater->finish();
   }
   else
   {

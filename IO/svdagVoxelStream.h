@@ -21,8 +21,10 @@ public:
   };
 
   // Opens `fileName` (the data file: for attached headers the header file itself). For Raw,
-  // checks that the file holds the whole volume after dataOffset; for Compressed, skips
-  // `skipAfterInflate` decompressed bytes. Throws svdagReadError.
+  // checks that the file holds exactly the volume after dataOffset (no byte less, no byte
+  // more); for Compressed, skips `skipAfterInflate` decompressed bytes, and the slab that
+  // reaches the last z-slice also reads the stream to its end and verifies it (checksums,
+  // sizes, nothing after it: svdagInflateStream). Throws svdagReadError.
   svdagVoxelStream(const std::string& fileName, Encoding encoding, uint64_t dataOffset,
     const svdag::Geometry& geometry, svdag::ScalarType type, bool bigEndian,
     uint64_t skipAfterInflate = 0);

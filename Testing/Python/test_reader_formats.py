@@ -780,8 +780,12 @@ def test_hdf5_slab_larger_than_memory(tmp_path):
     """A valid HDF5 file (chunked, nothing written) whose one slab would not fit in memory."""
     path = tmp_path / "huge.h5"
     with h5py.File(path, "w") as f:
-        f.create_dataset("labels", shape=(16, 2**20, 2**20), dtype=np.uint64, chunks=(1, 64, 64))
+        # 2^40 voxels (the most a volume may have), 8 TiB per slab of 16 slices.
+        f.create_dataset("labels", shape=(16, 2**18, 2**18), dtype=np.uint64, chunks=(1, 64, 64))
     assert_fails(path, vtkErrorCode.OutOfDiskSpaceError, "more than this machine's memory")
+    with h5py.File(path, "w") as f:
+        f.create_dataset("labels", shape=(16, 2**20, 2**20), dtype=np.uint64, chunks=(1, 64, 64))
+    assert_fails(path, vtkErrorCode.FileFormatError, "more than 2^40")
 
 
 def test_nrrd_short_raw_data(tmp_path):
