@@ -10,8 +10,12 @@
 #include "vtkSVDAGParallel.h"
 #include "vtkType.h"
 
-#include "svdag/Builder.h"
+#include "svdag/Decoder.h"
 #include "svdag/Volume.h"
+
+#include <new>
+#include <stdexcept>
+#include <string>
 
 vtkStandardNewMacro(vtkSegmentationSVDAG);
 
@@ -257,21 +261,58 @@ vtkTypeInt64 vtkSegmentationSVDAG::GetCompressedSize() const
 
 bool vtkSegmentationSVDAG::DecodeTo(vtkImageData* image) const
 {
+  std::string error;
+  if (this->DecodeTo(image, error))
+    return true;
+  vtkErrorMacro("DecodeTo: " << error);
+  return false;
+}
+
+bool vtkSegmentationSVDAG::DecodeTo(vtkImageData* image, std::string& error) const
+{
   if (!this->Volume || !image)
   {
-    vtkErrorMacro("DecodeTo: " << (image ? "no compressed volume" : "no output image"));
+    error = image ? "no compressed volume" : "no output image";
     return false;
   }
   const svdag::Volume& v = *this->Volume;
   const auto& g = v.geometry;
   image->Initialize();
+  vtkDataArray* labels = nullptr;
+  try
+  {
+    // Refused before allocating when the dense array cannot fit (a tiny file of a huge volume);
+    // a failed allocation (VTK throws std::bad_alloc) is reported the same way.
+    svdag::checkDecodeMemory(v);
+    const uint64_t bytes = svdag::decodedBytes(v);
+    try
+    {
+      labels = NewArrayOf(v.scalarType, static_cast<vtkIdType>(g.voxelCount()));
+    }
+    catch (const std::bad_alloc&)
+    {
+      throw std::length_error("decoding " + std::to_string(g.dims[0]) + " x " +
+        std::to_string(g.dims[1]) + " x " + std::to_string(g.dims[2]) + " " +
+        svdag::scalarName(v.scalarType) + " voxels needs " + std::to_string(bytes) + " bytes (" +
+        svdag::formatBytes(bytes) + "), and that much memory is not available");
+    }
+    if (labels->GetNumberOfTuples() != static_cast<vtkIdType>(g.voxelCount()))
+      throw std::length_error("cannot allocate " + std::to_string(bytes) + " bytes (" +
+        svdag::formatBytes(bytes) + ") for the decoded labels");
+    labels->SetName("Labels");
+    svdag::decode(v, labels->GetVoidPointer(0), vtkSVDAGParallelFor());
+  }
+  catch (const std::exception& e)
+  {
+    if (labels)
+      labels->Delete();
+    error = e.what();
+    return false;
+  }
   image->SetDimensions(g.dims[0], g.dims[1], g.dims[2]);
   image->SetSpacing(g.spacing[0], g.spacing[1], g.spacing[2]);
   image->SetOrigin(g.origin[0], g.origin[1], g.origin[2]);
   image->SetDirectionMatrix(g.direction.data());
-  vtkDataArray* labels = NewArrayOf(v.scalarType, static_cast<vtkIdType>(g.voxelCount()));
-  labels->SetName("Labels");
-  svdag::decode(v, labels->GetVoidPointer(0), vtkSVDAGParallelFor());
   image->GetPointData()->SetScalars(labels);
   labels->Delete();
   return true;

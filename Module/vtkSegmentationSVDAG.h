@@ -18,6 +18,7 @@
 #include "vtkSVDAGCoreModule.h" // for export macro
 
 #include <memory> // for std::shared_ptr
+#include <string> // for std::string
 
 class vtkDataArray;
 class vtkImageData;
@@ -88,6 +89,10 @@ public:
 
   /** Decodes losslessly into an image of the original scalar type ("Labels" point scalars). */
   bool DecodeTo(vtkImageData* image) const;
+#ifndef __VTK_WRAP__
+  /** The same, handing the reason of a failure to the caller (no error event on this object). */
+  bool DecodeTo(vtkImageData* image, std::string& error) const;
+#endif
 
 #ifndef __VTK_WRAP__
   /** The compressed volume (shared, immutable). */

@@ -8,6 +8,8 @@
 #include "vtkSegmentationSVDAG.h"
 #include "vtkStreamingDemandDrivenPipeline.h"
 
+#include <string>
+
 vtkStandardNewMacro(vtkSegmentationSVDAGToImageData);
 
 vtkSegmentationSVDAGToImageData::vtkSegmentationSVDAGToImageData() = default;
@@ -60,9 +62,10 @@ int vtkSegmentationSVDAGToImageData::RequestData(
     vtkErrorMacro("The input holds no compressed volume.");
     return 0;
   }
-  if (!input->DecodeTo(output))
+  std::string error;
+  if (!input->DecodeTo(output, error))
   {
-    vtkErrorMacro("Decoding failed.");
+    vtkErrorMacro("Decoding failed: " << error);
     return 0;
   }
   this->UpdateProgress(1.0);

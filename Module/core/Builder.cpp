@@ -203,29 +203,6 @@ void writeBits(std::vector<uint32_t>& stream, uint64_t offset, uint32_t width, u
 
 } // namespace
 
-std::string checkGeometry(const Geometry& g)
-{
-  for (int a = 0; a < 3; ++a)
-  {
-    if (g.dims[a] < 1)
-      return "dimensions must be at least 1 voxel along each axis (got " +
-        std::to_string(g.dims[0]) + " x " + std::to_string(g.dims[1]) + " x " +
-        std::to_string(g.dims[2]) + ")";
-    if (!std::isfinite(g.spacing[a]) || g.spacing[a] <= 0)
-      return "spacing must be finite and positive";
-    if (!std::isfinite(g.origin[a]))
-      return "origin must be finite";
-  }
-  for (double d : g.direction)
-  {
-    if (!std::isfinite(d))
-      return "direction matrix must be finite";
-  }
-  if (g.cellCount() > (uint64_t(1) << 32))
-    return "volume too large: more than 2^32 cells of 16^3 voxels";
-  return "";
-}
-
 struct Builder::Impl
 {
   Geometry geometry;
@@ -505,10 +482,12 @@ Volume Builder::finish()
   v.blockCount = m.blocks.size();
   const uint32_t recordBits = w.blockBits();
   v.blocks.assign((v.blockCount * recordBits + 31) / 32 + 1, 0u);
-  for (uint64_t i = 0; i < m.blocks.size(); ++i)
-  {
-    const PendingBlocks::Record b = m.blocks[i];
-    const uint64_t base = i * recordBits;
+  // Blocks come in cell order; within a cell they are written by label index (the sorted
+  // table's order), so that blocks are sorted by (cell, label) as Volume::validate requires.
+  std::vector<std::pair<uint32_t, uint64_t>> cellRun; // (label index, pending block)
+  uint64_t written = 0;
+  auto writeBlock = [&](const PendingBlocks::Record& b) {
+    const uint64_t base = written++ * recordBits;
     writeBits(v.blocks, base, w.cellBits, b[PendingCell]);
     writeBits(v.blocks, base + layout::blockBoundsOffset(w.cellBits), layout::BLOCK_BOUNDS_BITS,
       b[PendingBox]);
@@ -517,6 +496,16 @@ Volume Builder::finish()
       (uint64_t(rootOffsets[b[PendingRoot] >> 1]) << 1) | (b[PendingRoot] & 1u);
     writeBits(v.blocks, base + layout::blockRootOffset(w.cellBits, w.labelBits), w.rootRefBits,
       uint32_t(root));
+  };
+  for (uint64_t i = 0; i < m.blocks.size();)
+  {
+    const uint32_t cell = m.blocks[i][PendingCell];
+    cellRun.clear();
+    for (; i < m.blocks.size() && m.blocks[i][PendingCell] == cell; ++i)
+      cellRun.emplace_back(rank[m.blocks[i][PendingLabel]], i);
+    std::sort(cellRun.begin(), cellRun.end());
+    for (const auto& entry : cellRun)
+      writeBlock(m.blocks[entry.second]);
   }
   m.blocks.release();
   return v;
@@ -533,62 +522,6 @@ Volume Builder::build(const Geometry& geometry, ScalarType type, const void* dat
     builder.addSlab(z0, nz, static_cast<const uint8_t*>(data) + size_t(z0) * slice);
   }
   return builder.finish();
-}
-
-void decodeSlab(const Volume& v, int32_t z0, int32_t nz, void* out, const ParallelFor& parallel)
-{
-  const auto& d = v.geometry.dims;
-  if (z0 < 0 || nz < 0 || z0 + nz > d[2])
-    throw std::out_of_range("decodeSlab: z range outside the volume");
-  const size_t sliceSize = size_t(d[0]) * size_t(d[1]);
-  const ScalarType type = v.scalarType;
-  for (size_t i = 0; i < sliceSize * size_t(nz); ++i)
-    scalarStore(type, out, i, v.background);
-  if (nz == 0 || v.blockCount == 0)
-    return;
-  const auto n = v.geometry.cellCounts();
-  const uint32_t cellsPerLayer = uint32_t(n[0]) * uint32_t(n[1]);
-  const uint32_t czFirst = uint32_t(z0) / S, czLast = uint32_t(z0 + nz - 1) / S;
-  // Blocks of the covered cell layers, found once; each cell then decodes independently.
-  const uint64_t first = v.cellBlocks(czFirst * cellsPerLayer).first;
-  const uint64_t last = v.cellBlocks((czLast + 1) * cellsPerLayer).first;
-  std::vector<uint64_t> starts; // block index of each block run start
-  std::vector<uint32_t> runCells;
-  for (uint64_t b = first; b < last; ++b)
-  {
-    const uint32_t cell = v.block(b).cell;
-    if (runCells.empty() || runCells.back() != cell)
-    {
-      runCells.push_back(cell);
-      starts.push_back(b);
-    }
-  }
-  starts.push_back(last);
-  parallel(0, runCells.size(), 1, [&](uint64_t begin, uint64_t end) {
-    std::vector<uint8_t> occ(S * S * S);
-    for (uint64_t r = begin; r < end; ++r)
-    {
-      const uint32_t cell = runCells[r];
-      const int32_t cx = int32_t(cell % uint32_t(n[0]) * S);
-      const int32_t cy = int32_t(cell / uint32_t(n[0]) % uint32_t(n[1]) * S);
-      const int32_t cz = int32_t(cell / cellsPerLayer * S);
-      for (uint64_t b = starts[r]; b < starts[r + 1]; ++b)
-      {
-        const Block blk = v.block(b);
-        const uint64_t value = v.labels[blk.label].value;
-        v.occupancy(b, occ.data());
-        const int32_t zLo = std::max<int32_t>(cz + blk.lo[2], z0);
-        const int32_t zHi = std::min<int32_t>(cz + blk.hi[2], z0 + nz - 1);
-        for (int32_t z = zLo; z <= zHi; ++z)
-          for (int32_t y = cy + blk.lo[1]; y <= cy + blk.hi[1]; ++y)
-            for (int32_t x = cx + blk.lo[0]; x <= cx + blk.hi[0]; ++x)
-            {
-              if (occ[size_t(x - cx) + S * (size_t(y - cy) + S * size_t(z - cz))])
-                scalarStore(type, out, size_t(x) + size_t(d[0]) * (size_t(y) + size_t(d[1]) * size_t(z - z0)), value);
-            }
-      }
-    }
-  });
 }
 
 } // namespace svdag

@@ -1,8 +1,6 @@
 // The .svdag file format (the layout is documented in svdag/File.h and IO/README.md).
 #include "svdag/File.h"
 
-#include "svdag/Builder.h" // checkGeometry
-
 #include <zlib.h>
 #include <zstd.h>
 

@@ -1,8 +1,10 @@
 #include "svdag/Volume.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <limits>
+#include <memory>
 #include <stdexcept>
 
 namespace svdag
@@ -109,6 +111,29 @@ uint64_t Geometry::cellCount() const
     return UINT64_MAX;
   }
   return cells;
+}
+
+std::string checkGeometry(const Geometry& g)
+{
+  for (int a = 0; a < 3; ++a)
+  {
+    if (g.dims[a] < 1)
+      return "dimensions must be at least 1 voxel along each axis (got " +
+        std::to_string(g.dims[0]) + " x " + std::to_string(g.dims[1]) + " x " +
+        std::to_string(g.dims[2]) + ")";
+    if (!std::isfinite(g.spacing[a]) || g.spacing[a] <= 0)
+      return "spacing must be finite and positive";
+    if (!std::isfinite(g.origin[a]))
+      return "origin must be finite";
+  }
+  for (double d : g.direction)
+  {
+    if (!std::isfinite(d))
+      return "direction matrix must be finite";
+  }
+  if (g.cellCount() > (uint64_t(1) << 32))
+    return "volume too large: more than 2^32 cells of 16^3 voxels";
+  return "";
 }
 
 bool Geometry::operator==(const Geometry& o) const
@@ -304,9 +329,119 @@ MemoryUsage Volume::memory() const
   return m;
 }
 
+namespace
+{
+// Bit counts without a library call (the core is built for any x86-64, without POPCNT).
+inline uint32_t popcount64(uint64_t x)
+{
+  x = x - ((x >> 1) & 0x5555555555555555ull);
+  x = (x & 0x3333333333333333ull) + ((x >> 2) & 0x3333333333333333ull);
+  x = (x + (x >> 4)) & 0x0F0F0F0F0F0F0F0Full;
+  return uint32_t((x * 0x0101010101010101ull) >> 56);
+}
+inline uint32_t popcount8(uint32_t x)
+{
+  x = x - ((x >> 1) & 0x55u);
+  x = (x & 0x33u) + ((x >> 2) & 0x33u);
+  return (x + (x >> 4)) & 0x0Fu;
+}
+
+// A field of `width` bits at `offset` of a padded word stream, for offsets already known to lie
+// inside the stream's data (the padding word makes the second word readable).
+inline uint32_t fieldAt(const uint32_t* words, uint64_t offset, uint32_t width)
+{
+  if (width == 0)
+    return 0;
+  const uint64_t i = offset >> 5;
+  const uint64_t pair = uint64_t(words[i]) | (uint64_t(words[i + 1]) << 32);
+  return uint32_t(pair >> (offset & 31)) & layout::lowMask(width);
+}
+
+// Start offsets of the nodes of one stream, for O(1) "is this a node start" lookups. Every node
+// takes at least 16 bits, so no two starts share a 16-bit slot: one bit per slot plus a rank per
+// 64 slots (about 1/14 of the stream's size) find a node's ordinal from its offset.
+class NodeIndex
+{
+public:
+  void reset(uint64_t totalBits, uint64_t expected)
+  {
+    slots.assign(size_t(totalBits / (16 * 64) + 1), 0);
+    starts.reset(new uint64_t[size_t(expected)]); // written before it is read: no zeroing
+    count = 0;
+  }
+  // Offsets come in increasing order, at most `expected` of them.
+  void add(uint64_t offset)
+  {
+    slots[size_t(offset >> 10)] |= uint64_t(1) << ((offset >> 4) & 63);
+    starts[size_t(count++)] = offset;
+  }
+  void finish()
+  {
+    rank.resize(slots.size());
+    uint64_t r = 0;
+    for (size_t i = 0; i < slots.size(); ++i)
+    {
+      rank[i] = r;
+      r += popcount64(slots[i]);
+    }
+  }
+  // Ordinal of the node starting at `offset`, or -1 when no node starts there.
+  int64_t find(uint64_t offset) const
+  {
+    const uint64_t word = offset >> 10;
+    if (word >= slots.size())
+      return -1;
+    const uint64_t bit = uint64_t(1) << ((offset >> 4) & 63);
+    if (!(slots[size_t(word)] & bit))
+      return -1;
+    const uint64_t i = rank[size_t(word)] + popcount64(slots[size_t(word)] & (bit - 1));
+    return starts[size_t(i)] == offset ? int64_t(i) : -1;
+  }
+  uint64_t start(uint64_t ordinal) const { return starts[size_t(ordinal)]; }
+  uint64_t size() const { return count; }
+
+private:
+  std::vector<uint64_t> slots;
+  std::vector<uint64_t> rank;
+  std::unique_ptr<uint64_t[]> starts;
+  uint64_t count = 0;
+};
+
+// Projections of a 4^3 leaf mask (bit x + 4 y + 16 z) onto x, y and z, as 8-bit lanes
+// x | y << 8 | z << 16 (bit c of a lane: some voxel has that coordinate).
+inline uint32_t leafLanes(uint64_t m)
+{
+  uint64_t t = m | (m >> 32);
+  t |= t >> 16;
+  t &= 0xFFFFu; // bit x + 4 y: some voxel of that column
+  const uint32_t px = uint32_t(t | (t >> 4) | (t >> 8) | (t >> 12)) & 0xFu;
+  uint64_t v = t | (t >> 1);
+  v |= v >> 2;
+  v &= 0x1111u;                                             // bit 4 y: row y not empty
+  const uint32_t py = uint32_t((v * 0x1248u) >> 12) & 0xFu; // gathers bits 0, 4, 8, 12
+  uint64_t u = m | (m >> 8);
+  u |= u >> 4;
+  u |= u >> 2;
+  u |= u >> 1;
+  u &= 0x0001000100010001ull; // bit 16 z: slice z not empty
+  const uint64_t gather = (uint64_t(1) << 48) | (uint64_t(1) << 33) | (uint64_t(1) << 18) | 8u;
+  const uint32_t pz = uint32_t((u * gather) >> 48) & 0xFu;
+  return px | (py << 8) | (pz << 16);
+}
+
+// The full mask of a node read with polarity p (complemented: empty and full children swap).
+inline uint32_t fullAs(uint32_t header, bool p)
+{
+  const uint32_t mixed = layout::nodeMixedMask(header), full = layout::nodeFullMask(header);
+  return p ? (~(mixed | full) & 0xFFu) : full;
+}
+
+} // namespace
+
 void Volume::validate() const
 {
   auto fail = [](const std::string& what) { throw std::runtime_error("invalid SVDAG: " + what); };
+  auto str = [](uint64_t v) { return std::to_string(v); };
   for (int a = 0; a < 3; ++a)
   {
     if (geometry.dims[a] < 0)
@@ -327,78 +462,356 @@ void Volume::validate() const
     fail("block stream size does not match the block count");
   if (roots.empty() || mids.empty())
     fail("missing stream padding");
-  for (size_t l = 1; l < labels.size(); ++l)
+  if (int(scalarType) >= ScalarTypeCount)
+    fail("unknown scalar type");
+
+  // Label table: values of the type, sorted, unique, not the background, bounds in the volume.
+  const auto& d = geometry.dims;
+  auto validValue = [this](uint64_t v) {
+    uint64_t tmp = 0;
+    scalarStore(scalarType, &tmp, 0, v);
+    return scalarLoad(scalarType, &tmp, 0) == v;
+  };
+  for (size_t l = 0; l < labels.size(); ++l)
   {
-    if (!scalarLess(scalarType, labels[l - 1].value, labels[l].value))
-      fail("label table not sorted");
+    const LabelInfo& info = labels[l];
+    if (!validValue(info.value))
+      fail("label " + str(l) + ": value outside the range of " + scalarName(scalarType));
+    if (info.value == background)
+      fail("the label table holds the background value");
+    if (l > 0 && !scalarLess(scalarType, labels[l - 1].value, info.value))
+      fail("label table not sorted by value or not unique (label " + str(l) + ")");
+    for (int a = 0; a < 3; ++a)
+    {
+      const int32_t lo = info.bounds[2 * a], hi = info.bounds[2 * a + 1];
+      if (lo < 0 || lo > hi || hi >= d[a])
+        fail("label " + str(l) + ": bounds outside the volume");
+    }
   }
+
+  // Node streams, walked in order (nodes are contiguous): every node well formed and every child
+  // reference at a node start (a reference into the middle of a node would read its references
+  // as a header and run past the checked nodes) or an existing leaf. The same walk summarises
+  // each node's occupancy in both polarities (voxel count and projections, hence tight bounds),
+  // once per distinct node: blocks share nodes, so checking a block against its bounds and the
+  // label table against the blocks costs no expansion of any voxel.
+  const uint32_t* rootWords = roots.data();
+  const uint32_t* midWords = mids.data();
   const uint64_t rootBitsTotal = uint64_t(roots.size() - 1) * 32;
   const uint64_t midBitsTotal = uint64_t(mids.size() - 1) * 32;
-  // A reference must point at the start of a node, not just inside the stream: a reference into
-  // the middle of a node would read its references as a header and run past the checked nodes.
-  // The node start offsets come from a sequential walk (nodes are contiguous and in offset order).
-  auto isStart = [](const std::vector<uint64_t>& starts, uint64_t offset) {
-    return std::binary_search(starts.begin(), starts.end(), offset);
-  };
-  auto walk = [&](const std::vector<uint32_t>& stream, uint64_t count, uint64_t total,
-                uint32_t refBits, const char* what, const auto& childValid) {
-    std::vector<uint64_t> starts;
-    starts.reserve(size_t(std::min<uint64_t>(count, total / layout::NODE_HEADER_BITS + 1)));
+  // Per leaf and polarity: projection lanes (x bits 0-3, y 8-11, z 16-19) and voxel count (24-30).
+  std::vector<uint32_t> leafInfo(leaves.size() * 2);
+  for (size_t l = 0; l < leaves.size(); ++l)
+  {
+    const uint64_t m = leaves[l];
+    const uint32_t count = popcount64(m);
+    leafInfo[2 * l] = leafLanes(m) | (count << 24);
+    leafInfo[2 * l + 1] = leafLanes(~m) | ((64 - count) << 24);
+  }
+  // Walks one stream; child(n, c, ref, acc0, acc1) checks the reference of child c and stores
+  // the child's summary in both polarities; combine(acc) summarises a node from its children.
+  auto walk = [&](const uint32_t* words, uint64_t count, uint64_t total, uint32_t refBits,
+                const char* what, NodeIndex& index, std::unique_ptr<uint64_t[]>& summaries,
+                uint64_t solid, const auto& child, const auto& combine) {
+    const uint64_t expected = std::min<uint64_t>(count, total / layout::NODE_HEADER_BITS + 1);
+    index.reset(total, expected);
+    summaries.reset(new uint64_t[size_t(2 * expected)]); // nodes take 16 bits at least
+    uint64_t* summary = summaries.get();
     uint64_t offset = 0;
     for (uint64_t n = 0; n < count; ++n)
     {
       if (offset + layout::NODE_HEADER_BITS > total)
         fail(std::string(what) + " stream shorter than its node count");
-      const uint32_t header = nodeHeader(stream, offset);
-      const uint32_t mixed = layout::nodeMixedMask(header);
-      if (mixed & layout::nodeFullMask(header))
-        fail(std::string(what) + " child both mixed and full");
-      const uint64_t end = offset + nodeBits(stream, offset, refBits);
+      const uint32_t header = fieldAt(words, offset, layout::NODE_HEADER_BITS);
+      const uint32_t mixed = layout::nodeMixedMask(header), full = layout::nodeFullMask(header);
+      if (mixed & full)
+        fail(std::string(what) + " node at bit " + str(offset) + ": child both mixed and full");
+      const uint64_t end =
+        offset + layout::NODE_HEADER_BITS + uint64_t(popcount8(mixed)) * refBits;
       if (end > total)
         fail(std::string(what) + " node runs past the end of its stream");
-      for (uint32_t r = 0; r < layout::bitCount(mixed); ++r)
+      uint64_t acc0[8], acc1[8];
+      uint64_t refAt = offset + layout::NODE_HEADER_BITS;
+      for (uint32_t c = 0; c < 8; ++c)
       {
-        if (!childValid(layout::refTarget(nodeChildRef(stream, offset, r, refBits))))
-          fail(std::string(what) + " child reference does not point at a node");
+        const uint32_t bit = 1u << c;
+        if (mixed & bit)
+        {
+          if (!child(offset, fieldAt(words, refAt, refBits), acc0[c], acc1[c]))
+            fail(std::string(what) + " node at bit " + str(offset) +
+              ": child reference does not point at a node");
+          refAt += refBits;
+        }
+        else
+        {
+          acc0[c] = (full & bit) ? solid : 0;
+          acc1[c] = (full & bit) ? 0 : solid;
+        }
       }
-      starts.push_back(offset);
+      summary[2 * n] = combine(acc0);
+      summary[2 * n + 1] = combine(acc1);
+      index.add(offset);
       offset = end;
     }
     if (total - offset >= 32)
       fail(std::string(what) + " stream longer than its nodes");
-    return starts;
+    index.finish();
   };
-  const std::vector<uint64_t> midStarts = walk(mids, midCount, midBitsTotal, w.leafRefBits, "mid",
-    [this](uint64_t leaf) { return leaf < leaves.size(); });
-  const std::vector<uint64_t> rootStarts = walk(roots, rootCount, rootBitsTotal, w.midRefBits,
-    "root", [&](uint64_t mid) { return isStart(midStarts, mid); });
+  // Mid summary: lanes x bits 0-7, y 8-15, z 16-23; voxels from bit 32.
+  NodeIndex midIndex, rootIndex;
+  std::unique_ptr<uint64_t[]> midSummaries, rootSummaries;
+  walk(midWords, midCount, midBitsTotal, w.leafRefBits, "mid", midIndex, midSummaries,
+    uint64_t(0x0F0F0Fu | (64u << 24)),
+    [&](uint64_t, uint32_t ref, uint64_t& a0, uint64_t& a1) {
+      const uint64_t leaf = layout::refTarget(ref);
+      if (leaf >= leaves.size())
+        return false;
+      const size_t at = 2 * size_t(leaf) + (ref & 1u);
+      a0 = leafInfo[at];
+      a1 = leafInfo[at ^ 1u];
+      return true;
+    },
+    [](const uint64_t* a) {
+      const uint64_t voxels = (a[0] >> 24) + (a[1] >> 24) + (a[2] >> 24) + (a[3] >> 24) +
+        (a[4] >> 24) + (a[5] >> 24) + (a[6] >> 24) + (a[7] >> 24);
+      const uint64_t xlo = a[0] | a[2] | a[4] | a[6], xhi = a[1] | a[3] | a[5] | a[7];
+      const uint64_t ylo = a[0] | a[1] | a[4] | a[5], yhi = a[2] | a[3] | a[6] | a[7];
+      const uint64_t zlo = a[0] | a[1] | a[2] | a[3], zhi = a[4] | a[5] | a[6] | a[7];
+      return (xlo & 0xFu) | ((xhi & 0xFu) << 4) | (ylo & 0xF00u) | ((yhi & 0xF00u) << 4) |
+        (zlo & 0xF0000u) | ((zhi & 0xF0000u) << 4) | (voxels << 32);
+    });
+  // Root summary: lanes x bits 0-15, y 16-31, z 32-47; voxels from bit 48.
+  walk(rootWords, rootCount, rootBitsTotal, w.midRefBits, "root", rootIndex, rootSummaries,
+    uint64_t(0xFFFFFFu) | (uint64_t(512) << 32),
+    [&](uint64_t, uint32_t ref, uint64_t& a0, uint64_t& a1) {
+      const int64_t mid = midIndex.find(layout::refTarget(ref));
+      if (mid < 0)
+        return false;
+      const size_t at = 2 * size_t(mid) + (ref & 1u);
+      a0 = midSummaries[at];
+      a1 = midSummaries[at ^ 1u];
+      return true;
+    },
+    [](const uint64_t* a) {
+      const uint64_t voxels = (a[0] >> 32) + (a[1] >> 32) + (a[2] >> 32) + (a[3] >> 32) +
+        (a[4] >> 32) + (a[5] >> 32) + (a[6] >> 32) + (a[7] >> 32);
+      const uint64_t xlo = a[0] | a[2] | a[4] | a[6], xhi = a[1] | a[3] | a[5] | a[7];
+      const uint64_t ylo = a[0] | a[1] | a[4] | a[5], yhi = a[2] | a[3] | a[6] | a[7];
+      const uint64_t zlo = a[0] | a[1] | a[2] | a[3], zhi = a[4] | a[5] | a[6] | a[7];
+      return (xlo & 0xFFu) | ((xhi & 0xFFu) << 8) | ((ylo & 0xFF00u) << 8) |
+        ((yhi & 0xFF00u) << 16) | ((zlo & 0xFF0000u) << 16) | ((zhi & 0xFF0000u) << 24) |
+        (voxels << 48);
+    });
 
+  // Blocks: sorted by (cell, label), inside the grid and the volume, each occupancy non-empty
+  // and inside its bounds (decoders write only inside the bounds, the traversal reads the whole
+  // cell: both must agree), blocks of a cell disjoint, and the label table's voxel counts and
+  // bounds exactly what the blocks hold.
   const auto n = geometry.cellCounts();
+  std::vector<uint64_t> labelVoxels(labels.size(), 0);
+  std::vector<std::array<int32_t, 6>> labelBounds(labels.size(),
+    std::array<int32_t, 6>{ { INT32_MAX, INT32_MIN, INT32_MAX, INT32_MIN, INT32_MAX, INT32_MIN } });
+  struct CellEntry
+  {
+    uint64_t index;  // block
+    uint32_t root;   // its root reference
+    uint32_t header; // the root node's header
+  };
+  struct MidEntry
+  {
+    size_t entry; // in cellEntries
+    uint64_t offset;
+    bool inverted;
+    uint32_t mixed, full; // full as read with `inverted`
+  };
+  std::vector<CellEntry> cellEntries;
+  std::vector<MidEntry> octantEntries[8];
+  std::vector<uint32_t> cellLabels; // the labels of the current cell's blocks
+  auto checkCellLabels = [&](uint32_t cell) {
+    std::sort(cellLabels.begin(), cellLabels.end());
+    if (std::adjacent_find(cellLabels.begin(), cellLabels.end()) != cellLabels.end())
+      fail("cell " + str(cell) + " holds two blocks of one label");
+    cellLabels.clear();
+  };
+  auto checkCellDisjoint = [&](uint32_t cell) {
+    if (cellEntries.size() < 2)
+      return;
+    // Two blocks whose roots are each other's complement split the cell between them.
+    if (cellEntries.size() == 2 && (cellEntries[0].root ^ cellEntries[1].root) == 1u)
+      return;
+    auto overlap = [&](size_t a, size_t b) {
+      fail("blocks " + str(cellEntries[a].index) + " and " + str(cellEntries[b].index) +
+        " of cell " + str(cell) + " overlap (a voxel has one label)");
+    };
+    // Level by level: a solid child may meet no other non-empty one; children mixed in two or
+    // more blocks are compared one level down, and leaves voxel by voxel.
+    uint32_t accNonEmpty = 0, accFull = 0, accMixed = 0, shared = 0;
+    for (size_t e = 0; e < cellEntries.size(); ++e)
+    {
+      const CellEntry& ce = cellEntries[e];
+      const uint32_t mixed = layout::nodeMixedMask(ce.header);
+      const uint32_t full = fullAs(ce.header, layout::refComplement(ce.root));
+      if ((accNonEmpty & full) | (accFull & (mixed | full)))
+        overlap(e - 1, e);
+      shared |= accMixed & mixed;
+      accNonEmpty |= mixed | full;
+      accFull |= full;
+      accMixed |= mixed;
+    }
+    // The mid references of the shared octants, read in one sequential pass per block.
+    for (std::vector<MidEntry>& list : octantEntries)
+      list.clear();
+    for (size_t e = 0; e < cellEntries.size(); ++e)
+    {
+      const CellEntry& ce = cellEntries[e];
+      const uint32_t mixed = layout::nodeMixedMask(ce.header);
+      if (!(mixed & shared))
+        continue;
+      uint64_t refAt = layout::refTarget(ce.root) + layout::NODE_HEADER_BITS;
+      for (uint32_t o = 0; o < 8; ++o)
+      {
+        if (!(mixed & (1u << o)))
+          continue;
+        if (shared & (1u << o))
+        {
+          const uint32_t midRef = fieldAt(rootWords, refAt, w.midRefBits);
+          MidEntry me;
+          me.entry = e;
+          me.offset = layout::refTarget(midRef);
+          me.inverted = layout::refComplement(ce.root) != layout::refComplement(midRef);
+          octantEntries[o].push_back(me);
+        }
+        refAt += w.midRefBits;
+      }
+    }
+    for (uint32_t o = 0; o < 8; ++o)
+    {
+      std::vector<MidEntry>& list = octantEntries[o];
+      // Two blocks splitting the octant between them refer to one node with opposite polarity
+      // (the common case: the two sides of a boundary share their node, complemented).
+      if (list.size() < 2 ||
+        (list.size() == 2 && list[0].offset == list[1].offset &&
+          list[0].inverted != list[1].inverted))
+        continue;
+      uint32_t midNonEmpty = 0, midFullAcc = 0, midMixedAcc = 0, midShared = 0;
+      for (size_t k = 0; k < list.size(); ++k)
+      {
+        MidEntry& me = list[k];
+        const uint32_t header = fieldAt(midWords, me.offset, layout::NODE_HEADER_BITS);
+        me.mixed = layout::nodeMixedMask(header);
+        me.full = fullAs(header, me.inverted);
+        if ((midNonEmpty & me.full) | (midFullAcc & (me.mixed | me.full)))
+          overlap(k > 0 ? list[k - 1].entry : me.entry, me.entry);
+        midShared |= midMixedAcc & me.mixed;
+        midNonEmpty |= me.mixed | me.full;
+        midFullAcc |= me.full;
+        midMixedAcc |= me.mixed;
+      }
+      if (!midShared)
+        continue;
+      // Leaves mixed in two or more blocks: voxel by voxel.
+      uint64_t acc[8] = {};
+      size_t owner[8] = {};
+      for (const MidEntry& me : list)
+      {
+        if (!(me.mixed & midShared))
+          continue;
+        uint64_t refAt = me.offset + layout::NODE_HEADER_BITS;
+        for (uint32_t c = 0; c < 8; ++c)
+        {
+          if (!(me.mixed & (1u << c)))
+            continue;
+          if (midShared & (1u << c))
+          {
+            const uint32_t leafRef = fieldAt(midWords, refAt, w.leafRefBits);
+            uint64_t m = leaves[layout::refTarget(leafRef)];
+            if (me.inverted != layout::refComplement(leafRef))
+              m = ~m;
+            if (acc[c] & m)
+              overlap(owner[c], me.entry);
+            acc[c] |= m;
+            owner[c] = me.entry;
+          }
+          refAt += w.leafRefBits;
+        }
+      }
+    }
+  };
+
+  const uint32_t* blockWords = blocks.data();
+  const uint32_t recordBits = w.blockBits();
+  const uint32_t boundsAt = layout::blockBoundsOffset(w.cellBits);
+  const uint32_t labelFieldAt = layout::blockLabelOffset(w.cellBits);
+  const uint32_t rootAt = layout::blockRootOffset(w.cellBits, w.labelBits);
   uint32_t previousCell = 0;
   for (uint64_t i = 0; i < blockCount; ++i)
   {
-    const Block b = block(i);
-    if (b.cell >= cells)
-      fail("block cell outside the grid");
-    if (i > 0 && b.cell < previousCell)
-      fail("blocks not sorted by cell");
-    previousCell = b.cell;
-    if (b.label >= labels.size())
-      fail("block label index out of range");
+    const uint64_t base = i * recordBits;
+    const uint32_t cell = fieldAt(blockWords, base, w.cellBits);
+    const uint32_t box = fieldAt(blockWords, base + boundsAt, layout::BLOCK_BOUNDS_BITS);
+    const uint32_t label = fieldAt(blockWords, base + labelFieldAt, w.labelBits);
+    const uint32_t rootRef = fieldAt(blockWords, base + rootAt, w.rootRefBits);
+    auto name = [&]() { return "block " + str(i); };
+    if (cell >= cells)
+      fail(name() + ": cell outside the grid");
+    if (label >= labels.size())
+      fail(name() + ": label index out of range");
+    // Blocks are sorted by cell; within a cell, files written before version 0.1's builder
+    // sorted them by label come in scan order: only a label twice in one cell is refused.
+    if (i > 0 && cell < previousCell)
+      fail("blocks not sorted by cell (" + name() + ")");
+    if (i > 0 && cell != previousCell)
+    {
+      checkCellDisjoint(previousCell);
+      checkCellLabels(previousCell);
+      cellEntries.clear();
+    }
+    cellLabels.push_back(label);
+    previousCell = cell;
+    const int64_t root = rootIndex.find(layout::refTarget(rootRef));
+    if (root < 0)
+      fail(name() + ": root reference does not point at a root node");
+    const uint64_t summary = rootSummaries[2 * size_t(root) + (rootRef & 1u)];
+    const uint32_t voxels = uint32_t(summary >> 48);
+    if (voxels == 0)
+      fail(name() + ": empty occupancy");
     // Cell origin in voxels; the bounds must stay inside the volume (cells on the far edges are
     // partial), since decoders write voxels inside the bounds without further checks.
-    const uint64_t cellOrigin[3] = { uint64_t(b.cell % uint32_t(n[0])) * layout::CELL_SIZE,
-      uint64_t(b.cell / uint32_t(n[0]) % uint32_t(n[1])) * layout::CELL_SIZE,
-      uint64_t(b.cell / (uint64_t(n[0]) * uint64_t(n[1]))) * layout::CELL_SIZE };
+    const uint64_t cellOrigin[3] = { uint64_t(cell % uint32_t(n[0])) * layout::CELL_SIZE,
+      uint64_t(cell / uint32_t(n[0]) % uint32_t(n[1])) * layout::CELL_SIZE,
+      uint64_t(cell / (uint64_t(n[0]) * uint64_t(n[1]))) * layout::CELL_SIZE };
+    std::array<int32_t, 6>& lb = labelBounds[label];
     for (int a = 0; a < 3; ++a)
     {
-      if (b.lo[a] > b.hi[a])
-        fail("block bounds inverted");
-      if (cellOrigin[a] + b.hi[a] >= uint64_t(geometry.dims[a]))
-        fail("block bounds outside the volume");
+      const uint32_t blo = (box >> (4 * a)) & 15u, bhi = (box >> (12 + 4 * a)) & 15u;
+      if (blo > bhi)
+        fail(name() + ": bounds inverted");
+      if (cellOrigin[a] + bhi >= uint64_t(d[a]))
+        fail(name() + ": bounds outside the volume");
+      const uint32_t proj = uint32_t(summary >> (16 * a)) & 0xFFFFu;
+      const uint32_t lo = uint32_t(__builtin_ctz(proj)), hi = uint32_t(31 - __builtin_clz(proj));
+      if (lo < blo || hi > bhi)
+        fail(name() + ": occupancy outside its declared bounds");
+      lb[2 * a] = std::min(lb[2 * a], int32_t(cellOrigin[a] + lo));
+      lb[2 * a + 1] = std::max(lb[2 * a + 1], int32_t(cellOrigin[a] + hi));
     }
-    if (!isStart(rootStarts, layout::refTarget(b.root)))
-      fail("block root reference does not point at a root node");
+    labelVoxels[label] += voxels;
+    cellEntries.push_back({ i, rootRef, fieldAt(rootWords, layout::refTarget(rootRef), 16) });
+  }
+  checkCellDisjoint(previousCell);
+  checkCellLabels(previousCell);
+
+  for (size_t l = 0; l < labels.size(); ++l)
+  {
+    const std::string what = "label " + str(l) + " (value " +
+      (scalarSigned(scalarType) ? std::to_string(int64_t(labels[l].value))
+                                : std::to_string(labels[l].value)) +
+      ")";
+    if (labels[l].voxels != labelVoxels[l])
+      fail(what + ": voxel count " + str(labels[l].voxels) + " in the label table, " +
+        str(labelVoxels[l]) + " in its blocks");
+    if (labels[l].bounds != labelBounds[l])
+      fail(what + ": bounds in the label table differ from its blocks'");
   }
 }
 

@@ -1,6 +1,7 @@
 // Lossless round trips and structural invariants of the builder: every scalar type, odd shapes,
 // label values at the type's limits, thread-count independence and exact deduplication.
 #include "svdag/Builder.h"
+#include "svdag/Decoder.h"
 
 #include <gtest/gtest.h>
 
@@ -149,6 +150,15 @@ TEST_P(EveryType, RoundTripIsBitExact)
     EXPECT_EQ(total, c.labels.size() - std::count(c.labels.begin(), c.labels.end(), 0u));
     for (size_t i = 1; i < v.labels.size(); ++i)
       EXPECT_TRUE(svdag::scalarLess(t, v.labels[i - 1].value, v.labels[i].value));
+
+    // Blocks sorted by (cell, label): each cell's labels in table order, once each.
+    for (uint64_t i = 1; i < v.blockCount; ++i)
+    {
+      const svdag::Block p = v.block(i - 1), b = v.block(i);
+      ASSERT_TRUE(p.cell < b.cell || (p.cell == b.cell && p.label < b.label)) << "block " << i;
+    }
+    // The allocating decode gives the same bytes.
+    EXPECT_EQ(svdag::decode(v), input);
 
     // Random access agrees with the dense volume.
     const auto& d = c.geometry.dims;

@@ -2,6 +2,7 @@
 // random corruptions, absurd header values) that must give FileError, never a crash, an
 // out-of-bounds read or a huge allocation.
 #include "svdag/Builder.h"
+#include "svdag/Decoder.h"
 #include "svdag/File.h"
 
 #include <gtest/gtest.h>
@@ -512,3 +513,367 @@ TEST(File, ErrorMessagesNameTheProblem)
 }
 
 } // namespace
+
+// ---- content checks: files whose checksums are valid but whose content is impossible ----
+namespace
+{
+// Writes the sections of `edited` (same section sizes as the volume `original` was written from)
+// over an uncompressed file, then recomputes every section CRC and the header CRC: the edit
+// reaches the content checks behind the checksums.
+Bytes rewriteSections(const Bytes& original, const svdag::Volume& edited)
+{
+  Bytes b = original;
+  auto put = [&](uint32_t id, const Bytes& raw) {
+    const size_t e = entryOf(b, id);
+    EXPECT_EQ(getLE(b, e + Codec, 4), 0u) << "rewriteSections needs an uncompressed file";
+    EXPECT_EQ(getLE(b, e + Raw, 8), raw.size()) << "section " << id << " changed size";
+    const size_t at = size_t(getLE(b, e + Offset, 8));
+    std::copy(raw.begin(), raw.end(), b.begin() + long(at));
+    putLE(b, e + Crc, crc32(0, raw.data(), uInt(raw.size())), 4);
+  };
+  auto words = [](const std::vector<uint32_t>& stream) {
+    Bytes raw(4 * (stream.size() - 1));
+    for (size_t i = 0; i + 1 < stream.size(); ++i)
+      putLE(raw, 4 * i, stream[i], 4);
+    return raw;
+  };
+  Bytes labels(40 * edited.labels.size());
+  for (size_t l = 0; l < edited.labels.size(); ++l)
+  {
+    putLE(labels, 40 * l, edited.labels[l].value, 8);
+    putLE(labels, 40 * l + 8, edited.labels[l].voxels, 8);
+    for (int k = 0; k < 6; ++k)
+      putLE(labels, 40 * l + 16 + 4 * size_t(k), uint32_t(edited.labels[l].bounds[size_t(k)]), 4);
+  }
+  Bytes leaves(8 * edited.leaves.size());
+  for (size_t l = 0; l < edited.leaves.size(); ++l)
+    putLE(leaves, 8 * l, edited.leaves[l], 8);
+  put(LabelsSection, labels);
+  put(BlocksSection, words(edited.blocks));
+  put(RootsSection, words(edited.roots));
+  put(MidsSection, words(edited.mids));
+  put(LeavesSection, leaves);
+  resealHeader(b);
+  return b;
+}
+
+void writeBits(std::vector<uint32_t>& stream, uint64_t offset, uint32_t width, uint32_t value)
+{
+  for (uint32_t k = 0; k < width; ++k, ++offset)
+  {
+    const uint32_t bit = 1u << (offset & 31);
+    if ((value >> k) & 1u)
+      stream[size_t(offset >> 5)] |= bit;
+    else
+      stream[size_t(offset >> 5)] &= ~bit;
+  }
+}
+
+// Field setters of block i (Layout.h's record layout).
+void setBlockBox(svdag::Volume& v, uint64_t i, const svdag::Block& b)
+{
+  uint32_t box = 0;
+  for (int a = 0; a < 3; ++a)
+    box |= (uint32_t(b.lo[size_t(a)]) << (4 * a)) | (uint32_t(b.hi[size_t(a)]) << (12 + 4 * a));
+  writeBits(v.blocks, i * v.widths.blockBits() + svdag::layout::blockBoundsOffset(v.widths.cellBits),
+    24, box);
+}
+void setBlockRoot(svdag::Volume& v, uint64_t i, uint32_t ref)
+{
+  writeBits(v.blocks,
+    i * v.widths.blockBits() + svdag::layout::blockRootOffset(v.widths.cellBits, v.widths.labelBits),
+    v.widths.rootRefBits, ref);
+}
+void setBlockCell(svdag::Volume& v, uint64_t i, uint32_t cell)
+{
+  writeBits(v.blocks, i * v.widths.blockBits(), v.widths.cellBits, cell);
+}
+void setBlockLabel(svdag::Volume& v, uint64_t i, uint32_t label)
+{
+  writeBits(v.blocks, i * v.widths.blockBits() + svdag::layout::blockLabelOffset(v.widths.cellBits),
+    v.widths.labelBits, label);
+}
+
+std::string loadError(const Bytes& b)
+{
+  try
+  {
+    svdag::deserialize(b);
+  }
+  catch (const FileError& e)
+  {
+    return e.what();
+  }
+  return "loaded without an error";
+}
+
+// Three labels in a 37 x 32 x 26 volume (partial cells on x and z): nested spheres and a slab,
+// so that cells hold one, two and three blocks.
+svdag::Volume threeLabels()
+{
+  return build(ScalarType::UInt16, geometry(37, 32, 26), [](int x, int y, int z) -> uint64_t {
+    const int d2 = (x - 16) * (x - 16) + (y - 14) * (y - 14) + (z - 12) * (z - 12);
+    return d2 < 30 ? 5 : d2 < 100 ? 9 : y > 25 ? 40 : 0;
+  });
+}
+// First index of a cell holding at least `count` blocks.
+uint64_t cellWith(const svdag::Volume& v, uint64_t count)
+{
+  for (uint64_t i = 0; i + count <= v.blockCount; ++i)
+  {
+    if (v.block(i).cell == v.block(i + count - 1).cell)
+      return i;
+  }
+  ADD_FAILURE() << "no cell with " << count << " blocks";
+  return 0;
+}
+} // namespace
+
+// The untouched file loads: the helper itself changes nothing.
+TEST(FileContent, RewritingUnchangedSectionsLoads)
+{
+  const svdag::Volume v = threeLabels();
+  const Bytes good = svdag::serialize(v, { 0 });
+  EXPECT_EQ(rewriteSections(good, v), good);
+  EXPECT_TRUE(svdag::deserialize(rewriteSections(good, v)) == v);
+}
+
+TEST(FileContent, ImpossibleBlocksAreRefusedNamingTheRule)
+{
+  const svdag::Volume v = threeLabels();
+  const Bytes good = svdag::serialize(v, { 0 });
+  ASSERT_GE(v.blockCount, 4u);
+  auto expectRefused = [&](const svdag::Volume& bad, const std::string& rule) {
+    const std::string message = loadError(rewriteSections(good, bad));
+    EXPECT_NE(message.find(rule), std::string::npos) << "expected '" << rule << "', got: " << message;
+    EXPECT_THROW(bad.validate(), std::runtime_error) << rule;
+  };
+
+  { // bounds past the volume's edge in a partial cell (x: 37 = 2 * 16 + 5)
+    svdag::Volume bad = v;
+    const auto n = v.geometry.cellCounts();
+    uint64_t i = 0;
+    while (i < v.blockCount && v.block(i).cell % uint32_t(n[0]) != uint32_t(n[0] - 1))
+      ++i;
+    ASSERT_LT(i, v.blockCount);
+    svdag::Block b = v.block(i);
+    b.hi[0] = 15;
+    setBlockBox(bad, i, b);
+    expectRefused(bad, "bounds outside the volume");
+  }
+  { // inverted bounds
+    svdag::Volume bad = v;
+    uint64_t i = 0;
+    while (i < v.blockCount && v.block(i).lo[1] == v.block(i).hi[1])
+      ++i;
+    ASSERT_LT(i, v.blockCount);
+    svdag::Block b = v.block(i);
+    std::swap(b.lo[1], b.hi[1]);
+    setBlockBox(bad, i, b);
+    expectRefused(bad, "bounds inverted");
+  }
+  { // occupancy outside the declared bounds: label_at would see voxels that decode() does not
+    svdag::Volume bad = v;
+    uint64_t i = 0;
+    while (i < v.blockCount && v.block(i).lo[0] == v.block(i).hi[0])
+      ++i;
+    ASSERT_LT(i, v.blockCount);
+    svdag::Block b = v.block(i);
+    b.hi[0] = uint8_t(b.hi[0] - 1);
+    setBlockBox(bad, i, b);
+    expectRefused(bad, "occupancy outside its declared bounds");
+  }
+  auto swapBlocks = [&](svdag::Volume& volume, uint64_t i, uint64_t j) {
+    const svdag::Block a = v.block(i), b = v.block(j);
+    setBlockBox(volume, i, b);
+    setBlockLabel(volume, i, b.label);
+    setBlockRoot(volume, i, b.root);
+    setBlockBox(volume, j, a);
+    setBlockLabel(volume, j, a.label);
+    setBlockRoot(volume, j, a.root);
+  };
+  { // two blocks of one cell swapped: files written before blocks were sorted by label within a
+    // cell hold them in scan order; they load and decode to the same voxels
+    svdag::Volume swapped = v;
+    const uint64_t i = cellWith(v, 2);
+    swapBlocks(swapped, i, i + 1);
+    EXPECT_NO_THROW(swapped.validate());
+    const svdag::Volume loaded = svdag::deserialize(rewriteSections(good, swapped));
+    EXPECT_EQ(svdag::decode(loaded), svdag::decode(v));
+  }
+  { // blocks of two cells out of order: the last block moved to a cell before the others'
+    svdag::Volume bad = v;
+    const uint64_t last = v.blockCount - 1;
+    ASSERT_GT(v.block(last).cell, v.block(0).cell);
+    setBlockCell(bad, last, v.block(0).cell);
+    expectRefused(bad, "blocks not sorted by cell");
+  }
+  { // a cell with two blocks of one label
+    svdag::Volume bad = v;
+    const uint64_t i = cellWith(v, 2);
+    setBlockLabel(bad, i + 1, v.block(i).label);
+    expectRefused(bad, "holds two blocks of one label");
+  }
+  { // root reference into the middle of a root node
+    svdag::Volume bad = v;
+    setBlockRoot(bad, 0, (svdag::layout::refTarget(v.block(0).root) + 3) << 1);
+    expectRefused(bad, "root reference does not point at a root node");
+  }
+  { // two blocks of one cell overlapping: the second takes the first's occupancy and bounds
+    svdag::Volume bad = v;
+    const uint64_t i = cellWith(v, 2);
+    const svdag::Block a = v.block(i);
+    setBlockBox(bad, i + 1, a);
+    setBlockRoot(bad, i + 1, a.root);
+    expectRefused(bad, "overlap (a voxel has one label)");
+  }
+  { // in a cell of three blocks, the third takes the second's occupancy
+    svdag::Volume bad = v;
+    const uint64_t i = cellWith(v, 3);
+    const svdag::Block a = v.block(i + 1);
+    setBlockBox(bad, i + 2, a);
+    setBlockRoot(bad, i + 2, a.root);
+    expectRefused(bad, "overlap (a voxel has one label)");
+  }
+}
+
+TEST(FileContent, EmptyBlockOccupancyIsRefused)
+{
+  // A 20^3 volume of one label: cell 0 is solid, its root is the empty node complemented.
+  const svdag::Volume v =
+    build(ScalarType::Int64, geometry(20, 20, 20), [](int, int, int) { return uint64_t(3); });
+  const Bytes good = svdag::serialize(v, { 0 });
+  ASSERT_EQ(v.block(0).cell, 0u);
+  ASSERT_TRUE(svdag::layout::refComplement(v.block(0).root));
+  svdag::Volume bad = v;
+  setBlockRoot(bad, 0, v.block(0).root ^ 1u);
+  const std::string message = loadError(rewriteSections(good, bad));
+  EXPECT_NE(message.find("empty occupancy"), std::string::npos) << message;
+}
+
+TEST(FileContent, ImpossibleNodeReferencesAreRefused)
+{
+  const svdag::Volume v = threeLabels();
+  const Bytes good = svdag::serialize(v, { 0 });
+  // The first mixed child reference of the first root and of the first mid node with one.
+  auto firstRef = [](const std::vector<uint32_t>& stream, uint64_t count, uint32_t refBits) {
+    uint64_t offset = 0;
+    for (uint64_t n = 0; n < count; ++n)
+    {
+      const uint32_t mixed = svdag::layout::nodeMixedMask(svdag::Volume::nodeHeader(stream, offset));
+      if (mixed)
+        return int64_t(offset + svdag::layout::NODE_HEADER_BITS);
+      offset += svdag::Volume::nodeBits(stream, offset, refBits);
+    }
+    return int64_t(-1);
+  };
+  {
+    svdag::Volume bad = v;
+    const int64_t at = firstRef(v.roots, v.rootCount, v.widths.midRefBits);
+    ASSERT_GE(at, 0);
+    writeBits(bad.roots, uint64_t(at), v.widths.midRefBits, 3u << 1); // bit 3 of the mid stream
+    const std::string message = loadError(rewriteSections(good, bad));
+    EXPECT_NE(message.find("root node at bit"), std::string::npos) << message;
+    EXPECT_NE(message.find("child reference does not point at a node"), std::string::npos) << message;
+  }
+  {
+    svdag::Volume bad = v;
+    const int64_t at = firstRef(v.mids, v.midCount, v.widths.leafRefBits);
+    ASSERT_GE(at, 0);
+    const uint32_t past = uint32_t(v.leaves.size()) << 1;
+    ASSERT_EQ(past >> v.widths.leafRefBits, 0u) << "the leaf field cannot hold an index past the end";
+    writeBits(bad.mids, uint64_t(at), v.widths.leafRefBits, past);
+    const std::string message = loadError(rewriteSections(good, bad));
+    EXPECT_NE(message.find("mid node at bit"), std::string::npos) << message;
+  }
+}
+
+TEST(FileContent, LabelTableMustMatchTheBlocks)
+{
+  const svdag::Volume v = threeLabels();
+  ASSERT_EQ(v.labels.size(), 3u);
+  const Bytes good = svdag::serialize(v, { 0 });
+  auto expectRefused = [&](const svdag::Volume& bad, const std::string& rule) {
+    const std::string message = loadError(rewriteSections(good, bad));
+    EXPECT_NE(message.find(rule), std::string::npos) << "expected '" << rule << "', got: " << message;
+  };
+  {
+    svdag::Volume bad = v;
+    bad.labels[1].voxels -= 1;
+    expectRefused(bad, "voxel count");
+  }
+  {
+    svdag::Volume bad = v;
+    bad.labels[1].voxels += 1;
+    expectRefused(bad, "voxel count");
+  }
+  {
+    svdag::Volume bad = v;
+    ASSERT_GT(bad.labels[0].bounds[0], 0);
+    bad.labels[0].bounds[0] -= 1; // still inside the volume, no longer tight
+    expectRefused(bad, "bounds in the label table differ");
+  }
+  {
+    svdag::Volume bad = v;
+    std::swap(bad.labels[0].value, bad.labels[1].value);
+    expectRefused(bad, "not sorted by value or not unique");
+  }
+  {
+    svdag::Volume bad = v;
+    bad.labels[1].value = bad.labels[0].value;
+    expectRefused(bad, "not sorted by value or not unique");
+  }
+  {
+    svdag::Volume bad = v;
+    bad.labels[0].value = v.background;
+    expectRefused(bad, "background");
+  }
+}
+
+// A valid 404-byte file of an empty 4096^3 volume loads (it is tiny), but a dense decode needs
+// 256 GiB: refused before allocating, with the byte count, never std::bad_alloc.
+TEST(FileContent, HugeEmptyVolumeLoadsButRefusesADenseDecode)
+{
+  const svdag::Volume small =
+    build(ScalarType::UInt32, geometry(17, 17, 17), [](int, int, int) { return uint64_t(0); });
+  Bytes b = svdag::serialize(small, { 0 });
+  for (int a = 0; a < 3; ++a)
+    putLE(b, DimsAt + 4 * size_t(a), 4096, 4);
+  putLE(b, WidthsAt, 24, 4); // 256^3 cells
+  resealHeader(b);
+  EXPECT_EQ(b.size(), 404u);
+  const svdag::Volume v = svdag::deserialize(b);
+  EXPECT_EQ(v.geometry.voxelCount(), uint64_t(1) << 36);
+  EXPECT_EQ(svdag::decodedBytes(v), uint64_t(1) << 38);
+  if (svdag::physicalMemoryBytes() == 0 || svdag::physicalMemoryBytes() >= (uint64_t(1) << 38))
+    GTEST_SKIP() << "this machine could hold the decoded volume";
+  largestAllocation = 0;
+  for (int allocating = 0; allocating < 2; ++allocating)
+  {
+    try
+    {
+      if (allocating)
+        svdag::decode(v);
+      else
+        svdag::checkDecodeMemory(v);
+      ADD_FAILURE() << "a 256 GiB decode was not refused";
+    }
+    catch (const std::length_error& e)
+    {
+      const std::string message = e.what();
+      EXPECT_NE(message.find("decoding 4096 x 4096 x 4096 uint32 voxels needs 274877906944 bytes (256 GiB)"),
+        std::string::npos) << message;
+    }
+  }
+  EXPECT_LT(largestAllocation.load(), size_t(1) << 20);
+  // One slab of 16 slices (1 GiB) is a decode this machine can do, as far as the check goes.
+  EXPECT_NO_THROW(svdag::checkDecodeMemory(v, 1));
+}
+
+TEST(FileContent, FormatBytes)
+{
+  EXPECT_EQ(svdag::formatBytes(0), "0 bytes");
+  EXPECT_EQ(svdag::formatBytes(1), "1 byte");
+  EXPECT_EQ(svdag::formatBytes(1536), "1.5 KiB");
+  EXPECT_EQ(svdag::formatBytes(uint64_t(256) << 30), "256 GiB");
+}

@@ -243,3 +243,228 @@ def test_writer_errors(tmp_path, rng):
     assert "CompressionLevel: 22" in str(writer) and "empty.svdag" in str(writer)  # PrintSelf
     writer.SetCompressionLevel(-4)
     assert writer.GetCompressionLevel() == 0
+
+
+# -- content checks: valid checksums, impossible content ---------------------------------------
+
+def reseal(data, sections):
+    """`data` (an uncompressed .svdag file) with each raw section in `sections` (id -> bytes of
+    the same size) written over its place, every section CRC and the header CRC recomputed."""
+    data = bytearray(data)
+    (count,) = struct.unpack_from("<I", data, 216)
+    for i in range(count):
+        entry = 220 + 36 * i
+        sid, codec, offset, stored, raw, _ = struct.unpack_from("<IIQQQI", data, entry)
+        if sid in sections:
+            assert codec == 0 and len(sections[sid]) == raw == stored
+            data[offset:offset + raw] = sections[sid]
+            struct.pack_into("<I", data, entry + 32, zlib.crc32(sections[sid]))
+    table_end = 220 + 36 * count
+    struct.pack_into("<I", data, table_end, zlib.crc32(bytes(data[:table_end])))
+    return bytes(data)
+
+
+def raw_sections(data):
+    _, sections = parse(data)
+    return {sid: bytearray(sections[name][1]) for sid, name in SECTIONS.items()}
+
+
+class Blocks:
+    """The bit-packed block records of a file (IO/README.md), as one little-endian integer."""
+
+    def __init__(self, data):
+        header, sections = parse(data)
+        self.widths = header["widths"]
+        self.count = header["counts"]["blocks"]
+        self.raw_size = len(sections["blocks"][1])
+        self.bits = int.from_bytes(sections["blocks"][1], "little")
+        cell, label, root = self.widths[0], self.widths[1], self.widths[2]
+        self.record = cell + 24 + label + root
+        self.fields = {"cell": (0, cell), "box": (cell, 24), "label": (cell + 24, label),
+                       "root": (cell + 24 + label, root)}
+
+    def get(self, i, field):
+        at, width = self.fields[field]
+        return (self.bits >> (i * self.record + at)) & ((1 << width) - 1)
+
+    def set(self, i, field, value):
+        at, width = self.fields[field]
+        shift = i * self.record + at
+        self.bits &= ~(((1 << width) - 1) << shift)
+        self.bits |= (value & ((1 << width) - 1)) << shift
+
+    def box(self, i):
+        b = self.get(i, "box")
+        return [(b >> (4 * a)) & 15 for a in range(3)], [(b >> (12 + 4 * a)) & 15 for a in range(3)]
+
+    def set_box(self, i, lo, hi):
+        self.set(i, "box", sum(lo[a] << (4 * a) | hi[a] << (12 + 4 * a) for a in range(3)))
+
+    def bytes(self):
+        return self.bits.to_bytes(self.raw_size, "little")
+
+
+def three_labels():
+    z, y, x = np.mgrid[0:26, 0:32, 0:37]
+    d2 = (x - 16) ** 2 + (y - 14) ** 2 + (z - 12) ** 2
+    labels = np.where(d2 < 30, 5, np.where(d2 < 100, 9, np.where(y > 25, 40, 0))).astype(np.uint16)
+    return labels
+
+
+def expect_refused(tmp_path, data, rule):
+    path = tmp_path / "impossible.svdag"
+    path.write_bytes(data)
+    reader, errors = read(path)
+    assert reader.GetErrorCode() == vtkErrorCode.FileFormatError, rule
+    assert not reader.GetOutput().HasVolume(), rule
+    import vtksvdag
+    with pytest.raises(OSError, match=rule):
+        vtksvdag.read(path)
+
+
+def test_impossible_content_is_refused_naming_the_rule(tmp_path):
+    labels = three_labels()
+    good = write(compress_zyx(labels), tmp_path / "good.svdag", level=0)
+    blocks = Blocks(good)
+    assert blocks.count >= 4
+    # Unchanged sections load.
+    assert reseal(good, {2: blocks.bytes()}) == good
+
+    def with_blocks(edit):
+        b = Blocks(good)
+        edit(b)
+        return reseal(good, {2: b.bytes()})
+
+    def first(predicate):
+        return next(i for i in range(blocks.count) if predicate(i))
+
+    cells_x = -(-labels.shape[2] // 16)
+    edge = first(lambda i: blocks.get(i, "cell") % cells_x == cells_x - 1)
+    wide = first(lambda i: blocks.box(i)[0][0] < blocks.box(i)[1][0])
+    pair = first(lambda i: i + 1 < blocks.count
+                 and blocks.get(i, "cell") == blocks.get(i + 1, "cell"))
+
+    def past_edge(b):
+        lo, hi = b.box(edge)
+        b.set_box(edge, lo, [15, hi[1], hi[2]])
+
+    def inverted(b):
+        lo, hi = b.box(wide)
+        b.set_box(wide, [hi[0], lo[1], lo[2]], [lo[0], hi[1], hi[2]])
+
+    def shrunk(b):
+        lo, hi = b.box(wide)
+        b.set_box(wide, lo, [hi[0] - 1, hi[1], hi[2]])
+
+    def swapped(b):
+        for field in ("box", "label", "root"):
+            first_value, second_value = b.get(pair, field), b.get(pair + 1, field)
+            b.set(pair, field, second_value)
+            b.set(pair + 1, field, first_value)
+
+    def duplicate(b):
+        b.set(pair + 1, "label", b.get(pair, "label"))
+
+    def mid_node_reference(b):
+        b.set(0, "root", b.get(0, "root") + (3 << 1))
+
+    def overlapping(b):
+        lo, hi = b.box(pair)
+        b.set_box(pair + 1, lo, hi)
+        b.set(pair + 1, "root", b.get(pair, "root"))
+
+    for edit, rule in [
+        (past_edge, "bounds outside the volume"),
+        (inverted, "bounds inverted"),
+        (shrunk, "occupancy outside its declared bounds"),
+        (duplicate, "holds two blocks of one label"),
+        (mid_node_reference, "root reference does not point at a root node"),
+        (overlapping, r"overlap \(a voxel has one label\)"),
+    ]:
+        expect_refused(tmp_path, with_blocks(edit), rule)
+
+    # Blocks of one cell in scan order (as files written before the builder sorted them by label
+    # within a cell) load, and decode to the same voxels.
+    import vtksvdag
+
+    path = tmp_path / "scan_order.svdag"
+    path.write_bytes(with_blocks(swapped))
+    assert np.array_equal(vtksvdag.read(path).to_numpy(axis_order="zyx"), labels)
+
+    # The label table must hold what the blocks hold.
+    def with_labels(edit):
+        raw = raw_sections(good)[1]
+        edit(raw)
+        return reseal(good, {1: bytes(raw)})
+
+    record = 40
+    for edit, rule in [
+        (lambda raw: struct.pack_into("<Q", raw, record + 8,
+                                      struct.unpack_from("<Q", raw, record + 8)[0] - 1),
+         "voxel count"),
+        (lambda raw: struct.pack_into("<i", raw, 16, struct.unpack_from("<i", raw, 16)[0] - 1),
+         "bounds in the label table differ"),
+        (lambda raw: raw.__setitem__(slice(0, 2 * record),
+                                     raw[record:2 * record] + raw[0:record]),
+         "not sorted by value or not unique"),
+        (lambda raw: raw.__setitem__(slice(record, record + 8), raw[0:8]),
+         "not sorted by value or not unique"),
+        (lambda raw: raw.__setitem__(slice(0, 8), bytes(8)), "background"),
+    ]:
+        expect_refused(tmp_path, with_labels(edit), rule)
+
+
+def empty_volume_file(dims, scalar_type=5):
+    """A valid uncompressed .svdag file of an all-background volume: 404 bytes at any size."""
+    header = MAGIC + struct.pack("<HH3i", 1, 0, *dims)
+    header += struct.pack("<3d3d9d", 1, 1, 1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1)
+    cells = int(np.prod([-(-d // 16) for d in dims]))
+    header += struct.pack("<IQ", scalar_type, 0)
+    header += struct.pack("<5I5QI", (cells - 1).bit_length(), 0, 1, 1, 1, 0, 0, 0, 0, 0, 5)
+    for sid in range(1, 6):
+        header += struct.pack("<IIQQQI", sid, 0, 220 + 36 * 5 + 4, 0, 0, zlib.crc32(b""))
+    return header + struct.pack("<I", zlib.crc32(header))
+
+
+def test_huge_empty_volume_gives_an_exception_not_an_abort(tmp_path):
+    import os
+
+    import vtksvdag
+
+    path = tmp_path / "huge.svdag"
+    path.write_bytes(empty_volume_file((4096, 4096, 4096)))
+    assert path.stat().st_size == 404
+    volume = vtksvdag.read(path)  # valid and tiny: loads
+    assert volume.dims == (4096, 4096, 4096)
+    memory = os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    if memory >= 256 << 30:
+        pytest.skip("this machine could hold the decoded volume")
+    # Refused before anything is allocated, with the bytes a decode needs.
+    with pytest.raises((MemoryError, ValueError, OSError), match=r"274877906944 bytes \(256 GiB\)"):
+        volume.to_numpy()
+    # The filter reports an error and leaves its output empty.
+    decoder = vtkSegmentationSVDAGToImageData()
+    errors = ErrorCatcher(decoder)
+    decoder.SetInputData(volume.dataobject)
+    decoder.Update()
+    assert errors.messages
+    assert decoder.GetOutput().GetNumberOfPoints() == 0
+
+
+DTYPES = ["int8", "uint8", "int16", "uint16", "int32", "uint32", "int64", "uint64"]
+
+
+@pytest.mark.parametrize("dtype", DTYPES)
+@pytest.mark.parametrize("level", [0, 3])
+def test_every_dtype_round_trips_bit_exactly(tmp_path, rng, dtype, level):
+    import vtksvdag
+
+    info = np.iinfo(dtype)
+    labels = rng.integers(0, 6, size=(21, 34, 19)).astype(dtype)
+    labels[labels == 1] = info.min
+    labels[labels == 2] = info.max
+    labels[3:9, 4:30, 2:17] = info.max - 1  # a solid region spanning cells
+    write(compress_zyx(labels), tmp_path / "v.svdag", level=level)
+    decoded = vtksvdag.read(tmp_path / "v.svdag").to_numpy("zyx")
+    assert decoded.dtype == np.dtype(dtype)
+    np.testing.assert_array_equal(decoded, labels)

@@ -4,7 +4,7 @@
 // merged in cell order into the deduplicated pools, so the output does not depend on the thread
 // count. The pools are kept bit-packed at the widths their counts need so far (widened in place
 // as they grow), so the builder's own memory stays near 1.5 times the output; the caller holds
-// one slab at a time.
+// one slab at a time. The decoder (Volume -> dense labels) is in svdag/Decoder.h.
 #pragma once
 
 #include "svdag/Parallel.h"
@@ -23,15 +23,12 @@ struct BuildOptions
   std::vector<uint64_t> excluded; // label patterns left out (decode as background)
 };
 
-// Empty if the geometry can be compressed, else why not (absurd dimensions, spacing, ...).
-std::string checkGeometry(const Geometry& geometry);
-
 class Builder
 {
 public:
   static constexpr int32_t SlabDepth = 16;
 
-  // Throws std::invalid_argument when checkGeometry fails.
+  // Throws std::invalid_argument when checkGeometry (Volume.h) fails.
   Builder(const Geometry& geometry, ScalarType type, const BuildOptions& options = {},
     ParallelFor parallel = sequentialFor);
   ~Builder();
@@ -57,14 +54,5 @@ private:
   struct Impl;
   std::unique_ptr<Impl> impl;
 };
-
-// Writes the decoded labels of z-slices [z0, z0 + nz) into `out` (dims[0] * dims[1] * nz values
-// of the volume's scalar type, x fastest).
-void decodeSlab(const Volume& volume, int32_t z0, int32_t nz, void* out,
-  const ParallelFor& parallel = sequentialFor);
-inline void decode(const Volume& volume, void* out, const ParallelFor& parallel = sequentialFor)
-{
-  decodeSlab(volume, 0, volume.geometry.dims[2], out, parallel);
-}
 
 } // namespace svdag

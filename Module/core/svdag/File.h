@@ -38,7 +38,12 @@
 // Loading is one pass over the file: header, table, then each section is decompressed (a zstd
 // frame must decode to exactly its declared raw size; the output buffer grows with the bytes
 // actually produced, so a false size cannot reserve memory), checked against its crc32, decoded,
-// and finally the whole Volume is checked with Volume::validate().
+// and finally the whole Volume is checked with Volume::validate(): content as well as checksums
+// (every reference at a node start, blocks sorted by cell and label with bounds inside their cell
+// and the volume, each block's occupancy non-empty and inside its bounds, blocks of a cell
+// disjoint, the label table's counts and bounds equal to what the blocks hold), in time linear in
+// the file size. A loaded file may still describe a volume too large to decode densely: see
+// checkDecodeMemory in svdag/Decoder.h.
 #pragma once
 
 #include "svdag/Volume.h"

@@ -22,7 +22,8 @@
  * leaf is canonical: its voxel (0,0,0) is empty, so a shape and its inverse are stored once.
  * For roots and mids, target = bit offset of the node in its stream; for leaves, the index.
  *
- * Blocks are fixed-width bit-packed records, sorted by cell index:
+ * Blocks are fixed-width bit-packed records, sorted by cell index (and, as the builder writes
+ * them, by label within a cell; readers accept any order within a cell):
  *   [cell:CELL_BITS][minX:4][minY:4][minZ:4][maxX:4][maxY:4][maxZ:4][label:LABEL_BITS][root:ROOT_REF_BITS]
  * with the tight voxel bounds (inclusive, cell-local) and the dense label index. A block's root
  * covers the whole cell; voxels outside the volume are empty.

@@ -51,6 +51,9 @@ struct Geometry
   bool operator==(const Geometry& o) const;
 };
 
+// Empty if the geometry can be compressed, else why not (absurd dimensions, spacing, ...).
+std::string checkGeometry(const Geometry& geometry);
+
 struct LabelInfo
 {
   uint64_t value = 0;                  // original label value (pattern, see ScalarType)
@@ -134,7 +137,14 @@ public:
   int64_t findLabel(uint64_t value) const;
 
   MemoryUsage memory() const;
-  // Throws std::runtime_error naming the first inconsistency (widths, offsets, bounds, ordering).
+  // Throws std::runtime_error naming the first inconsistency, so that no accessor, decoder or
+  // traversal can read out of bounds or disagree with another: widths wide enough; the label
+  // table valid for the type, sorted, unique, without the background, bounds inside the volume;
+  // every node well formed and every reference (block -> root, root -> mid, mid -> leaf) at a
+  // node start of its pool; blocks sorted by (cell, label), bounds ordered and inside the volume,
+  // each occupancy non-empty and inside its bounds, the blocks of a cell disjoint; each label's
+  // voxel count and bounds exactly what its blocks hold. Linear in the size of the volume:
+  // occupancy is summarised once per distinct node, never expanded per block.
   void validate() const;
   bool operator==(const Volume& o) const;
 };
