@@ -8,4 +8,8 @@ bash scripts/setup.sh || { echo "setup failed"; exit 1; }
 status=0
 xvfb-run -a -s "-screen 0 1024x768x24" ctest --test-dir build --output-on-failure -j2 || status=1
 xvfb-run -a -s "-screen 0 1024x768x24" .venv/bin/python -m pytest -q Testing/Python || status=1
+# In CI (CI=true), or when asked: the ASan+UBSan build and its tests (about 8 minutes on 2 cores).
+if [ "${CI:-}" = true ] || [ -n "${VTKSVDAG_SANITIZE_TESTS:-}" ]; then
+  bash scripts/sanitize.sh || status=1
+fi
 exit $status
