@@ -8,7 +8,7 @@ import nrrd
 import numpy as np
 import pytest
 
-from conftest import REPO, SHARED_DATA
+from conftest import REPO
 
 STATS_KEYS = {
     "dims", "voxels", "labels", "blocks", "dag_nodes", "root_nodes", "mid_nodes", "leaves",
@@ -142,8 +142,8 @@ def test_compress_with_background_and_exclusions(small_nrrd, tmp_path):
     np.testing.assert_array_equal(np.load(out), np.where(np.isin(labels, [9, 2]), -3, labels))
 
 
-def test_shared_volume_round_trip(tmp_path):
-    source = SHARED_DATA / "fib25_64.nrrd"
+def test_shared_volume_round_trip(shared_data, tmp_path):
+    source = shared_data / "fib25_64.nrrd"
     expected, _ = nrrd.read(str(source))
     svdag = tmp_path / "fib25.svdag"
     stats = run_json("compress", source, "-o", svdag)
