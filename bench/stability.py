@@ -1,7 +1,7 @@
 """Runs every stiff and extreme case (Testing/Python/extreme_cases.py, their one definition),
 times each and writes docs/stability.md: one row per case (group, what was checked, measured
 error, tolerance, seconds, pass/fail), then the fuzzing and sanitizer results that
-scripts/fuzz.sh and scripts/sanitize.sh leave in build/fuzz/summary.json and
+scripts/fuzz.sh and scripts/sanitize.sh leave in bench/out/fuzz/summary.json and
 build-asan/sanitize-summary.txt ("not run" where absent), and the date and machine.
 
     xvfb-run -a .venv/bin/python bench/stability.py            # the cases pytest runs
@@ -64,8 +64,8 @@ def machine():
 
 def fuzz_section():
     lines = ["## Fuzzing and sanitizers", ""]
-    summary = REPO / "build" / "fuzz" / "summary.json"
-    lines.append("### Fuzzing (`build/fuzz/summary.json`, written by `scripts/fuzz.sh`)")
+    summary = REPO / "bench" / "out" / "fuzz" / "summary.json"
+    lines.append("### Fuzzing (`bench/out/fuzz/summary.json`, written by `scripts/fuzz.sh`)")
     lines.append("")
     if summary.is_file():
         try:

@@ -34,7 +34,7 @@ export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
 status=0
 echo "== ctest (ASan+UBSan) in $BUILD"
 xvfb-run -a -s "-screen 0 1024x768x24" ctest --test-dir "$BUILD" --output-on-failure -j "$JOBS" \
-  || status=1
+  | tee "$BUILD/sanitize-ctest.log" || status=1
 t2=$(date +%s)
 
 # python3 is not instrumented: the ASan runtime has to be loaded first, by LD_PRELOAD. The wrapped
@@ -53,7 +53,14 @@ if printf '%s\n' "$where" | grep -qv "^$BUILD/python/"; then
   echo "sanitize.sh: vtksvdag's wrapped modules do not come from $BUILD"; exit 1
 fi
 # shellcheck disable=SC2086
-"$PY" -m pytest -q $PYTESTS || status=1
+"$PY" -m pytest -q $PYTESTS | tee "$BUILD/sanitize-pytest.log" || status=1
 t3=$(date +%s)
 echo "sanitize.sh: build $((t1 - t0)) s, ctest $((t2 - t1)) s, pytest $((t3 - t2)) s; status $status"
+# The summary bench/stability.py puts into docs/stability.md.
+{
+  echo "$(date -u '+%Y-%m-%d %H:%M UTC'), ASan+UBSan ($BUILD), status $status"
+  grep -E "tests passed|tests failed" "$BUILD/sanitize-ctest.log" | tail -1
+  tail -1 "$BUILD/sanitize-pytest.log"
+  echo "build $((t1 - t0)) s, ctest $((t2 - t1)) s, pytest $((t3 - t2)) s"
+} > "$BUILD/sanitize-summary.txt"
 exit $status
