@@ -36,7 +36,9 @@
  *                   over the n accumulated samples; 0 while n < 2
  *
  * Path tracing (camera.rgen, Shading.h, PathTracer.h): every pass adds sampling.y samples per
- * pixel, each a camera path through a uniformly jittered point of the pixel. A sample whose camera
+ * pixel, each a camera path through a uniformly jittered point of the pixel, except the first
+ * sample of an accumulation, which goes through the pixel center and reuses the pixel-center
+ * ray's hit (a restarting frame traces its primary rays once). A sample whose camera
  * ray hits nothing is the background (frame.background, alpha included): the environment lights
  * the scene but is not what the camera sees behind it, like VTK's renderer background. A hit
  * counts alpha 1. The sums live in the accumulation buffer (rgb + alpha sum per pixel); sampling.x
