@@ -6,10 +6,11 @@ cd "$(dirname "$0")/.."
 bash scripts/setup.sh || { echo "setup failed"; exit 1; }
 
 status=0
-xvfb-run -a -s "-screen 0 1024x768x24" ctest --test-dir build --output-on-failure -j2 || status=1
-xvfb-run -a -s "-screen 0 1024x768x24" .venv/bin/python -m pytest -q Testing/Python || status=1
-# In CI (CI=true), or when asked: the ASan+UBSan build and its tests (about 8 minutes on 2 cores).
+# In CI (CI=true), or when asked: the ASan+UBSan build and its tests (about 8 minutes on 2 cores),
+# first, so that the output ends with the main suites' summaries.
 if [ "${CI:-}" = true ] || [ -n "${VTKSVDAG_SANITIZE_TESTS:-}" ]; then
   bash scripts/sanitize.sh || status=1
 fi
+xvfb-run -a -s "-screen 0 1024x768x24" ctest --test-dir build --output-on-failure -j2 || status=1
+xvfb-run -a -s "-screen 0 1024x768x24" .venv/bin/python -m pytest -q Testing/Python || status=1
 exit $status
