@@ -16,10 +16,12 @@
 
 namespace
 {
-// VTK 9.1's vtkXMLDataParser trusts the block sizes of a compressed array's header: a last block
-// larger than the block size, or blocks adding up to more than the array, make it write past its
-// buffers (found by the fuzzer). Every compressed array's header is therefore checked against
-// the array it must fill before VTK reads the file.
+// VTK 9.1's XML reader trusts what it reads: a compressed array's block sizes (a last block
+// larger than the others wrote past a heap buffer), an appended section not starting at its '_'
+// (4 GiB allocated), a DataArray without a format or a Piece with an inverted extent (a null
+// stream read) were all found by the fuzzer. Before VTK reads the file, its structure is checked
+// here: byte order, header type and compressor known, extents not inverted, every array's format
+// known and its header describing exactly the array it fills, inside the file.
 class HeaderCheck
 {
 public:
@@ -37,10 +39,18 @@ public:
       return; // not ours to judge: vtkXMLImageDataReader reports it
     const std::string root = this->tag(file);
     const std::string compressor = attribute(root, "compressor");
-    if (compressor.empty())
-      return; // uncompressed arrays: VTK checks their sizes itself
-    this->WordSize = attribute(root, "header_type") == "UInt64" ? 8 : 4;
-    this->BigEndian = attribute(root, "byte_order") == "BigEndian";
+    if (!compressor.empty() && compressor != "vtkZLibDataCompressor" &&
+      compressor != "vtkLZ4DataCompressor" && compressor != "vtkLZMADataCompressor")
+      this->fail("compressor '" + compressor + "'");
+    this->Compressed = !compressor.empty();
+    const std::string headerType = attribute(root, "header_type");
+    if (!headerType.empty() && headerType != "UInt32" && headerType != "UInt64")
+      this->fail("header_type '" + headerType + "' (UInt32 or UInt64)");
+    this->WordSize = headerType == "UInt64" ? 8 : 4;
+    const std::string byteOrder = attribute(root, "byte_order");
+    if (byteOrder != "LittleEndian" && byteOrder != "BigEndian")
+      this->fail("byte_order '" + byteOrder + "' (LittleEndian or BigEndian)");
+    this->BigEndian = byteOrder == "BigEndian";
     const size_t appended = this->Text.find("<AppendedData");
     size_t dataStart = std::string::npos;
     bool appendedRaw = false;
@@ -50,15 +60,32 @@ public:
       if (encoding != "raw" && encoding != "base64")
         this->fail("AppendedData encoding '" + encoding + "' (raw or base64)");
       appendedRaw = encoding == "raw";
-      dataStart = this->Text.find('_', appended);
-      if (dataStart == std::string::npos)
-        this->fail("AppendedData without its '_' marker");
+      // The data starts after the '_' that must be the first character after the tag but for
+      // white space (VTK, not finding it there, scans on and reads from elsewhere).
+      dataStart = this->Text.find('>', appended) + 1;
+      while (dataStart < this->Text.size() &&
+        std::isspace(static_cast<unsigned char>(this->Text[dataStart])))
+        ++dataStart;
+      if (dataStart >= this->Text.size() || this->Text[dataStart] != '_')
+        this->fail("AppendedData does not start with its '_' marker");
       ++dataStart;
     }
+    const size_t image = this->Text.find("<ImageData");
+    if (image == std::string::npos)
+      this->fail("no ImageData element");
+    const std::array<long long, 6> whole = extentOf(attribute(this->tag(image), "WholeExtent"));
+    uint64_t covered = 0;
     for (size_t piece = this->Text.find("<Piece"); piece != std::string::npos && piece < appended;
          piece = this->Text.find("<Piece", piece + 1))
     {
-      const uint64_t points = pointsOf(attribute(this->tag(piece), "Extent"));
+      const std::array<long long, 6> extent = extentOf(attribute(this->tag(piece), "Extent"));
+      for (int a = 0; a < 3; ++a)
+      {
+        if (extent[2 * a] < whole[2 * a] || extent[2 * a + 1] > whole[2 * a + 1])
+          this->fail("a Piece outside the WholeExtent");
+      }
+      const uint64_t points = pointsOf(extent);
+      covered += points;
       const size_t end = this->Text.find("</Piece>", piece);
       for (size_t a = this->Text.find("<DataArray", piece); a != std::string::npos && a < end;
            a = this->Text.find("<DataArray", a + 1))
@@ -83,6 +110,11 @@ public:
           this->fail("DataArray format '" + format + "' (ascii, binary or appended)");
       }
     }
+    // VTK leaves the parts of the whole extent that no piece covers at zero: an incomplete file
+    // would read as a volume with background there.
+    if (covered != pointsOf(whole))
+      this->fail("the pieces hold " + std::to_string(covered) + " of the whole extent's " +
+        std::to_string(pointsOf(whole)) + " points");
   }
 
 private:
@@ -120,20 +152,25 @@ private:
     return std::stoull(text);
   }
 
-  uint64_t pointsOf(const std::string& extent) const
+  std::array<long long, 6> extentOf(const std::string& text) const
   {
-    long long e[6];
-    if (std::sscanf(extent.c_str(), "%lld %lld %lld %lld %lld %lld", e, e + 1, e + 2, e + 3,
-          e + 4, e + 5) != 6)
-      this->fail("a Piece without a valid Extent");
+    std::array<long long, 6> e{};
+    if (std::sscanf(text.c_str(), "%lld %lld %lld %lld %lld %lld", &e[0], &e[1], &e[2], &e[3],
+          &e[4], &e[5]) != 6)
+      this->fail("an extent that is not 6 integers ('" + text + "')");
+    return e;
+  }
+
+  uint64_t pointsOf(const std::array<long long, 6>& e) const
+  {
     uint64_t points = 1;
     for (int a = 0; a < 3; ++a)
     {
       if (e[2 * a + 1] < e[2 * a] || e[2 * a + 1] - e[2 * a] >= (1ll << 31))
-        this->fail("a Piece Extent of negative or absurd size");
+        this->fail("an extent of negative or absurd size");
       points *= uint64_t(e[2 * a + 1] - e[2 * a] + 1);
       if (points > (uint64_t(1) << 40))
-        this->fail("a Piece of more than 2^40 points");
+        this->fail("an extent of more than 2^40 points");
     }
     return points;
   }
@@ -217,6 +254,17 @@ private:
 
   void checkHeader(size_t at, bool raw, uint64_t bytes) const
   {
+    if (!this->Compressed)
+    {
+      // One word: the array's byte count, then the bytes.
+      const uint64_t stored = this->words(at, raw, 1)[0];
+      if (stored != bytes)
+        this->fail("an array header of " + std::to_string(stored) + " bytes for an array of " +
+          std::to_string(bytes) + " bytes");
+      if (raw && bytes > this->Text.size() - at - this->WordSize)
+        this->fail("array data past the end of the file");
+      return;
+    }
     const std::vector<uint64_t> h = this->words(at, raw, 3);
     const uint64_t blocks = h[0], blockSize = h[1], lastSize = h[2];
     const uint64_t total =
@@ -226,21 +274,42 @@ private:
       this->fail("a compressed array header of " + std::to_string(blocks) + " blocks of " +
         std::to_string(blockSize) + " bytes (last " + std::to_string(lastSize) +
         ") for an array of " + std::to_string(bytes) + " bytes");
+    // The compressed blocks must be there: raw, after the header words; base64, in the chunk
+    // that follows the header's own base64 chunk.
+    const std::vector<uint64_t> all = this->words(at, raw, size_t(3 + blocks));
+    uint64_t compressed = 0;
+    for (size_t b = 3; b < all.size(); ++b)
+      compressed += all[b];
+    uint64_t available = 0;
     if (raw)
+      available = this->Text.size() - at - all.size() * this->WordSize;
+    else
     {
-      const std::vector<uint64_t> all = this->words(at, raw, size_t(3 + blocks));
-      uint64_t compressed = 0;
-      for (size_t b = 3; b < all.size(); ++b)
-        compressed += all[b];
-      if (compressed > this->Text.size() - at)
-        this->fail("compressed blocks past the end of the file");
+      size_t data = at;
+      while (data < this->Text.size() && std::isspace(static_cast<unsigned char>(this->Text[data])))
+        ++data;
+      data += 4 * ((all.size() * this->WordSize + 2) / 3); // the header chunk, padded
+      uint64_t chars = 0;
+      for (; data < this->Text.size(); ++data)
+      {
+        const char c = this->Text[data];
+        if (std::isalnum(static_cast<unsigned char>(c)) || c == '+' || c == '/' || c == '=')
+          ++chars;
+        else if (!std::isspace(static_cast<unsigned char>(c)))
+          break;
+      }
+      available = chars / 4 * 3;
     }
+    if (compressed > available)
+      this->fail("compressed blocks of " + std::to_string(compressed) + " bytes where the file holds " +
+        std::to_string(available));
   }
 
   std::string FileName;
   std::string Text;
   size_t WordSize = 4;
   bool BigEndian = false;
+  bool Compressed = false;
 };
 } // namespace
 
