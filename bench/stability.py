@@ -69,12 +69,28 @@ def fuzz_section():
     lines.append("")
     if summary.is_file():
         try:
-            text = json.dumps(json.loads(summary.read_text()), indent=2)
+            runs = json.loads(summary.read_text())
         except ValueError:
-            text = summary.read_text()
-        lines += ["```json", text.strip(), "```"]
+            runs = None
+        if isinstance(runs, list):
+            lines += ["| target | inputs | accepted | rejected | accepted, checked exactly | findings |",
+                      "|---|---|---|---|---|---|"]
+            for r in runs:
+                lines.append(f"| {r.get('target')} | {r.get('inputs', 0):,} | {r.get('accepted', 0):,} "
+                             f"| {r.get('rejected', 0):,} | {r.get('accepted_exact_checked', 0):,} "
+                             f"| {len(r.get('findings', []))} |")
+            total = sum(r.get("inputs", 0) for r in runs)
+            found = sum(len(r.get("findings", [])) for r in runs)
+            lines += ["", f"{total:,} inputs, {found} findings."]
+        else:
+            lines += ["```", summary.read_text().strip(), "```"]
     else:
         lines.append("not run")
+    crashes = sorted((REPO / "Testing" / "fuzz" / "crashes").glob("*"))
+    if crashes:
+        lines += ["", "Every input the fuzzer ever found, kept in `Testing/fuzz/crashes/` and replayed by "
+                  "`Testing/Python/test_fuzz.py` (each must now be refused cleanly):", ""]
+        lines += [f"- `{c.name}`" for c in crashes]
     lines.append("")
     sanitize = REPO / "build-asan" / "sanitize-summary.txt"
     lines.append("### Sanitizers (`build-asan/sanitize-summary.txt`, written by "
