@@ -155,3 +155,33 @@ def caster_pick(caster, origin, direction, to_world=None):
         if np.linalg.norm(normal) > 0:
             normal /= np.linalg.norm(normal)
     return label, position, normal
+
+
+def mapper_scene(svdag, camera_position=(80, -60, 90), focal=(20, 20, 20), up=(0, 0, 1),
+                 parallel=False, clipping=(20.0, 300.0), size=(200, 150)):
+    """An off-screen VTK window with one volume drawn by vtkSegmentationSVDAGVolumeMapper and a
+    fixed camera: (window, renderer, volume, mapper)."""
+    import vtkmodules.vtkRenderingOpenGL2  # noqa: F401 (the OpenGL factory overrides)
+    from vtkmodules.vtkRenderingCore import vtkRenderer, vtkRenderWindow, vtkVolume
+
+    from vtksvdag.vtkSVDAGRendering import vtkSegmentationSVDAGVolumeMapper
+
+    mapper = vtkSegmentationSVDAGVolumeMapper()
+    mapper.SetInputData(svdag)
+    volume = vtkVolume()
+    volume.SetMapper(mapper)
+    renderer = vtkRenderer()
+    renderer.AddVolume(volume)
+    window = vtkRenderWindow()
+    window.SetOffScreenRendering(1)
+    window.SetSize(*size)
+    window.AddRenderer(renderer)
+    camera = renderer.GetActiveCamera()
+    camera.SetPosition(*camera_position)
+    camera.SetFocalPoint(*focal)
+    camera.SetViewUp(*up)
+    if parallel:
+        camera.ParallelProjectionOn()
+        camera.SetParallelScale(30.0)
+    camera.SetClippingRange(*clipping)
+    return window, renderer, volume, mapper

@@ -30,7 +30,7 @@ import tempfile
 import textwrap
 
 import numpy as np
-from conftest import REPO, caster_pick, mapper_pick, pixel_ray, primary_rays
+from conftest import REPO, caster_pick, mapper_pick, mapper_scene, pixel_ray, primary_rays
 from vtkmodules.util.numpy_support import vtk_to_numpy
 
 import vtksvdag
@@ -677,35 +677,18 @@ def camera_1e6_widths_away():
 
 @case("rays")
 def mapper_clipping_planes():
-    import vtkmodules.vtkRenderingOpenGL2  # noqa: F401 (the OpenGL factory overrides)
-    from vtkmodules.vtkRenderingCore import vtkRenderer, vtkRenderWindow, vtkVolume
-
-    from vtksvdag.vtkSVDAGRendering import vtkSegmentationSVDAGVolumeMapper
-
     array = np.zeros((40, 40, 40), np.uint16)
     array[5:35, 5:35, 5:35] = 3
     array[10:30, 10:30, 10:30] = 0      # a hollow: the near plane (z = 25) cuts through it
     array[12:20, 14:26, 10:20] = 7      # a box in it, between the planes
     volume = vtksvdag.from_numpy(array)  # behind the far plane (z = 15): the hollow's floor
-    mapper = vtkSegmentationSVDAGVolumeMapper()
-    mapper.SetInputData(volume.dataobject)
-    actor = vtkVolume()
-    actor.SetMapper(mapper)
-    renderer = vtkRenderer()
-    renderer.AddVolume(actor)
-    window = vtkRenderWindow()
-    window.SetOffScreenRendering(1)
     width, height = 64, 48
-    window.SetSize(width, height)
-    window.AddRenderer(renderer)
-    camera = renderer.GetActiveCamera()
     eye, focal = np.array([19.5, 19.5, 120.0]), np.array([19.5, 19.5, 19.5])
-    camera.SetPosition(*eye)
-    camera.SetFocalPoint(*focal)
-    camera.SetViewUp(0, 1, 0)
-    camera.SetViewAngle(30)
     near, far = 95.0, 105.0                     # z = 25 .. 15: both planes inside the volume
-    camera.SetClippingRange(near, far)
+    window, renderer, _, mapper = mapper_scene(volume.dataobject, camera_position=eye,
+                                               focal=focal, up=(0, 1, 0), clipping=(near, far),
+                                               size=(width, height))
+    renderer.GetActiveCamera().SetViewAngle(30)
     window.Render()
     caster = caster_of(volume)
     view = (focal - eye) / np.linalg.norm(focal - eye)

@@ -13,19 +13,12 @@ import textwrap
 import numpy as np
 import pytest
 import vtkmodules.vtkRenderingOpenGL2  # noqa: F401 (the OpenGL factory overrides)
-from conftest import REPO, caster_pick, compress_zyx, display_to_world, mapper_pick, pixel_ray
+from conftest import mapper_scene, REPO, caster_pick, compress_zyx, display_to_world, mapper_pick, pixel_ray
 from vtkmodules.util.numpy_support import vtk_to_numpy
 from vtkmodules.vtkCommonCore import vtkFloatArray
 from vtkmodules.vtkCommonMath import vtkMatrix4x4
 from vtkmodules.vtkFiltersSources import vtkCubeSource
-from vtkmodules.vtkRenderingCore import (
-    vtkActor,
-    vtkPolyDataMapper,
-    vtkRenderer,
-    vtkRenderWindow,
-    vtkVolume,
-    vtkWindowToImageFilter,
-)
+from vtkmodules.vtkRenderingCore import vtkActor, vtkPolyDataMapper, vtkWindowToImageFilter
 
 from vtksvdag.vtkSVDAGCore import vtkSegmentationSVDAGRayCaster
 from vtksvdag.vtkSVDAGRendering import vtkSegmentationSVDAGVolumeMapper
@@ -42,27 +35,8 @@ def two_boxes(n=40):
     return labels
 
 
-def make_scene(svdag, camera_position=(80, -60, 90), focal=(20, 20, 20), up=(0, 0, 1),
-               parallel=False, clipping=(20.0, 300.0), size=(W, H)):
-    mapper = vtkSegmentationSVDAGVolumeMapper()
-    mapper.SetInputData(svdag)
-    volume = vtkVolume()
-    volume.SetMapper(mapper)
-    renderer = vtkRenderer()
-    renderer.AddVolume(volume)
-    window = vtkRenderWindow()
-    window.SetOffScreenRendering(1)
-    window.SetSize(*size)
-    window.AddRenderer(renderer)
-    camera = renderer.GetActiveCamera()
-    camera.SetPosition(*camera_position)
-    camera.SetFocalPoint(*focal)
-    camera.SetViewUp(*up)
-    if parallel:
-        camera.ParallelProjectionOn()
-        camera.SetParallelScale(30.0)
-    camera.SetClippingRange(*clipping)
-    return window, renderer, volume, mapper
+def make_scene(svdag, **options):
+    return mapper_scene(svdag, **{"size": (W, H), **options})
 
 
 def compare_picks(mapper, renderer, svdag_reference, step=5, to_world=None, position_tol=1e-3):
