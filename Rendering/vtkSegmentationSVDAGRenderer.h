@@ -51,9 +51,9 @@
  *
  * Path tracing: a constant or equirectangular OpenEXR environment, an optional sun (a disk
  * light), next-event estimation with multiple importance sampling (or the plain estimator),
- * Russian roulette. A fixed Seed gives the same image. Known limitation: a ray starting inside a
- * solid has no exit point in the traversal, so refracted paths end at the surface (transmission
- * darkens instead of showing the inside).
+ * Russian roulette. A fixed Seed gives the same image. Known limitation: transmission is
+ * thin-walled (a transmitted ray continues straight through the label, Shading.h), and where a
+ * label continues into the next 16^3 cell the ray meets one more surface event at the cell face.
  *
  * The camera is set with SetCameraPosition/FocalPoint/ViewUp/ViewAngle, or framed around the
  * whole volume with ResetCamera(azimuth, elevation, zoom); a camera never set is framed on the

@@ -17,9 +17,9 @@
 // metallic 0, transmission 0, ior 1.5, specular 0.5, visible); an edit is a buffer upload.
 // Visibility 0 hides the label like setHiddenLabels: its blocks leave the BVH.
 //
-// Known limitation: Traversal.h reports a ray that starts inside a solid with t = tmin and no
-// entry face (no exit point), so a refracted path cannot cross an object: with a transmissive
-// material such paths end (they contribute nothing, never NaN).
+// Known limitation: transmission is thin-walled: a transmitted ray continues straight through
+// the solid it entered (the entry-only hit group skips the run it starts in, per block), so
+// where a label continues into the next 16^3 cell it meets one more surface event at the face.
 #pragma once
 
 #include "svdag_render/Camera.h"
