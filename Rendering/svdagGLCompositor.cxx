@@ -221,7 +221,6 @@ void Compositor::draw(vtkOpenGLRenderWindow* window, const Viewport& vp, const f
   in.Quad->Render();
   in.Depth->Deactivate();
   in.Color->Deactivate();
-  (void)colorWidth;
 }
 
 void Compositor::releaseGraphicsResources(vtkWindow* window)

@@ -45,6 +45,19 @@ def _error_collector(messages):
 
 
 @contextlib.contextmanager
+def _collected_errors(objects):
+    """Within the block, the cleaned messages of the ErrorEvents of ``objects`` (a sequence)."""
+    messages = []
+    on_error = _error_collector(messages)
+    tags = [(obj, obj.AddObserver(vtkCommand.ErrorEvent, on_error)) for obj in objects]
+    try:
+        yield messages
+    finally:
+        for obj, tag in tags:
+            obj.RemoveObserver(tag)
+
+
+@contextlib.contextmanager
 def vtk_errors_raised(objects, error=RuntimeError):
     """Within the block, ErrorEvents of ``objects`` are collected; on leaving, the first one
     is raised as ``error`` (VTK would only print it).
@@ -58,14 +71,8 @@ def vtk_errors_raised(objects, error=RuntimeError):
     """
     if not isinstance(objects, (list, tuple)):
         objects = [objects]
-    messages = []
-    on_error = _error_collector(messages)
-    tags = [(obj, obj.AddObserver(vtkCommand.ErrorEvent, on_error)) for obj in objects]
-    try:
+    with _collected_errors(objects) as messages:
         yield messages
-    finally:
-        for obj, tag in tags:
-            obj.RemoveObserver(tag)
     if messages:
         raise error(messages[0])
 
@@ -102,13 +109,11 @@ def run_algorithm(algorithm, *, action="Update", progress=None, error=ValueError
     """
     if progress is not None and not callable(progress):
         raise TypeError(f"progress must be a callable taking a fraction, not {progress!r}")
-    messages = []
-    on_error = _error_collector(messages)
     observed = [algorithm]
     executive = algorithm.GetExecutive() if hasattr(algorithm, "GetExecutive") else None
     if executive is not None:
         observed.append(executive)  # "returned failure for request" comes from the executive
-    tags = [(obj, obj.AddObserver(vtkCommand.ErrorEvent, on_error)) for obj in observed]
+    tags = []
     # An exception raised in an observer cannot travel through VTK's C++: VTK would print it and
     # carry on. The progress observer keeps it, asks the algorithm to stop, and it is raised
     # below once the call has returned.
@@ -131,7 +136,8 @@ def run_algorithm(algorithm, *, action="Update", progress=None, error=ValueError
             (algorithm, algorithm.AddObserver(vtkCommand.WarningEvent, _error_collector(warnings_seen)))
         )
     try:
-        getattr(algorithm, action)()
+        with _collected_errors(observed) as messages:
+            getattr(algorithm, action)()
     finally:
         for obj, tag in tags:
             obj.RemoveObserver(tag)

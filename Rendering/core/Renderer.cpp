@@ -496,16 +496,17 @@ const Image& Renderer::render()
   // direction's rounding would move them by more than a voxel (see advanceRays). Depths and ray
   // limits stay relative to the rays as given: the advance is added back, per pixel, in double.
   const ViewRays given = this->viewRays();
-  const auto volumeBounds = worldBounds(g.scene->volume().geometry);
-  std::array<double, 3> center;
+  const Volume& volume = g.scene->volume();
+  const auto bounds = worldBounds(volume.geometry);
+  // The scene's reference point is the center of these bounds (Scene.h).
+  const auto& reference = g.scene->worldReference();
   double radius = 0;
   for (int a = 0; a < 3; ++a)
   {
-    center[a] = (volumeBounds[2 * a] + volumeBounds[2 * a + 1]) / 2;
-    const double half = (volumeBounds[2 * a + 1] - volumeBounds[2 * a]) / 2;
+    const double half = (bounds[2 * a + 1] - bounds[2 * a]) / 2;
     radius += half * half;
   }
-  const double advance = approachParameter(given, center, std::sqrt(radius));
+  const double advance = approachParameter(given, reference, std::sqrt(radius));
   const ViewRays rays = advance > 0 ? advanceRays(given, advance) : given;
   // Per pixel center, how much closer the traced rays start (world units).
   auto advanced = [&](uint32_t x, uint32_t y) {
@@ -519,14 +520,12 @@ const Image& Renderer::render()
       " values for an image of " + std::to_string(pixels) + " pixels");
   g.resizeOutputs(pixels);
 
-  const Volume& volume = g.scene->volume();
   const FieldWidths& w = volume.widths;
   const auto cells = volume.geometry.cellCounts();
   const auto& s = volume.geometry.spacing;
   const PixelFootprint footprint = pixelFootprint(rays, this->Height);
   gpu::FrameUniforms u{};
   // Relative to the scene's reference point, in double before rounding to float (Scene.h).
-  const auto& reference = g.scene->worldReference();
   u.rayOrigin = vec({ { rays.origin[0] - reference[0], rays.origin[1] - reference[1],
     rays.origin[2] - reference[2] } });
   u.rayOrigin.w = rays.bounded ? 1.0f : 0.0f;
@@ -569,7 +568,6 @@ const Image& Renderer::render()
     sun.irradiance[0], sun.irradiance[1], sun.irradiance[2], features.sun ? 1.0f : 0.0f);
   // Ray epsilon: a thousandth of the smallest voxel side, but never below the float rounding of
   // positions (relative to the reference point: ray origin distance plus the volume's extent).
-  const auto bounds = worldBounds(volume.geometry);
   double extent = 0, originDistance = 0;
   for (int a = 0; a < 3; ++a)
   {
