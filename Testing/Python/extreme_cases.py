@@ -156,17 +156,23 @@ def axis_rays_error(array, volume, geometry, rays):
     return worst, f"{hits} of {len(rays)} rays hit; worst: {detail or 'exact'}"
 
 
+def image_renderer(volume, width, height, spp=1):
+    """The GPU image renderer of a SegmentationVolume at a size, `spp` samples per pass."""
+    renderer = vtkSegmentationSVDAGRenderer()
+    renderer.SetInputData(volume.dataobject)
+    renderer.SetWidth(width)
+    renderer.SetHeight(height)
+    renderer.GetSettings().SetSamplesPerPixel(spp)
+    return renderer
+
+
 def gpu_vs_cpu(volume, camera, width=32, height=24):
     """Label (index + 1) and Depth of the image renderer against the CPU caster on the same
     pixel-center rays (conftest.primary_rays); `camera(renderer)` sets the camera. Returns
     (fraction of pixels with another label, largest relative depth error where both hit,
     number of hits, detail)."""
-    renderer = vtkSegmentationSVDAGRenderer()
-    renderer.SetInputData(volume.dataobject)
-    renderer.SetWidth(width)
-    renderer.SetHeight(height)
+    renderer = image_renderer(volume, width, height)
     renderer.GetSettings().SetLOD(vtkSegmentationSVDAGRenderSettings.LOD_VOXEL)
-    renderer.GetSettings().SetSamplesPerPixel(1)
     camera(renderer)
     if renderer.Render() != 1:
         return INF, INF, 0, "the renderer reported an error"
@@ -630,11 +636,7 @@ def gpu_camera_inside_solid():
     array[4:28, 4:28, 4:28] = 9
     array[10:12, 10:30, 10:12] = 4
     volume = vtksvdag.from_numpy(array, **UNIT.kwargs())
-    renderer = vtkSegmentationSVDAGRenderer()
-    renderer.SetInputData(volume.dataobject)
-    renderer.SetWidth(24)
-    renderer.SetHeight(16)
-    renderer.GetSettings().SetSamplesPerPixel(1)
+    renderer = image_renderer(volume, 24, 16)
     renderer.SetCameraPosition(20.3, 20.7, 20.1)
     renderer.SetCameraFocalPoint(0, 0, 0)
     renderer.SetCameraViewUp(0, 0, 1)
@@ -743,14 +745,10 @@ def shading_volume():
 
 
 def shading_renderer(spp=64, bounces=64, environment=1.0, white=True):
-    renderer = vtkSegmentationSVDAGRenderer()
-    renderer.SetInputData(shading_volume().dataobject)
-    renderer.SetWidth(SHADE_W)
-    renderer.SetHeight(SHADE_H)
+    renderer = image_renderer(shading_volume(), SHADE_W, SHADE_H, spp)
     renderer.ResetCamera(30, 25, 1.3)
     settings = renderer.GetSettings()
     settings.SetSeed(1234)
-    settings.SetSamplesPerPixel(spp)
     settings.SetMaximumBounces(bounces)
     settings.SetEnvironmentColor(environment, environment, environment)
     settings.SetBackground(environment, environment, environment, 1)
@@ -984,12 +982,8 @@ def several_blas():
     volume = vtksvdag.from_numpy(array)
     images = []
     for limit in (0, 7):
-        renderer = vtkSegmentationSVDAGRenderer()
-        renderer.SetInputData(volume.dataobject)
-        renderer.SetWidth(48)
-        renderer.SetHeight(32)
+        renderer = image_renderer(volume, 48, 32)
         renderer.GetSettings().SetMaximumBlocksPerBLAS(limit)
-        renderer.GetSettings().SetSamplesPerPixel(1)
         renderer.ResetCamera(25, 30, 1.2)
         ok = renderer.Render()
         data = renderer.GetOutput().GetPointData()
@@ -1074,11 +1068,7 @@ def dag_over_128_mib():
     del array
     stats = volume.stats()
     dag_bytes = stats.get("bytes_dag", 0) if isinstance(stats, dict) else 0
-    renderer = vtkSegmentationSVDAGRenderer()
-    renderer.SetInputData(volume.dataobject)
-    renderer.SetWidth(48)
-    renderer.SetHeight(48)
-    renderer.GetSettings().SetSamplesPerPixel(1)
+    renderer = image_renderer(volume, 48, 48)
     renderer.ResetCamera(30, 20, 1.5)
     ok = renderer.Render()
     data = renderer.GetOutput().GetPointData()
