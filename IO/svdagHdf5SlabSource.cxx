@@ -152,7 +152,11 @@ svdagHdf5SlabSource::svdagHdf5SlabSource(const std::string& fileName, const std:
   if (impl->datasetName.empty())
   {
     VisitState state{ impl->file.get(), {} };
-    if (H5Ovisit(impl->file.get(), H5_INDEX_NAME, H5_ITER_NATIVE, collectVolumes, &state) < 0)
+    // Only the object type is needed: the full info (H5O_INFO_ALL, what plain H5Ovisit asks
+    // for) also walks each group's B-tree for its size, and HDF5 1.10 reads out of bounds there
+    // on a corrupt B-tree address (found by the fuzzer).
+    if (H5Ovisit2(impl->file.get(), H5_INDEX_NAME, H5_ITER_NATIVE, collectVolumes, &state,
+          H5O_INFO_BASIC) < 0)
       throw svdagReadError(vtkErrorCode::FileFormatError,
         fileName + ": cannot list the HDF5 datasets (corrupt file?)");
     if (state.found.size() != 1)

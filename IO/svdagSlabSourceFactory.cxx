@@ -1,6 +1,7 @@
 #include "svdagSlabSourceFactory.h"
 
 #include "svdagHdf5SlabSource.h"
+#include "svdagIsolatedSlabSource.h"
 #include "svdagMetaImageSlabSource.h"
 #include "svdagNiftiSlabSource.h"
 #include "svdagNrrdSlabSource.h"
@@ -34,7 +35,12 @@ std::unique_ptr<svdagSlabSource> openPlain(const std::string& fileName, const sv
 std::unique_ptr<svdagSlabSource> openHdf5(
   const std::string& fileName, const svdagSlabSourceOptions& options)
 {
-  return std::unique_ptr<svdagSlabSource>(new svdagHdf5SlabSource(fileName, options.datasetName));
+  // In a child process: HDF5 1.10 is not hardened against corrupt metadata (the fuzzer crashes
+  // it in its metadata cache), and a crash must be an error for the file.
+  const std::string datasetName = options.datasetName;
+  return std::unique_ptr<svdagSlabSource>(new svdagIsolatedSlabSource(fileName, "HDF5", [=] {
+    return std::unique_ptr<svdagSlabSource>(new svdagHdf5SlabSource(fileName, datasetName));
+  }));
 }
 
 const Format Formats[] = {

@@ -7,6 +7,8 @@ specification. Each damaged file must raise OSError or ValueError from vtksvdag.
 message that names the problem.
 """
 import gzip
+import os
+import pathlib
 import struct
 import zlib
 
@@ -349,6 +351,39 @@ def test_hdf5_truncated(tmp_path, labels):
     assert_round_trip(path, labels)
     cut(path, 100)
     assert_refused(path, "t.h5")
+
+
+HDF5_CRASHES = sorted((pathlib.Path(__file__).parents[1] / "fuzz" / "crashes").glob("h5--*segfault*"))
+
+
+@pytest.mark.parametrize("path", HDF5_CRASHES, ids=lambda p: p.name)
+def test_hdf5_library_crash_is_an_error(path):
+    # These files crash HDF5 1.10 itself (a read out of bounds in its metadata cache); the
+    # reader runs HDF5 in a child process, so the crash is an error for the file.
+    assert_refused(path, "the HDF5 library crashed")
+    assert not child_processes(), "the HDF5 reader process was not reaped"
+
+
+def test_hdf5_reader_leaves_no_process(tmp_path, labels):
+    path = tmp_path / "t.h5"
+    with h5py.File(path, "w") as f:
+        f["labels"] = zyx(labels)
+    for _ in range(3):
+        assert_round_trip(path, labels)
+    assert not child_processes()
+
+
+def child_processes():
+    """PIDs of this process's children (from /proc: Linux)."""
+    children = []
+    for entry in pathlib.Path("/proc").iterdir():
+        try:
+            fields = (entry / "stat").read_text().rsplit(")", 1)[1].split()
+        except (OSError, IndexError):
+            continue
+        if int(fields[1]) == os.getpid():
+            children.append(int(entry.name))
+    return children
 
 
 # ------------------------------------------------------------------------------ header fields

@@ -1,0 +1,285 @@
+#include "svdagIsolatedSlabSource.h"
+
+#include "vtkErrorCode.h"
+
+#include <cerrno>
+#include <csignal>
+#include <cstring>
+#include <new>
+#include <type_traits>
+#include <vector>
+
+#ifndef _WIN32
+#include <poll.h>
+#include <sys/socket.h>
+#include <sys/types.h>
+#include <sys/wait.h>
+#include <unistd.h>
+#define SVDAG_ISOLATE 1
+#endif
+
+static_assert(std::is_trivially_copyable<svdag::Geometry>::value, "Geometry crosses a socket");
+
+namespace
+{
+// Every message from the child starts with a status byte. An error carries its vtkErrorCode
+// and message, so the parent throws what an in-process source would have thrown.
+enum Status : unsigned char
+{
+  Ok = 1,
+  Error = 2
+};
+
+struct Request
+{
+  int32_t z0;
+  int32_t nz;
+};
+
+#ifdef SVDAG_ISOLATE
+// False when the peer closed its end or the socket failed. MSG_NOSIGNAL: a dead peer must
+// not kill this process with SIGPIPE.
+bool sendAll(int fd, const void* data, size_t size)
+{
+  const char* p = static_cast<const char*>(data);
+  while (size > 0)
+  {
+    const ssize_t n = ::send(fd, p, size, MSG_NOSIGNAL);
+    if (n < 0 && errno == EINTR)
+      continue;
+    if (n <= 0)
+      return false;
+    p += n;
+    size -= size_t(n);
+  }
+  return true;
+}
+
+// Reads exactly `size` bytes. Returns false on end of stream; throws TimeoutError-style
+// svdagReadError when nothing arrives for `timeoutSeconds` (a negative timeout waits forever).
+bool receiveAll(int fd, void* data, size_t size, int timeoutSeconds)
+{
+  char* p = static_cast<char*>(data);
+  while (size > 0)
+  {
+    if (timeoutSeconds >= 0)
+    {
+      pollfd pfd{ fd, POLLIN, 0 };
+      const int ready = ::poll(&pfd, 1, timeoutSeconds * 1000);
+      if (ready < 0 && errno == EINTR)
+        continue;
+      if (ready == 0)
+        throw std::runtime_error("timeout");
+    }
+    const ssize_t n = ::recv(fd, p, size, 0);
+    if (n < 0 && errno == EINTR)
+      continue;
+    if (n <= 0)
+      return false;
+    p += n;
+    size -= size_t(n);
+  }
+  return true;
+}
+
+void sendError(int fd, unsigned long code, const std::string& message)
+{
+  const unsigned char status = Error;
+  const uint64_t code64 = code;
+  const uint64_t length = message.size();
+  sendAll(fd, &status, 1) && sendAll(fd, &code64, sizeof code64) &&
+    sendAll(fd, &length, sizeof length) && sendAll(fd, message.data(), message.size());
+}
+
+// Runs `body`, reporting what it throws over `fd`. False if it threw.
+template <typename Body>
+bool reportingErrors(int fd, Body&& body)
+{
+  try
+  {
+    body();
+    return true;
+  }
+  catch (const svdagReadError& e)
+  {
+    sendError(fd, e.code(), e.what());
+  }
+  catch (const std::bad_alloc&)
+  {
+    sendError(fd, vtkErrorCode::OutOfDiskSpaceError, "out of memory");
+  }
+  catch (const std::exception& e)
+  {
+    sendError(fd, vtkErrorCode::UnknownError, e.what());
+  }
+  return false;
+}
+
+[[noreturn]] void serve(int fd, const svdagIsolatedSlabSource::Opener& open)
+{
+  // A crash must end the child quietly: handlers inherited from the parent (Python's
+  // faulthandler, a fuzzer's crash reporter) would report it as the parent's.
+  for (int s : { SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT })
+    std::signal(s, SIG_DFL);
+  std::unique_ptr<svdagSlabSource> source;
+  if (!reportingErrors(fd, [&] { source = open(); }))
+    _exit(0);
+  const unsigned char ok = Ok;
+  const svdag::Geometry geometry = source->geometry();
+  const svdag::ScalarType type = source->scalarType();
+  if (!sendAll(fd, &ok, 1) || !sendAll(fd, &geometry, sizeof geometry) ||
+    !sendAll(fd, &type, sizeof type))
+    _exit(0);
+  std::vector<char> slab;
+  Request request{};
+  while (receiveAll(fd, &request, sizeof request, -1))
+  {
+    const bool read = reportingErrors(fd, [&] {
+      slab.resize(size_t(request.nz) * size_t(geometry.dims[0]) * size_t(geometry.dims[1]) *
+        size_t(svdag::scalarSize(type)));
+      source->readSlab(request.z0, request.nz, slab.data());
+    });
+    if (read && !(sendAll(fd, &ok, 1) && sendAll(fd, slab.data(), slab.size())))
+      break;
+  }
+  _exit(0);
+}
+#endif
+}
+
+struct svdagIsolatedSlabSource::Impl
+{
+  std::string fileName;
+  std::string library; // "the HDF5 library", for messages
+#ifdef SVDAG_ISOLATE
+  int fd = -1;
+  pid_t child = -1;
+
+  // How the child ended, for the error message; reaps it.
+  std::string childFate()
+  {
+    int status = 0;
+    if (this->child > 0 && ::waitpid(this->child, &status, 0) == this->child)
+    {
+      this->child = -1;
+      if (WIFSIGNALED(status))
+        return "crashed (signal " + std::to_string(WTERMSIG(status)) + ", " +
+          strsignal(WTERMSIG(status)) + ")";
+      return "exited early (status " + std::to_string(WEXITSTATUS(status)) + ")";
+    }
+    return "stopped";
+  }
+
+  // Reads the child's status byte and, on an error, throws what the child threw.
+  void receiveStatus(const std::string& what)
+  {
+    unsigned char status = 0;
+    this->receive(&status, 1, what);
+    if (status == Ok)
+      return;
+    uint64_t code = 0, length = 0;
+    this->receive(&code, sizeof code, what);
+    this->receive(&length, sizeof length, what);
+    std::string message(size_t(length < (1u << 20) ? length : 0), '\0');
+    this->receive(&message[0], message.size(), what);
+    throw svdagReadError(code, message);
+  }
+
+  void receive(void* data, size_t size, const std::string& what)
+  {
+    bool complete = false;
+    try
+    {
+      complete = receiveAll(this->fd, data, size, SilenceTimeoutSeconds);
+    }
+    catch (const std::runtime_error&)
+    {
+      ::kill(this->child, SIGKILL);
+      this->childFate();
+      throw svdagReadError(vtkErrorCode::FileFormatError,
+        this->fileName + ": the reader sent nothing for " + std::to_string(SilenceTimeoutSeconds) +
+          " s while " + what + " (a corrupt file that makes " + this->library + " loop?)");
+    }
+    if (!complete)
+      throw svdagReadError(vtkErrorCode::FileFormatError,
+        this->fileName + ": " + this->library + " " + this->childFate() + " while " + what +
+          " (corrupt file?)");
+  }
+
+  ~Impl()
+  {
+    // The child holds nothing worth finishing (it may be in the middle of a slab nobody will
+    // read); ending it at once keeps a destructor from waiting for a long read.
+    if (this->fd >= 0)
+      ::close(this->fd);
+    if (this->child > 0)
+    {
+      ::kill(this->child, SIGKILL);
+      ::waitpid(this->child, nullptr, 0);
+    }
+  }
+#else
+  std::unique_ptr<svdagSlabSource> source;
+#endif
+};
+
+svdagIsolatedSlabSource::svdagIsolatedSlabSource(
+  const std::string& fileName, const char* formatName, Opener open)
+  : impl(new Impl)
+  , FormatName(formatName)
+{
+  impl->fileName = fileName;
+  impl->library = std::string("the ") + formatName + " library";
+#ifdef SVDAG_ISOLATE
+  int fds[2] = { -1, -1 };
+  if (::socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, fds) != 0)
+    throw svdagReadError(vtkErrorCode::CannotOpenFileError,
+      fileName + ": cannot create a socket for the reader process: " + std::strerror(errno));
+  const pid_t child = ::fork();
+  if (child < 0)
+  {
+    ::close(fds[0]);
+    ::close(fds[1]);
+    throw svdagReadError(vtkErrorCode::CannotOpenFileError,
+      fileName + ": cannot start the reader process: " + std::strerror(errno));
+  }
+  if (child == 0)
+  {
+    ::close(fds[0]);
+    serve(fds[1], open);
+  }
+  ::close(fds[1]);
+  impl->fd = fds[0];
+  impl->child = child;
+  impl->receiveStatus("opening it");
+  impl->receive(&this->Geometry, sizeof this->Geometry, "opening it");
+  impl->receive(&this->Type, sizeof this->Type, "opening it");
+#else
+  impl->source = open();
+  this->Geometry = impl->source->geometry();
+  this->Type = impl->source->scalarType();
+#endif
+}
+
+svdagIsolatedSlabSource::~svdagIsolatedSlabSource() = default;
+
+void svdagIsolatedSlabSource::readSlab(int32_t z0, int32_t nz, void* dst)
+{
+  this->checkSlab(z0, nz);
+#ifdef SVDAG_ISOLATE
+  const std::string what =
+    "reading z-slices " + std::to_string(z0) + ".." + std::to_string(z0 + nz - 1);
+  const Request request{ z0, nz };
+  if (!sendAll(impl->fd, &request, sizeof request))
+    throw svdagReadError(vtkErrorCode::FileFormatError,
+      impl->fileName + ": " + impl->library + " " + impl->childFate() + " before " + what +
+        " (corrupt file?)");
+  impl->receiveStatus(what);
+  impl->receive(dst,
+    size_t(nz) * size_t(this->Geometry.dims[0]) * size_t(this->Geometry.dims[1]) *
+      size_t(svdag::scalarSize(this->Type)),
+    what);
+#else
+  impl->source->readSlab(z0, nz, dst);
+#endif
+}
