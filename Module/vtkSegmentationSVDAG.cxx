@@ -1,6 +1,9 @@
 #include "vtkSegmentationSVDAG.h"
 
 #include "vtkDataArray.h"
+#include "vtkDoubleArray.h"
+#include "vtkIdTypeArray.h"
+#include "vtkUnsignedCharArray.h"
 #include "vtkImageData.h"
 #include "vtkInformation.h"
 #include "vtkInformationVector.h"
@@ -11,6 +14,8 @@
 #include "vtkType.h"
 
 #include "svdag/Decoder.h"
+#include "svdag/LabelStatistics.h"
+#include "svdag/RandomAccess.h"
 #include "svdag/Volume.h"
 
 #include <new>
@@ -315,6 +320,176 @@ bool vtkSegmentationSVDAG::DecodeTo(vtkImageData* image, std::string& error) con
   image->SetDirectionMatrix(g.direction.data());
   image->GetPointData()->SetScalars(labels);
   labels->Delete();
+  return true;
+}
+
+namespace
+{
+// An image holding `box` of the volume's geometry, with `scalars` (a new array, handed over).
+void SetBoxImage(vtkImageData* image, const svdag::Geometry& g, const svdag::Box& box,
+  vtkDataArray* scalars)
+{
+  image->Initialize();
+  image->SetExtent(box[0], box[1], box[2], box[3], box[4], box[5]);
+  image->SetSpacing(g.spacing[0], g.spacing[1], g.spacing[2]);
+  image->SetOrigin(g.origin[0], g.origin[1], g.origin[2]);
+  image->SetDirectionMatrix(g.direction.data());
+  image->GetPointData()->SetScalars(scalars);
+  scalars->Delete();
+}
+
+// A new array of `n` values of `type` (a vtkDataArray type id), or a std::length_error.
+vtkDataArray* NewOutputArray(int vtkType, uint64_t n, uint64_t valueBytes, const char* name)
+{
+  svdag::checkOutputMemory(n * valueBytes, std::string("the ") + name + " array of " +
+      std::to_string(n) + " values");
+  vtkDataArray* a = nullptr;
+  try
+  {
+    a = vtkDataArray::CreateDataArray(vtkType);
+    a->SetNumberOfTuples(static_cast<vtkIdType>(n));
+  }
+  catch (const std::bad_alloc&)
+  {
+    if (a)
+      a->Delete();
+    throw std::length_error(std::string("cannot allocate the ") + name + " array of " +
+      std::to_string(n) + " values");
+  }
+  if (a->GetNumberOfTuples() != static_cast<vtkIdType>(n))
+  {
+    a->Delete();
+    throw std::length_error(std::string("cannot allocate the ") + name + " array of " +
+      std::to_string(n) + " values");
+  }
+  a->SetName(name);
+  return a;
+}
+} // namespace
+
+bool vtkSegmentationSVDAG::DecodeExtentTo(const int extent[6], vtkImageData* image) const
+{
+  std::string error;
+  if (this->DecodeExtentTo(extent, image, error))
+    return true;
+  vtkErrorMacro("DecodeExtentTo: " << error);
+  return false;
+}
+
+bool vtkSegmentationSVDAG::DecodeExtentTo(
+  const int extent[6], vtkImageData* image, std::string& error) const
+{
+  if (!this->Volume || !image || !extent)
+  {
+    error = !this->Volume ? "no compressed volume" : !image ? "no output image" : "no extent";
+    return false;
+  }
+  const svdag::Volume& v = *this->Volume;
+  const svdag::Box box{ { extent[0], extent[1], extent[2], extent[3], extent[4], extent[5] } };
+  try
+  {
+    svdag::checkBox(v, box, "DecodeExtentTo");
+    vtkDataArray* labels = NewOutputArray(VTKTypes[int(v.scalarType)], svdag::boxVoxels(box),
+      uint64_t(svdag::scalarSize(v.scalarType)), "Labels");
+    try
+    {
+      svdag::decodeBox(v, box, labels->GetVoidPointer(0), vtkSVDAGParallelFor());
+    }
+    catch (...)
+    {
+      labels->Delete();
+      throw;
+    }
+    SetBoxImage(image, v.geometry, box, labels);
+  }
+  catch (const std::exception& e)
+  {
+    error = e.what();
+    return false;
+  }
+  return true;
+}
+
+bool vtkSegmentationSVDAG::DecodeLabelMaskTo(
+  vtkIdType labelIndex, const int extent[6], vtkImageData* image) const
+{
+  std::string error;
+  if (this->DecodeLabelMaskTo(labelIndex, extent, image, error))
+    return true;
+  vtkErrorMacro("DecodeLabelMaskTo: " << error);
+  return false;
+}
+
+bool vtkSegmentationSVDAG::DecodeLabelMaskTo(
+  vtkIdType labelIndex, const int extent[6], vtkImageData* image, std::string& error) const
+{
+  if (!this->Volume || !image || !extent)
+  {
+    error = !this->Volume ? "no compressed volume" : !image ? "no output image" : "no extent";
+    return false;
+  }
+  const svdag::Volume& v = *this->Volume;
+  if (labelIndex < 0 || labelIndex >= static_cast<vtkIdType>(v.labels.size()))
+  {
+    error = "label index " + std::to_string(labelIndex) + " is not in the label table of " +
+      std::to_string(v.labels.size()) + " labels";
+    return false;
+  }
+  const svdag::Box box{ { extent[0], extent[1], extent[2], extent[3], extent[4], extent[5] } };
+  try
+  {
+    svdag::checkBox(v, box, "DecodeLabelMaskTo");
+    vtkDataArray* mask = NewOutputArray(VTK_UNSIGNED_CHAR, svdag::boxVoxels(box), 1, "Mask");
+    svdag::decodeMask(v, uint32_t(labelIndex), box,
+      static_cast<uint8_t*>(mask->GetVoidPointer(0)), vtkSVDAGParallelFor());
+    SetBoxImage(image, v.geometry, box, mask);
+  }
+  catch (const std::exception& e)
+  {
+    error = e.what();
+    return false;
+  }
+  return true;
+}
+
+bool vtkSegmentationSVDAG::ComputeLabelStatistics(
+  vtkDoubleArray* centroids, vtkIdTypeArray* surfaceVoxels) const
+{
+  if (!this->Volume)
+  {
+    vtkErrorMacro("ComputeLabelStatistics: no compressed volume");
+    return false;
+  }
+  std::vector<svdag::LabelStatistics> stats;
+  try
+  {
+    stats = svdag::labelStatistics(*this->Volume, vtkSVDAGParallelFor());
+  }
+  catch (const std::exception& e)
+  {
+    vtkErrorMacro("ComputeLabelStatistics: " << e.what());
+    return false;
+  }
+  const vtkIdType n = static_cast<vtkIdType>(stats.size());
+  if (centroids)
+  {
+    centroids->SetNumberOfComponents(3);
+    centroids->SetNumberOfTuples(n);
+    centroids->SetName("Centroids");
+    for (vtkIdType i = 0; i < n; ++i)
+    {
+      const auto c = stats[size_t(i)].centroid();
+      centroids->SetTypedTuple(i, c.data());
+    }
+  }
+  if (surfaceVoxels)
+  {
+    surfaceVoxels->SetNumberOfComponents(1);
+    surfaceVoxels->SetNumberOfTuples(n);
+    surfaceVoxels->SetName("SurfaceVoxels");
+    for (vtkIdType i = 0; i < n; ++i)
+      surfaceVoxels->SetValue(i, static_cast<vtkIdType>(stats[size_t(i)].surfaceVoxels));
+  }
   return true;
 }
 

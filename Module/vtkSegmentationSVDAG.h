@@ -21,6 +21,8 @@
 #include <string> // for std::string
 
 class vtkDataArray;
+class vtkDoubleArray;
+class vtkIdTypeArray;
 class vtkImageData;
 class vtkInformation;
 class vtkInformationVector;
@@ -92,6 +94,36 @@ public:
 #ifndef __VTK_WRAP__
   /** The same, handing the reason of a failure to the caller (no error event on this object). */
   bool DecodeTo(vtkImageData* image, std::string& error) const;
+#endif
+
+  ///@{
+  /**
+   * Random access from the compressed form (svdag/RandomAccess.h): only the 16^3 cells that
+   * meet the extent are decoded. `extent` is an inclusive VTK extent (xmin, xmax, ymin, ymax,
+   * zmin, zmax) of voxel indices inside the volume. The image gets that extent, the volume's
+   * spacing, origin and direction, and point scalars "Labels" of the original type.
+   */
+  bool DecodeExtentTo(const int extent[6], vtkImageData* image) const;
+  /**
+   * Unsigned char point scalars "Mask" over `extent`: 1 where the voxel holds the label of table
+   * index `labelIndex` (see GetLabelIndexAt / NewLabelValues), else 0. Only that label's blocks
+   * are decoded.
+   */
+  bool DecodeLabelMaskTo(vtkIdType labelIndex, const int extent[6], vtkImageData* image) const;
+  /**
+   * Per-label statistics without a dense decode (svdag/LabelStatistics.h), in table order:
+   * `centroids` gets 3 components per label, the mean voxel index (i, j, k); `surfaceVoxels`
+   * the number of the label's voxels with at least one of their 6 face neighbours of another
+   * label (background included) or outside the volume. Either array may be null.
+   */
+  bool ComputeLabelStatistics(vtkDoubleArray* centroids, vtkIdTypeArray* surfaceVoxels) const;
+  ///@}
+
+#ifndef __VTK_WRAP__
+  /** The same, handing the reason of a failure to the caller (no error event on this object). */
+  bool DecodeExtentTo(const int extent[6], vtkImageData* image, std::string& error) const;
+  bool DecodeLabelMaskTo(
+    vtkIdType labelIndex, const int extent[6], vtkImageData* image, std::string& error) const;
 #endif
 
 #ifndef __VTK_WRAP__

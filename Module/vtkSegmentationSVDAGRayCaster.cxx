@@ -9,8 +9,11 @@
 #include "svdag/RayCaster.h"
 #include "svdag/Volume.h"
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <stdexcept>
+#include <vector>
 
 vtkStandardNewMacro(vtkSegmentationSVDAGRayCaster);
 
@@ -43,11 +46,68 @@ void vtkSegmentationSVDAGRayCaster::ClearHit()
   this->HitLabelValue = nullptr;
   this->HitDistance = 0.0;
   this->HitBlockIndex = -1;
+  this->HitClippingPlane = -1;
   for (int a = 0; a < 3; ++a)
   {
     this->HitPosition[a] = 0.0;
     this->HitNormal[a] = 0.0;
+    this->HitShadingNormal[a] = 0.0;
     this->HitVoxel[a] = 0;
+  }
+}
+
+int vtkSegmentationSVDAGRayCaster::AddClippingPlane(const double origin[3], const double normal[3])
+{
+  if (this->ClippingPlanes.size() >= 6)
+  {
+    vtkErrorMacro("AddClippingPlane: at most 6 clipping planes are supported");
+    return 0;
+  }
+  const double length = vtkMath::Norm(normal);
+  if (!std::isfinite(length) || !(length > 0.0) || !std::isfinite(vtkMath::Norm(origin)))
+  {
+    vtkErrorMacro("AddClippingPlane: the origin must be finite and the normal finite and non-zero");
+    return 0;
+  }
+  this->ClippingPlanes.push_back({ { origin[0], origin[1], origin[2], normal[0] / length,
+    normal[1] / length, normal[2] / length } });
+  this->Modified();
+  return 1;
+}
+
+void vtkSegmentationSVDAGRayCaster::RemoveAllClippingPlanes()
+{
+  if (!this->ClippingPlanes.empty())
+  {
+    this->ClippingPlanes.clear();
+    this->Modified();
+  }
+}
+
+int vtkSegmentationSVDAGRayCaster::GetNumberOfClippingPlanes()
+{
+  return int(this->ClippingPlanes.size());
+}
+
+void vtkSegmentationSVDAGRayCaster::SetCroppingRegionPlanes(
+  double xmin, double xmax, double ymin, double ymax, double zmin, double zmax)
+{
+  const double b[6] = { xmin, xmax, ymin, ymax, zmin, zmax };
+  for (int a = 0; a < 3; ++a)
+  {
+    if (!std::isfinite(b[2 * a]) || !std::isfinite(b[2 * a + 1]) || !(b[2 * a] <= b[2 * a + 1]))
+    {
+      vtkErrorMacro("SetCroppingRegionPlanes: the box must be finite with min <= max on every "
+                    "axis, got ("
+        << xmin << ", " << xmax << ", " << ymin << ", " << ymax << ", " << zmin << ", " << zmax
+        << ")");
+      return;
+    }
+  }
+  if (!std::equal(b, b + 6, this->CroppingRegionPlanes))
+  {
+    std::copy(b, b + 6, this->CroppingRegionPlanes);
+    this->Modified();
   }
 }
 
@@ -96,10 +156,47 @@ int vtkSegmentationSVDAGRayCaster::CastRay(const double origin[3], const double 
   ray.tmin = 0.0;
   ray.tmax = this->MaximumDistance;
 
+  // Clipping planes and crop faces (world origin o, unit normal n) as index-space planes whose
+  // function dot(n, world(p) - o) is a world distance, with world(p) = O + M (p - 0.5); moved
+  // into the kept side by the margin the GPU renderer uses at least (Clipping.h: a quarter of a
+  // thousandth of the smallest voxel side).
+  std::vector<std::array<double, 6>> worldPlanes = this->ClippingPlanes;
+  if (this->Cropping)
+  {
+    for (int a = 0; a < 3; ++a)
+    {
+      std::array<double, 6> lo{ { 0, 0, 0, 0, 0, 0 } }, hi = lo;
+      lo[size_t(a)] = this->CroppingRegionPlanes[2 * a];
+      lo[size_t(3 + a)] = 1.0;
+      hi[size_t(a)] = this->CroppingRegionPlanes[2 * a + 1];
+      hi[size_t(3 + a)] = -1.0;
+      worldPlanes.push_back(lo);
+      worldPlanes.push_back(hi);
+    }
+  }
+  const double margin = 2.5e-4 * std::min({ g.spacing[0], g.spacing[1], g.spacing[2] });
+  std::vector<std::array<double, 4>> clipPlanes;
+  for (const auto& wp : worldPlanes)
+  {
+    std::array<double, 4> plane{ { 0, 0, 0, -margin } };
+    for (int r = 0; r < 3; ++r)
+    {
+      plane[3] += wp[size_t(3 + r)] * (g.origin[size_t(r)] - wp[size_t(r)]);
+      for (int c = 0; c < 3; ++c)
+        plane[size_t(c)] += wp[size_t(3 + r)] * m[3 * r + c];
+    }
+    plane[3] -= 0.5 * (plane[0] + plane[1] + plane[2]);
+    clipPlanes.push_back(plane);
+  }
+
   svdag::RayHit hit;
+  std::array<float, 3> shading{ { 0, 0, 0 } };
   try
   {
-    hit = svdag::RayCaster(volume).cast(ray, svdag::Lod(this->LOD));
+    svdag::RayCaster caster(volume);
+    caster.setClipPlanes(clipPlanes);
+    hit = caster.cast(ray, svdag::Lod(this->LOD));
+    shading = caster.smoothNormal(ray, hit, svdag::Lod(this->LOD));
   }
   catch (const std::exception& e)
   {
@@ -121,17 +218,33 @@ int vtkSegmentationSVDAGRayCaster::CastRay(const double origin[3], const double 
   this->HitLabelValue.TakeReference(value);
   // Normals transform with the inverse transpose of M.
   double normal[3] = { 0.0, 0.0, 0.0 };
+  double shadingNormal[3] = { 0.0, 0.0, 0.0 };
   for (int r = 0; r < 3; ++r)
   {
     this->HitPosition[r] = origin[r] + hit.t * unit[r];
     this->HitVoxel[r] = hit.voxel[size_t(r)];
     for (int c = 0; c < 3; ++c)
+    {
       normal[r] += inverse[3 * c + r] * hit.normal[size_t(c)];
+      shadingNormal[r] += inverse[3 * c + r] * double(shading[size_t(c)]);
+    }
+  }
+  if (hit.clipPlane >= 0)
+  {
+    // A cut face: the kept region's outward normal there, which faces the ray.
+    this->HitClippingPlane = hit.clipPlane;
+    for (int r = 0; r < 3; ++r)
+      normal[r] = -worldPlanes[size_t(hit.clipPlane)][size_t(3 + r)];
   }
   if (vtkMath::Norm(normal) > 0.0)
     vtkMath::Normalize(normal);
+  if (vtkMath::Norm(shadingNormal) > 0.0)
+    vtkMath::Normalize(shadingNormal);
   for (int r = 0; r < 3; ++r)
+  {
     this->HitNormal[r] = normal[r];
+    this->HitShadingNormal[r] = hit.clipPlane >= 0 ? normal[r] : shadingNormal[r];
+  }
   return 1;
 }
 
@@ -142,6 +255,8 @@ void vtkSegmentationSVDAGRayCaster::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "LOD: "
      << (this->LOD == LOD_BLOCK ? "block" : (this->LOD == LOD_LEAF ? "leaf" : "voxel")) << "\n";
   os << indent << "MaximumDistance: " << this->MaximumDistance << "\n";
+  os << indent << "ClippingPlanes: " << this->ClippingPlanes.size() << "\n";
+  os << indent << "Cropping: " << this->Cropping << "\n";
   os << indent << "Hit: " << this->Hit << "\n";
   if (this->Hit)
   {

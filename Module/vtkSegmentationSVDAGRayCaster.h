@@ -21,6 +21,9 @@
 #include "vtkSVDAGCoreModule.h" // for export macro
 #include "vtkSmartPointer.h"    // for vtkSmartPointer
 
+#include <array>  // for std::array
+#include <vector> // for std::vector
+
 class vtkDataArray;
 class vtkSegmentationSVDAG;
 
@@ -59,6 +62,39 @@ public:
   vtkGetMacro(MaximumDistance, double);
   ///@}
 
+  ///@{
+  /**
+   * Clipping planes in world coordinates, as the GPU renderer's (svdag/Clipping.h): each keeps
+   * the half-space its normal points to (VTK's convention), at most 6 (VTK's usual limit).
+   * AddClippingPlane returns 0 and reports an error for a 7th plane, a zero or non-finite normal
+   * or a non-finite origin. A ray that enters the kept region inside a labelled voxel (LOD_BLOCK:
+   * block box, LOD_LEAF: leaf box) hits the cut face: the distance where it enters, the label
+   * there, the normal -normal (unit, facing the ray); GetHitClippingPlane tells which plane.
+   */
+  int AddClippingPlane(const double origin[3], const double normal[3]);
+  void RemoveAllClippingPlanes();
+  int GetNumberOfClippingPlanes();
+  ///@}
+
+  ///@{
+  /**
+   * An axis-aligned crop box (world: xmin, xmax, ymin, ymax, zmin, zmax) applied when Cropping
+   * is on (default off): only what lies inside is hit, with cut faces like clipping planes.
+   * SetCroppingRegionPlanes reports an error for an inverted (min > max) or non-finite box and
+   * keeps the previous one.
+   */
+  vtkSetMacro(Cropping, bool);
+  vtkGetMacro(Cropping, bool);
+  vtkBooleanMacro(Cropping, bool);
+  void SetCroppingRegionPlanes(
+    double xmin, double xmax, double ymin, double ymax, double zmin, double zmax);
+  void SetCroppingRegionPlanes(const double planes[6])
+  {
+    this->SetCroppingRegionPlanes(planes[0], planes[1], planes[2], planes[3], planes[4], planes[5]);
+  }
+  vtkGetVector6Macro(CroppingRegionPlanes, double);
+  ///@}
+
   /**
    * Casts a ray from `origin` along `direction` (world coordinates; the direction need not be
    * unit length). Returns 1 on a hit, 0 on a miss or an error (no input, zero or non-finite
@@ -80,10 +116,18 @@ public:
   vtkGetVector3Macro(HitPosition, double);
   /** Unit world normal of the face entered (zero when the ray starts inside). */
   vtkGetVector3Macro(HitNormal, double);
+  /** Unit world smooth shading normal (svdag/SmoothNormal.h: the gradient of the hit label's
+   * smoothed occupancy around the hit point, facing the ray), what the renderer shades with when
+   * its Shading is smooth; the face normal at LOD_BLOCK and LOD_LEAF and where the gradient
+   * vanishes; zero when the ray starts inside. */
+  vtkGetVector3Macro(HitShadingNormal, double);
   /** Voxel index (i, j, k) where the ray enters the hit box; with LOD_VOXEL the voxel hit. */
   vtkGetVector3Macro(HitVoxel, int);
   /** Index of the block hit in the compressed volume, or -1. */
   vtkGetMacro(HitBlockIndex, vtkIdType);
+  /** Where the hit is a cut face: the clipping plane (0 .. 5, in the order added) or crop box
+   * face (6 + 2 axis + (0: min, 1: max) after the planes); -1 otherwise. */
+  vtkGetMacro(HitClippingPlane, int);
   ///@}
 
 protected:
@@ -102,8 +146,15 @@ protected:
   double HitDistance = 0.0;
   double HitPosition[3] = { 0.0, 0.0, 0.0 };
   double HitNormal[3] = { 0.0, 0.0, 0.0 };
+  double HitShadingNormal[3] = { 0.0, 0.0, 0.0 };
   int HitVoxel[3] = { 0, 0, 0 };
   vtkIdType HitBlockIndex = -1;
+  int HitClippingPlane = -1;
+
+  // Clipping planes (origin, unit normal; world) and the crop box.
+  std::vector<std::array<double, 6>> ClippingPlanes;
+  bool Cropping = false;
+  double CroppingRegionPlanes[6] = { 0.0, 0.0, 0.0, 0.0, 0.0, 0.0 };
 
 private:
   vtkSegmentationSVDAGRayCaster(const vtkSegmentationSVDAGRayCaster&) = delete;

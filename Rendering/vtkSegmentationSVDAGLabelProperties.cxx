@@ -2,6 +2,7 @@
 
 #include "vtkObjectFactory.h"
 #include "vtkScalarsToColors.h"
+#include "vtkSegmentationSVDAG.h"
 #include "vtkSmartPointer.h"
 
 #include <svdag/Volume.h>
@@ -12,6 +13,7 @@
 #include <cmath>
 #include <map>
 #include <optional>
+#include <set>
 
 vtkStandardNewMacro(vtkSegmentationSVDAGLabelProperties);
 
@@ -49,6 +51,7 @@ const svdag::render::Material& defaults()
 struct vtkSegmentationSVDAGLabelProperties::Internals
 {
   std::map<vtkTypeInt64, Appearance> Labels;
+  std::set<vtkTypeInt64> Highlighted;
   vtkSmartPointer<vtkScalarsToColors> Table;
   bool DefaultVisible = true;
 
@@ -88,6 +91,16 @@ bool vtkSegmentationSVDAGLabelProperties::GetColor(vtkTypeInt64 label, double rg
     return false;
   std::copy(a->color->begin(), a->color->end(), rgb);
   return true;
+}
+
+void vtkSegmentationSVDAGLabelProperties::RemoveColor(vtkTypeInt64 label)
+{
+  Appearance* a = this->Internal->find(label);
+  if (a && a->color)
+  {
+    a->color.reset();
+    this->Modified();
+  }
 }
 
 void vtkSegmentationSVDAGLabelProperties::SetOpacity(vtkTypeInt64 label, double opacity)
@@ -137,6 +150,66 @@ void vtkSegmentationSVDAGLabelProperties::SetEmission(
 {
   this->Internal->Labels[label].emission =
     std::array<double, 3>{ { clampTo(r, 0, 3e38), clampTo(g, 0, 3e38), clampTo(b, 0, 3e38) } };
+  this->Modified();
+}
+
+bool vtkSegmentationSVDAGLabelProperties::GetEmission(vtkTypeInt64 label, double rgb[3])
+{
+  const Appearance* a = this->Internal->find(label);
+  if (!a || !a->emission)
+    return false;
+  std::copy(a->emission->begin(), a->emission->end(), rgb);
+  return true;
+}
+
+void vtkSegmentationSVDAGLabelProperties::AddHighlightedLabel(vtkTypeInt64 label)
+{
+  if (this->Internal->Highlighted.insert(label).second)
+    this->Modified();
+}
+
+void vtkSegmentationSVDAGLabelProperties::RemoveHighlightedLabel(vtkTypeInt64 label)
+{
+  if (this->Internal->Highlighted.erase(label))
+    this->Modified();
+}
+
+void vtkSegmentationSVDAGLabelProperties::RemoveAllHighlightedLabels()
+{
+  if (!this->Internal->Highlighted.empty())
+  {
+    this->Internal->Highlighted.clear();
+    this->Modified();
+  }
+}
+
+bool vtkSegmentationSVDAGLabelProperties::IsHighlighted(vtkTypeInt64 label)
+{
+  return this->Internal->Highlighted.count(label) != 0;
+}
+
+vtkIdType vtkSegmentationSVDAGLabelProperties::GetNumberOfHighlightedLabels()
+{
+  return vtkIdType(this->Internal->Highlighted.size());
+}
+
+vtkTypeInt64 vtkSegmentationSVDAGLabelProperties::GetHighlightedLabel(vtkIdType i)
+{
+  if (i < 0 || i >= this->GetNumberOfHighlightedLabels())
+  {
+    vtkErrorMacro("GetHighlightedLabel: index " << i << " is outside 0 .. "
+                                                << this->GetNumberOfHighlightedLabels() - 1);
+    return 0;
+  }
+  return *std::next(this->Internal->Highlighted.begin(), i);
+}
+
+void vtkSegmentationSVDAGLabelProperties::SetHighlightColor(double r, double g, double b)
+{
+  const double rgb[3] = { clampTo(r, 0, 1), clampTo(g, 0, 1), clampTo(b, 0, 1) };
+  if (std::equal(rgb, rgb + 3, this->HighlightColor))
+    return;
+  std::copy(rgb, rgb + 3, this->HighlightColor);
   this->Modified();
 }
 
@@ -205,6 +278,10 @@ std::vector<svdag::shading::Material> vtkSegmentationSVDAGLabelProperties::Mater
   const bool signedLabels = svdag::scalarSigned(volume.scalarType);
   std::vector<svdag::render::Material> materials;
   materials.reserve(volume.labels.size());
+  const glm::vec3 tint = glm::vec3(linearFromSrgb(this->HighlightColor[0]),
+                           linearFromSrgb(this->HighlightColor[1]),
+                           linearFromSrgb(this->HighlightColor[2])) *
+    float(this->HighlightIntensity);
   for (size_t i = 0; i < volume.labels.size(); ++i)
   {
     svdag::render::Material m = svdag::render::Renderer::defaultMaterial(uint32_t(i));
@@ -225,7 +302,7 @@ std::vector<svdag::shading::Material> vtkSegmentationSVDAGLabelProperties::Mater
       m.baseColorVisibility = glm::vec4(
         linearFromSrgb(color[0]), linearFromSrgb(color[1]), linearFromSrgb(color[2]), 1.0f);
     const bool visible = a && a->visible ? *a->visible : in.DefaultVisible;
-    const double opacity = a ? a->opacity : 1.0;
+    double opacity = a ? a->opacity : 1.0;
     if (a)
     {
       m.params.x = float(a->roughness.value_or(m.params.x));
@@ -236,12 +313,24 @@ std::vector<svdag::shading::Material> vtkSegmentationSVDAGLabelProperties::Mater
       if (a->emission)
         m.emission = glm::vec4(float((*a->emission)[0]), float((*a->emission)[1]),
           float((*a->emission)[2]), 0.0f);
-      if (opacity < 1)
+    }
+    if (!in.Highlighted.empty())
+    {
+      if (in.Highlighted.count(label))
+        m.emission += glm::vec4(tint, 0.0f);
+      else
       {
-        m.params.z = float(1 - opacity * (1 - m.params.z));
-        if (!a->ior)
-          m.params.w = 1.0f;
+        // Dimming scales the linear albedo: reflected light scales by the same factor.
+        m.baseColorVisibility = glm::vec4(
+          glm::vec3(m.baseColorVisibility) * float(this->DimOthers), m.baseColorVisibility.a);
+        opacity *= this->OthersOpacity;
       }
+    }
+    if (opacity < 1)
+    {
+      m.params.z = float(1 - opacity * (1 - m.params.z));
+      if (!a || !a->ior)
+        m.params.w = 1.0f;
     }
     m.baseColorVisibility.a = visible && opacity > 0 ? 1.0f : 0.0f;
     materials.push_back(m);
@@ -249,11 +338,35 @@ std::vector<svdag::shading::Material> vtkSegmentationSVDAGLabelProperties::Mater
   return materials;
 }
 
+bool vtkSegmentationSVDAGLabelProperties::GetMaterial(
+  vtkSegmentationSVDAG* volume, vtkTypeInt64 label, double material[16])
+{
+  if (!volume || !volume->HasVolume())
+    return false;
+  const svdag::Volume& v = *volume->GetVolume();
+  const int64_t index = v.findLabel(uint64_t(label));
+  if (index < 0)
+    return false;
+  // The whole table: a label's default color depends on its index.
+  const svdag::render::Material m = this->MaterialsFor(v)[size_t(index)];
+  const glm::vec4* parts[4] = { &m.baseColorVisibility, &m.emission, &m.params, &m.extra };
+  for (int p = 0; p < 4; ++p)
+    for (int c = 0; c < 4; ++c)
+      material[4 * p + c] = double((*parts[p])[c]);
+  return true;
+}
+
 void vtkSegmentationSVDAGLabelProperties::PrintSelf(ostream& os, vtkIndent indent)
 {
   this->Superclass::PrintSelf(os, indent);
   os << indent << "LookupTable: " << this->Internal->Table.GetPointer() << "\n";
   os << indent << "DefaultVisibility: " << this->Internal->DefaultVisible << "\n";
+  os << indent << "HighlightedLabels: " << this->Internal->Highlighted.size() << "\n";
+  os << indent << "HighlightColor: " << this->HighlightColor[0] << " " << this->HighlightColor[1]
+     << " " << this->HighlightColor[2] << "\n";
+  os << indent << "HighlightIntensity: " << this->HighlightIntensity << "\n";
+  os << indent << "DimOthers: " << this->DimOthers << "\n";
+  os << indent << "OthersOpacity: " << this->OthersOpacity << "\n";
   os << indent << "Labels: " << this->Internal->Labels.size() << "\n";
   for (const auto& entry : this->Internal->Labels)
   {

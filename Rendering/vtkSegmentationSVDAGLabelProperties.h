@@ -23,6 +23,15 @@
  * Defaults (labels never set): opacity 1, visible, roughness 0.6, metallic 0, transmission 0,
  * IOR 1.5, specular 0.5, no emission (svdag::render::Renderer::defaultMaterial).
  *
+ * Selection highlight: highlighted labels (AddHighlightedLabel) add HighlightColor (display sRGB,
+ * converted to linear) times HighlightIntensity to their emission, an emissive tint that shows
+ * under any lighting. While at least one label is highlighted, every other label's base color is
+ * multiplied by DimOthers (1: unchanged, 0.3: 30 % of its albedo) and its opacity by
+ * OthersOpacity (below 1: see-through, as SetOpacity). A highlight change is a material upload
+ * that restarts the accumulation; it does not rebuild the acceleration structure (OthersOpacity 0
+ * would hide the others, which does). The first emissive or transmissive material in a scene
+ * recompiles the path tracer's pipeline once (its specialization constants), not the BVH.
+ *
  * A mapper re-uploads the materials (a buffer copy) when the MTime changes; only a change of
  * which labels are visible rebuilds its acceleration structure.
  */
@@ -36,6 +45,7 @@
 #include <vector> // for std::vector
 
 class vtkScalarsToColors;
+class vtkSegmentationSVDAG;
 #ifndef __VTK_WRAP__
 namespace svdag
 {
@@ -62,6 +72,8 @@ public:
   void SetColor(vtkTypeInt64 label, double r, double g, double b);
   /** Whether a color was set for the label; GetColor returns it (else false, rgb untouched). */
   bool GetColor(vtkTypeInt64 label, double rgb[3]);
+  /** Forgets the label's color only: the lookup table or the hash colors it again. */
+  void RemoveColor(vtkTypeInt64 label);
   void SetOpacity(vtkTypeInt64 label, double opacity);
   double GetOpacity(vtkTypeInt64 label);
   void SetVisibility(vtkTypeInt64 label, bool visible);
@@ -78,7 +90,46 @@ public:
   double GetSpecular(vtkTypeInt64 label);
   /** Emitted linear radiance (>= 0). */
   void SetEmission(vtkTypeInt64 label, double r, double g, double b);
+  /** Whether an emission was set for the label; GetEmission returns it (else false, rgb
+   * untouched). The highlight's tint is not included (GetMaterial has it). */
+  bool GetEmission(vtkTypeInt64 label, double rgb[3]);
   ///@}
+
+  ///@{
+  /** The selection highlight (see the class description). Highlighting a label the volume does
+   * not hold is allowed (it is ignored there, as every setting is). */
+  void AddHighlightedLabel(vtkTypeInt64 label);
+  void RemoveHighlightedLabel(vtkTypeInt64 label);
+  void RemoveAllHighlightedLabels();
+  bool IsHighlighted(vtkTypeInt64 label);
+  /** Highlighted labels, in ascending order. */
+  vtkIdType GetNumberOfHighlightedLabels();
+  vtkTypeInt64 GetHighlightedLabel(vtkIdType i);
+  /** The tint's color, display sRGB in [0, 1] (default 1, 0.8, 0.2: amber). */
+  void SetHighlightColor(double r, double g, double b);
+  void SetHighlightColor(const double rgb[3]) { this->SetHighlightColor(rgb[0], rgb[1], rgb[2]); }
+  vtkGetVector3Macro(HighlightColor, double);
+  /** The tint's radiance scale, >= 0 (default 1: about as bright as a white surface under the
+   * default unit environment). */
+  vtkSetClampMacro(HighlightIntensity, double, 0.0, 1e6);
+  vtkGetMacro(HighlightIntensity, double);
+  /** Base color factor of the labels not highlighted while a highlight is active, in [0, 1]
+   * (default 1: no dimming). */
+  vtkSetClampMacro(DimOthers, double, 0.0, 1.0);
+  vtkGetMacro(DimOthers, double);
+  /** Opacity factor of the labels not highlighted while a highlight is active, in [0, 1]
+   * (default 1; 0 hides them, which rebuilds the acceleration structure). */
+  vtkSetClampMacro(OthersOpacity, double, 0.0, 1.0);
+  vtkGetMacro(OthersOpacity, double);
+  ///@}
+
+  /**
+   * The material the renderer gets for `label` in `volume`, everything above applied (colors,
+   * table, highlight, opacity): 16 values, linear base color rgb, visibility (0 or 1), emission
+   * rgb, 0, roughness, metallic, transmission, IOR, specular, 0, 0, 0. Returns false (material
+   * untouched) when the volume does not hold the label.
+   */
+  bool GetMaterial(vtkSegmentationSVDAG* volume, vtkTypeInt64 label, double material[16]);
 
   ///@{
   /** Colors of labels without SetColor: the table's color at the label value. */
@@ -107,6 +158,11 @@ public:
 protected:
   vtkSegmentationSVDAGLabelProperties();
   ~vtkSegmentationSVDAGLabelProperties() override;
+
+  double HighlightColor[3] = { 1.0, 0.8, 0.2 };
+  double HighlightIntensity = 1.0;
+  double DimOthers = 1.0;
+  double OthersOpacity = 1.0;
 
 private:
   vtkSegmentationSVDAGLabelProperties(const vtkSegmentationSVDAGLabelProperties&) = delete;

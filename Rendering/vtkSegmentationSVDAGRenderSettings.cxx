@@ -7,6 +7,8 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <stdexcept>
+#include <vector>
 
 vtkStandardNewMacro(vtkSegmentationSVDAGRenderSettings);
 
@@ -210,6 +212,120 @@ vtkTypeInt64 vtkSegmentationSVDAGRenderSettings::GetMaximumBlocksPerBLAS() const
   return this->Settings->maximumBlocksPerBlas;
 }
 
+int vtkSegmentationSVDAGRenderSettings::GetMaximumNumberOfClippingPlanes()
+{
+  return int(core::MaximumClipPlanes);
+}
+
+int vtkSegmentationSVDAGRenderSettings::AddClippingPlane(
+  double ox, double oy, double oz, double nx, double ny, double nz)
+{
+  std::vector<core::ClipPlane> planes = this->Settings->clipPlanes;
+  core::ClipPlane plane;
+  plane.origin = { { ox, oy, oz } };
+  plane.normal = { { nx, ny, nz } };
+  planes.push_back(plane);
+  try
+  {
+    core::validateClipping(planes, this->Settings->crop);
+  }
+  catch (const std::exception& e)
+  {
+    vtkErrorMacro("AddClippingPlane: " << e.what());
+    return -1;
+  }
+  this->Settings->clipPlanes = std::move(planes);
+  this->Modified();
+  return int(this->Settings->clipPlanes.size()) - 1;
+}
+
+void vtkSegmentationSVDAGRenderSettings::RemoveAllClippingPlanes()
+{
+  if (!this->Settings->clipPlanes.empty())
+  {
+    this->Settings->clipPlanes.clear();
+    this->Modified();
+  }
+}
+
+int vtkSegmentationSVDAGRenderSettings::GetNumberOfClippingPlanes() const
+{
+  return int(this->Settings->clipPlanes.size());
+}
+
+void vtkSegmentationSVDAGRenderSettings::GetClippingPlane(
+  int i, double origin[3], double normal[3]) const
+{
+  const auto& planes = this->Settings->clipPlanes;
+  const bool valid = i >= 0 && size_t(i) < planes.size();
+  for (int a = 0; a < 3; ++a)
+  {
+    origin[a] = valid ? planes[size_t(i)].origin[size_t(a)] : 0.0;
+    normal[a] = valid ? planes[size_t(i)].normal[size_t(a)] : 0.0;
+  }
+}
+
+void vtkSegmentationSVDAGRenderSettings::SetCropping(bool on)
+{
+  assign(this, this->Settings->crop.on, on);
+}
+
+bool vtkSegmentationSVDAGRenderSettings::GetCropping() const
+{
+  return this->Settings->crop.on;
+}
+
+void vtkSegmentationSVDAGRenderSettings::SetCroppingRegionPlanes(
+  double xmin, double xmax, double ymin, double ymax, double zmin, double zmax)
+{
+  core::CropBox box;
+  box.on = true;
+  box.bounds = { { xmin, xmax, ymin, ymax, zmin, zmax } };
+  try
+  {
+    core::validateClipping({}, box);
+  }
+  catch (const std::exception& e)
+  {
+    vtkErrorMacro("SetCroppingRegionPlanes: " << e.what());
+    return;
+  }
+  assign(this, this->Settings->crop.bounds, box.bounds);
+}
+
+void vtkSegmentationSVDAGRenderSettings::GetCroppingRegionPlanes(double bounds[6]) const
+{
+  std::copy(this->Settings->crop.bounds.begin(), this->Settings->crop.bounds.end(), bounds);
+}
+
+void vtkSegmentationSVDAGRenderSettings::SetShading(int shading)
+{
+  assign(this, this->Settings->shading,
+    static_cast<core::Shading>(std::min(std::max(shading, int(SHADING_VOXEL)), int(SHADING_SMOOTH))));
+}
+
+void vtkSegmentationSVDAGRenderSettings::SetShading(const char* name)
+{
+  try
+  {
+    assign(this, this->Settings->shading, core::parseShading(name ? name : ""));
+  }
+  catch (const std::invalid_argument& e)
+  {
+    vtkErrorMacro("SetShading: " << e.what());
+  }
+}
+
+int vtkSegmentationSVDAGRenderSettings::GetShading() const
+{
+  return int(this->Settings->shading);
+}
+
+const char* vtkSegmentationSVDAGRenderSettings::GetShadingAsString() const
+{
+  return core::shadingName(this->Settings->shading);
+}
+
 void vtkSegmentationSVDAGRenderSettings::DeepCopy(vtkSegmentationSVDAGRenderSettings* other)
 {
   if (other && other != this)
@@ -244,4 +360,18 @@ void vtkSegmentationSVDAGRenderSettings::PrintSelf(ostream& os, vtkIndent indent
   triple(s.sun.irradiance);
   os << "\n" << indent << "SunAngularRadius: " << s.sun.angularRadiusDegrees << "\n";
   os << indent << "MaximumBlocksPerBLAS: " << s.maximumBlocksPerBlas << "\n";
+  os << indent << "Shading: " << core::shadingName(s.shading) << "\n";
+  os << indent << "ClippingPlanes: " << s.clipPlanes.size() << "\n";
+  for (const auto& p : s.clipPlanes)
+  {
+    os << indent.GetNextIndent() << "origin ";
+    triple(p.origin);
+    os << ", normal ";
+    triple(p.normal);
+    os << "\n";
+  }
+  os << indent << "Cropping: " << s.crop.on << "\n" << indent << "CroppingRegionPlanes:";
+  for (double b : s.crop.bounds)
+    os << " " << b;
+  os << "\n";
 }

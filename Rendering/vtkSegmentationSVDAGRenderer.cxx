@@ -237,6 +237,7 @@ void fillOutput(const svdag::render::Image& image, vtkImageData* output)
   pd->AddArray(floats("Depth", 1, image.depth));
   pd->AddArray(label);
   pd->AddArray(floats("Normal", 3, image.normal));
+  pd->AddArray(floats("FaceNormal", 3, image.faceNormal));
 }
 } // namespace
 
@@ -337,6 +338,7 @@ SVDAG_RENDERER_STATISTIC(double, SetupSeconds, r->setupSeconds())
 SVDAG_RENDERER_STATISTIC(double, LastFrameMilliseconds, r->lastFrameMilliseconds())
 SVDAG_RENDERER_STATISTIC(vtkTypeInt64, BLASBytes, r->blasBytes())
 SVDAG_RENDERER_STATISTIC(vtkTypeInt64, TLASBytes, r->tlasBytes())
+SVDAG_RENDERER_STATISTIC(vtkTypeInt64, NeighbourTableBytes, r->neighbourTableBytes())
 SVDAG_RENDERER_STATISTIC(int, NumberOfBLAS, r->blasCount())
 #undef SVDAG_RENDERER_STATISTIC
 
@@ -368,6 +370,7 @@ void vtkSegmentationSVDAGRenderer::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "LastFrameMilliseconds: " << this->GetLastFrameMilliseconds() << "\n";
   os << indent << "BLASBytes: " << this->GetBLASBytes() << "\n";
   os << indent << "TLASBytes: " << this->GetTLASBytes() << "\n";
+  os << indent << "NeighbourTableBytes: " << this->GetNeighbourTableBytes() << "\n";
   os << indent << "NumberOfBLAS: " << this->GetNumberOfBLAS() << "\n";
   os << indent << "AccumulatedSamples: " << this->GetAccumulatedSamples() << "\n";
   os << indent << "RenderSeconds: " << this->GetRenderSeconds() << "\n";

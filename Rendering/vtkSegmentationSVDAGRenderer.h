@@ -23,8 +23,10 @@
  *   "Depth"  float              world distance from the camera along the ray; FLT_MAX on a miss
  *   "Label"  int                label index + 1 (0: background); the index is that of the
  *                               volume's label table (vtkSegmentationSVDAG::NewLabelValues)
- *   "Normal" 3 x float          world-space unit normal of the face entered (0 on a miss and
+ *   "Normal" 3 x float          world-space unit shading normal: the face entered's, or the
+ *                               smooth estimate with Settings Shading smooth (0 on a miss and
  *                               where the camera is inside the hit voxel)
+ *   "FaceNormal" 3 x float      world-space unit normal of the face entered (0 likewise)
  * Depth, Label and Normal come from the un-jittered pixel-center ray: pixel (x, y), y = 0 the
  * bottom row, is the point x + Width * y. Its ray starts at the camera
  * position with the direction normalize(F + u * tan(a/2) * Width/Height * R + v * tan(a/2) * U),
@@ -152,6 +154,8 @@ public:
   vtkTypeInt64 GetBLASBytes() const;
   vtkTypeInt64 GetTLASBytes() const;
   int GetNumberOfBLAS() const;
+  /** Bytes of the smooth-shading neighbour table on the device (0 until a smooth pass). */
+  vtkTypeInt64 GetNeighbourTableBytes() const;
   ///@}
 
   ///@{

@@ -8,6 +8,8 @@
 #include "vtkObjectFactory.h"
 #include "vtkOpenGLCamera.h"
 #include "vtkOpenGLRenderWindow.h"
+#include "vtkPlane.h"
+#include "vtkPlaneCollection.h"
 #include "vtkRenderWindow.h"
 #include "vtkRenderer.h"
 #include "vtkSegmentationSVDAG.h"
@@ -193,17 +195,24 @@ std::vector<float> compositedDepth(const core::Image& image, const core::ViewRay
 }
 
 // What identifies a frame: passes accumulate while it stays the same (an exposure change only
-// re-composites). The model-to-clip matrix matches to 1e-6 relative (VTK recomputes the camera's key matrices in float in some paths:
+// re-composites). VTK recomputes the camera's key matrices in float in some paths:
 // vtkWindowToImageFilter re-renders with matrices that differ in the 8th digit, far less than a
-// pixel, which must not restart the accumulation); everything else exactly.
+// pixel, and the props drawn before the volume then land a float step away in the depth buffer,
+// or cover a silhouette pixel or not. None of that must restart the accumulation: the matrix
+// matches to 1e-6 relative, the scene depth to 1e-6 (window depth) except on silhouette pixels
+// (a depth step next to them), of which at most 1% may differ; everything else exactly.
 struct FrameKey
 {
   Matrix matrix{};
   core::RenderSettings settings;
   std::vector<uint64_t> ids;
+  std::vector<float> sceneDepth; // viewport pixels; empty when nothing was drawn before
+  int depthWidth = 0;
+
   bool matches(const FrameKey& o) const
   {
-    if (ids.empty() || ids != o.ids || !core::tracesSameImage(settings, o.settings))
+    if (ids.empty() || ids != o.ids || !core::tracesSameImage(settings, o.settings) ||
+      sceneDepth.size() != o.sceneDepth.size() || depthWidth != o.depthWidth)
       return false;
     for (size_t i = 0; i < matrix.size(); ++i)
     {
@@ -211,18 +220,93 @@ struct FrameKey
       if (!(std::abs(a - b) <= 1e-6 * std::max({ 1.0, std::abs(a), std::abs(b) })))
         return false;
     }
+    return this->sameSceneDepth(o);
+  }
+
+private:
+  bool sameSceneDepth(const FrameKey& o) const
+  {
+    const size_t w = size_t(std::max(this->depthWidth, 1));
+    const size_t h = sceneDepth.size() / w;
+    size_t silhouettes = 0;
+    for (size_t y = 0; y < h; ++y)
+    {
+      for (size_t x = 0; x < w; ++x)
+      {
+        const size_t i = x + w * y;
+        if (std::abs(sceneDepth[i] - o.sceneDepth[i]) <= 1e-6f)
+          continue;
+        if (!o.onSilhouette(x, y, w, h) || ++silhouettes > sceneDepth.size() / 100)
+          return false;
+      }
+    }
     return true;
+  }
+
+  // Whether the depth steps (by more than 1e-3) between pixel (x, y) and a neighbour.
+  bool onSilhouette(size_t x, size_t y, size_t w, size_t h) const
+  {
+    const float d = sceneDepth[x + w * y];
+    for (size_t ny = (y > 0 ? y - 1 : y); ny <= std::min(y + 1, h - 1); ++ny)
+    {
+      for (size_t nx = (x > 0 ? x - 1 : x); nx <= std::min(x + 1, w - 1); ++nx)
+      {
+        if (std::abs(sceneDepth[nx + w * ny] - d) > 1e-3f)
+          return true;
+      }
+    }
+    return false;
   }
 };
 
-// 64-bit FNV-1a of a float buffer (a change of what was drawn before the volume).
-uint64_t hashFloats(const std::vector<float>& values)
+// Appends a mapper's clipping planes (VTK world) to the settings' (the data's world, the
+// vtkVolume's model coordinates): x_world = V x_model, so a plane dot(n, x - o) keeps
+// dot(V^T n, x_model - V^-1 o) >= 0. Applies the mapper's cropping (the data's world) too,
+// intersected with the settings' own box.
+void addMapperClipping(core::RenderSettings& settings, vtkPlaneCollection* planes,
+  const Matrix& modelToWorld, bool cropping, const double* cropBounds)
 {
-  uint64_t h = 1469598103934665603ull;
-  const unsigned char* bytes = reinterpret_cast<const unsigned char*>(values.data());
-  for (size_t i = 0; i < values.size() * sizeof(float); ++i)
-    h = (h ^ bytes[i]) * 1099511628211ull;
-  return h;
+  if (planes && planes->GetNumberOfItems() > 0)
+  {
+    const Matrix worldToModel = inverse(modelToWorld);
+    vtkCollectionSimpleIterator it;
+    planes->InitTraversal(it);
+    while (vtkPlane* plane = planes->GetNextPlane(it))
+    {
+      double o[3], n[3];
+      plane->GetOrigin(o);
+      plane->GetNormal(n);
+      core::ClipPlane p;
+      for (int r = 0; r < 3; ++r)
+      {
+        p.origin[r] = worldToModel[4 * r + 3];
+        p.normal[r] = 0;
+        for (int c = 0; c < 3; ++c)
+        {
+          p.origin[r] += worldToModel[4 * r + c] * o[c];
+          p.normal[r] += modelToWorld[4 * c + r] * n[c];
+        }
+      }
+      settings.clipPlanes.push_back(p);
+    }
+  }
+  if (cropping)
+  {
+    core::CropBox box;
+    box.on = true;
+    std::copy(cropBounds, cropBounds + 6, box.bounds.begin());
+    if (settings.crop.on)
+    {
+      for (int a = 0; a < 3; ++a)
+      {
+        box.bounds[2 * a] = std::max(box.bounds[2 * a], settings.crop.bounds[2 * a]);
+        // Disjoint boxes keep nothing: an empty box (min == max) clips every ray away.
+        const double hi = std::min(box.bounds[2 * a + 1], settings.crop.bounds[2 * a + 1]);
+        box.bounds[2 * a + 1] = std::max(box.bounds[2 * a], hi);
+      }
+    }
+    settings.crop = box;
+  }
 }
 } // namespace
 
@@ -250,6 +334,7 @@ struct vtkSegmentationSVDAGVolumeMapper::Internals
   vtkTypeInt64 PickedLabel = 0;
   Vec3 PickedPosition{ { 0, 0, 0 } };
   Vec3 PickedNormal{ { 0, 0, 0 } };
+  Vec3 PickedShadingNormal{ { 0, 0, 0 } };
 };
 
 vtkSegmentationSVDAGVolumeMapper::vtkSegmentationSVDAGVolumeMapper()
@@ -353,36 +438,68 @@ void vtkSegmentationSVDAGVolumeMapper::Render(vtkRenderer* renderer, vtkVolume* 
     const Matrix clipToModel = inverse(modelToClip);
     const core::ViewRays rays = core::viewRaysFromClipToWorld(clipToModel);
 
-    // The level: full quality unless the allocated time is too short for it.
-    const core::RenderSettings& base = in.Session.settings()->GetCoreSettings();
-    const uint64_t viewportPixels = uint64_t(vp.width) * uint64_t(vp.height);
-    const double budget = this->AutoAdjustToRenderTime ? volume->GetAllocatedRenderTime() : 0.0;
-    in.Level = in.Budget.choose(base.lod, viewportPixels, budget);
-    in.FullQuality = in.Level.lod == base.lod && in.Level.reduction == 1;
-    core::RenderSettings settings = base;
-    settings.lod = in.Level.lod;
-    settings.background = { { 0, 0, 0, 0 } }; // misses are transparent over the scene
-    if (!in.FullQuality)
-      settings.samplesPerPixel = 1;
-    r.setSettings(settings);
-    const int width = int((vp.width + in.Level.reduction - 1) / in.Level.reduction);
-    const int height = int((vp.height + in.Level.reduction - 1) / in.Level.reduction);
-
     // Depth in: each traced pixel's ray ends at the surface drawn there before the volume.
     const std::vector<float> sceneDepth = in.Compositor.readDepth(window, vp);
-    std::vector<float> limits = rayLimits(sceneDepth, vp, width, height, clipToModel, rays);
-    const bool limited = !limits.empty();
-
-    // The frame's identity: while it stays the same, passes accumulate.
-    FrameKey key;
-    key.matrix = modelToClip;
-    key.settings = settings;
-    key.ids = { uint64_t(vp.width), uint64_t(vp.height), uint64_t(in.Level.reduction),
-      uint64_t(in.Session.labels()->GetMTime()),
-      uint64_t(reinterpret_cast<uintptr_t>(in.Session.volume().get())),
-      limited ? hashFloats(limits) : 0 };
-    const bool sameFrame = key.matches(in.Frame) && r.accumulatedSamples() > 0 &&
-      r.image().width == uint32_t(width) && r.image().height == uint32_t(height);
+    const core::RenderSettings& base = in.Session.settings()->GetCoreSettings();
+    const bool drawnBefore =
+      std::any_of(sceneDepth.begin(), sceneDepth.end(), [](float d) { return d < 1.0f; });
+    // The settings a level traces with, the pixels it traces and the frame's identity (while it
+    // stays the same, passes accumulate).
+    struct LevelFrame
+    {
+      core::RenderSettings settings;
+      int width = 0, height = 0;
+      FrameKey key;
+    };
+    auto levelFrame = [&](const core::FrameLevel& level) {
+      LevelFrame f;
+      const bool full = level.lod == base.lod && level.reduction == 1;
+      f.settings = base;
+      f.settings.lod = level.lod;
+      f.settings.background = { { 0, 0, 0, 0 } }; // misses are transparent over the scene
+      if (!full)
+        f.settings.samplesPerPixel = 1;
+      addMapperClipping(
+        f.settings, this->ClippingPlanes, modelToWorld, this->Cropping, this->CroppingRegionPlanes);
+      f.width = int((vp.width + level.reduction - 1) / level.reduction);
+      f.height = int((vp.height + level.reduction - 1) / level.reduction);
+      f.key.matrix = modelToClip;
+      f.key.settings = f.settings;
+      f.key.ids = { uint64_t(vp.width), uint64_t(vp.height), uint64_t(level.reduction),
+        uint64_t(in.Session.labels()->GetMTime()),
+        uint64_t(reinterpret_cast<uintptr_t>(in.Session.volume().get())) };
+      // What was drawn before the volume: the depth itself (FrameKey), not the ray limits derived
+      // from it, which change in their last bits with the camera matrices.
+      if (drawnBefore)
+      {
+        f.key.sceneDepth = sceneDepth;
+        f.key.depthWidth = vp.width;
+      }
+      return f;
+    };
+    const core::FrameLevel fullLevel{ base.lod, 1 };
+    LevelFrame frame = levelFrame(fullLevel);
+    auto accumulating = [&](const LevelFrame& f) {
+      return f.key.matches(in.Frame) && r.accumulatedSamples() > 0 &&
+        r.image().width == uint32_t(f.width) && r.image().height == uint32_t(f.height);
+    };
+    // The level: full quality unless the allocated time is too short for it. A still view whose
+    // full-quality image is already accumulating keeps it even then: showing it costs nothing,
+    // and a coarse frame would replace a refined image by a noisier one (a capture or a render
+    // with several props in the window gets a share of the frame time).
+    const uint64_t viewportPixels = uint64_t(vp.width) * uint64_t(vp.height);
+    const double budget = this->AutoAdjustToRenderTime ? volume->GetAllocatedRenderTime() : 0.0;
+    const core::FrameLevel chosen = in.Budget.choose(base.lod, viewportPixels, budget);
+    const bool chosenFull = chosen.lod == base.lod && chosen.reduction == 1;
+    const bool keepAccumulated = accumulating(frame);
+    in.Level = keepAccumulated ? fullLevel : chosen;
+    in.FullQuality = keepAccumulated || chosenFull;
+    if (!in.FullQuality)
+      frame = levelFrame(in.Level);
+    r.setSettings(frame.settings);
+    const int width = frame.width;
+    const int height = frame.height;
+    const bool sameFrame = accumulating(frame);
     auto refined = [&]() {
       return r.accumulatedSamples() >= uint32_t(this->TargetSamplesPerPixel) ||
         (this->ErrorTarget > 0 && r.accumulatedSamples() >= 2 &&
@@ -393,19 +510,23 @@ void vtkSegmentationSVDAGVolumeMapper::Render(vtkRenderer* renderer, vtkVolume* 
     const int* tiles = window->GetTileScale();
     const bool tiled = tiles[0] > 1 || tiles[1] > 1;
     in.TraceMilliseconds = 0;
-    if (!(sameFrame && in.FullQuality && refined()))
+    // A kept still view adds a pass when its time allows one (or a tile must be finished now),
+    // else shows what it has; any other frame traces unless it is refined at full quality.
+    const bool trace = keepAccumulated ? !refined() && (chosenFull || tiled)
+                                       : !(sameFrame && in.FullQuality && refined());
+    if (trace)
     {
       if (!sameFrame)
         r.resetAccumulation();
       r.setImageSize(uint32_t(width), uint32_t(height));
       r.setViewRays(rays);
-      r.setRayLimits(limited ? std::move(limits) : std::vector<float>());
+      r.setRayLimits(rayLimits(sceneDepth, vp, width, height, clipToModel, rays));
       do
       {
         r.render();
         in.TraceMilliseconds += r.lastFrameMilliseconds();
       } while (tiled && in.FullQuality && !refined());
-      in.Frame = std::move(key);
+      in.Frame = std::move(frame.key);
     }
     const core::Image& image = r.image();
     in.Converged = in.FullQuality && refined();
@@ -436,6 +557,28 @@ void vtkSegmentationSVDAGVolumeMapper::Render(vtkRenderer* renderer, vtkVolume* 
   in.FrameMilliseconds = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
   this->TimeToDraw = in.FrameMilliseconds / 1000;
   this->InvokeEvent(vtkCommand::VolumeMapperRenderEndEvent, nullptr);
+}
+
+void vtkSegmentationSVDAGVolumeMapper::SetCroppingRegionPlanes(
+  double xmin, double xmax, double ymin, double ymax, double zmin, double zmax)
+{
+  core::CropBox box;
+  box.on = true;
+  box.bounds = { { xmin, xmax, ymin, ymax, zmin, zmax } };
+  try
+  {
+    core::validateClipping({}, box);
+  }
+  catch (const std::exception& e)
+  {
+    vtkErrorMacro("SetCroppingRegionPlanes: " << e.what());
+    return;
+  }
+  if (!std::equal(box.bounds.begin(), box.bounds.end(), this->CroppingRegionPlanes))
+  {
+    std::copy(box.bounds.begin(), box.bounds.end(), this->CroppingRegionPlanes);
+    this->Modified();
+  }
 }
 
 bool vtkSegmentationSVDAGVolumeMapper::InitializeDevice()
@@ -542,29 +685,37 @@ bool vtkSegmentationSVDAGVolumeMapper::Pick(vtkRenderer* renderer, double x, dou
   const Ray ray = rayAt(in.PickRays, imageCoordinate(px, int(image.width)),
     imageCoordinate(py, int(image.height)));
   const Matrix& m = in.ModelToWorld;
-  Vec3 model, normal;
+  Vec3 model, normal, shading;
   for (int a = 0; a < 3; ++a)
   {
     model[a] = ray.origin[a] + double(image.depth[i]) * ray.direction[a];
-    normal[a] = image.normal[3 * i + a];
+    normal[a] = image.faceNormal[3 * i + a];
+    shading[a] = image.normal[3 * i + a];
   }
   // Normals transform with the inverse transpose of the model matrix's linear part.
   const Matrix inv = inverse(m);
-  double length = 0;
+  double length = 0, shadingLength = 0;
   for (int r = 0; r < 3; ++r)
   {
     in.PickedPosition[r] = m[4 * r + 3];
     in.PickedNormal[r] = 0;
+    in.PickedShadingNormal[r] = 0;
     for (int c = 0; c < 3; ++c)
     {
       in.PickedPosition[r] += m[4 * r + c] * model[c];
       in.PickedNormal[r] += inv[4 * c + r] * normal[c];
+      in.PickedShadingNormal[r] += inv[4 * c + r] * shading[c];
     }
     length += in.PickedNormal[r] * in.PickedNormal[r];
+    shadingLength += in.PickedShadingNormal[r] * in.PickedShadingNormal[r];
   }
   length = std::sqrt(length);
+  shadingLength = std::sqrt(shadingLength);
   for (int r = 0; r < 3; ++r)
+  {
     in.PickedNormal[r] = length > 0 ? in.PickedNormal[r] / length : 0.0;
+    in.PickedShadingNormal[r] = shadingLength > 0 ? in.PickedShadingNormal[r] / shadingLength : 0.0;
+  }
   return true;
 }
 
@@ -583,6 +734,12 @@ void vtkSegmentationSVDAGVolumeMapper::GetPickedNormal(double normal[3])
   std::copy(this->Internal->PickedNormal.begin(), this->Internal->PickedNormal.end(), normal);
 }
 
+void vtkSegmentationSVDAGVolumeMapper::GetPickedShadingNormal(double normal[3])
+{
+  std::copy(this->Internal->PickedShadingNormal.begin(), this->Internal->PickedShadingNormal.end(),
+    normal);
+}
+
 void vtkSegmentationSVDAGVolumeMapper::ReleaseGraphicsResources(vtkWindow* window)
 {
   this->Internal->Compositor.releaseGraphicsResources(window);
@@ -597,6 +754,11 @@ void vtkSegmentationSVDAGVolumeMapper::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "AutoAdjustToRenderTime: " << this->AutoAdjustToRenderTime << "\n";
   os << indent << "TargetSamplesPerPixel: " << this->TargetSamplesPerPixel << "\n";
   os << indent << "ErrorTarget: " << this->ErrorTarget << "\n";
+  os << indent << "Cropping: " << this->Cropping << "\n";
+  os << indent << "CroppingRegionPlanes: " << this->CroppingRegionPlanes[0] << " "
+     << this->CroppingRegionPlanes[1] << " " << this->CroppingRegionPlanes[2] << " "
+     << this->CroppingRegionPlanes[3] << " " << this->CroppingRegionPlanes[4] << " "
+     << this->CroppingRegionPlanes[5] << "\n";
   os << indent << "DeviceName: " << this->GetDeviceName() << "\n";
   os << indent << "AccumulatedSamples: " << this->GetAccumulatedSamples() << "\n";
   os << indent << "ErrorEstimate: " << this->GetErrorEstimate() << "\n";

@@ -90,6 +90,36 @@ public:
   vtkGetMacro(ErrorTarget, double);
   ///@}
 
+  ///@{
+  /**
+   * Cropping, with vtkVolumeMapper's names and meaning for its simple case (keep the central
+   * box, VTK_CROP_SUBVOLUME): while Cropping is on (default off) only what lies inside
+   * CroppingRegionPlanes (xmin, xmax, ymin, ymax, zmin, zmax) is drawn. The planes are in the
+   * data's world coordinates (origin, spacing and direction applied, before the vtkVolume's
+   * matrix), like vtkVolumeMapper's. Cut voxels show their cut faces, as with clipping planes.
+   * An inverted (min > max) or non-finite box is an error and keeps the previous one.
+   *
+   * Clipping planes: vtkAbstractMapper's (AddClippingPlane, SetClippingPlanes,
+   * RemoveAllClippingPlanes), in VTK's world coordinates (after the vtkVolume's matrix, like
+   * vtkGPUVolumeRayCastMapper's), each keeping the side its vtkPlane normal points to; together
+   * with the settings' own planes at most 6. Every ray is clipped (cut-away parts cast no
+   * shadow) and a cut through a label shows its cut face with the plane's normal (at block and
+   * leaf LOD the cross-section of the block or leaf box). Bad planes (more than 6, a zero or
+   * non-finite normal) are reported by Render with vtkErrorMacro and nothing is drawn. A change
+   * of planes or cropping restarts the refinement but does not rebuild the BVH.
+   */
+  vtkSetMacro(Cropping, vtkTypeBool);
+  vtkGetMacro(Cropping, vtkTypeBool);
+  vtkBooleanMacro(Cropping, vtkTypeBool);
+  void SetCroppingRegionPlanes(
+    double xmin, double xmax, double ymin, double ymax, double zmin, double zmax);
+  void SetCroppingRegionPlanes(const double planes[6])
+  {
+    this->SetCroppingRegionPlanes(planes[0], planes[1], planes[2], planes[3], planes[4], planes[5]);
+  }
+  vtkGetVector6Macro(CroppingRegionPlanes, double);
+  ///@}
+
   /** Creates the Vulkan renderer now (else on the first render): returns false and reports the
    * reason (no device with ray tracing: every device found and what it lacks) with
    * vtkErrorMacro. */
@@ -123,12 +153,15 @@ public:
    * coordinates) in the last frame traced for `renderer`. Returns true on a hit; then
    * GetPickedLabel (the original value; a uint64 label >= 2^63 as the int64 with its bits),
    * GetPickedPosition (world) and GetPickedNormal (world, unit; zero where the camera is inside
-   * the label) describe it. False on background, outside the viewport or before a frame.
+   * the label) describe it, and GetPickedShadingNormal the normal the frame was shaded with
+   * (world, unit: the face's, or the smooth estimate with Settings Shading smooth). False on
+   * background, outside the viewport or before a frame.
    */
   bool Pick(vtkRenderer* renderer, double x, double y);
   vtkTypeInt64 GetPickedLabel();
   void GetPickedPosition(double position[3]);
   void GetPickedNormal(double normal[3]);
+  void GetPickedShadingNormal(double normal[3]);
   ///@}
 
   /** World bounds of the volume's voxels (before the vtkVolume's matrix). */
@@ -147,6 +180,8 @@ protected:
   bool AutoAdjustToRenderTime = true;
   int TargetSamplesPerPixel = 64;
   double ErrorTarget = 0.0;
+  vtkTypeBool Cropping = 0;
+  double CroppingRegionPlanes[6] = { 0.0, 1.0, 0.0, 1.0, 0.0, 1.0 };
 
 private:
   vtkSegmentationSVDAGVolumeMapper(const vtkSegmentationSVDAGVolumeMapper&) = delete;

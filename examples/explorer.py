@@ -1,11 +1,13 @@
-"""Explore a segmentation interactively: pick labels, hide them, switch the level of detail.
+"""Explore a segmentation interactively: pick and highlight labels, hide them, switch the LOD.
 
     xvfb-run -a .venv/bin/python examples/explorer.py [--off-screen] [--output PNG]
 
-Left-click prints the label under the mouse and where the ray hit it; 'h' hides the label under
-the mouse, 'a' shows all labels again, 'l' cycles the LOD (block, leaf, voxel, auto).
-With ``--off-screen`` it picks once at the image center, prints the hit, hides that label and
-saves a screenshot to ``--output`` (default ``build/examples/explorer.png``).
+Left-click prints the label under the mouse and where the ray hit it, and highlights it (an
+emissive tint; the other labels are dimmed): the next frame shows it, without rebuilding any
+geometry. A click on the background removes the highlight. 'h' hides the label under the mouse,
+'a' shows all labels again (and removes the highlight), 'l' cycles the LOD (block, leaf, voxel,
+auto). With ``--off-screen`` it picks once at the image center, prints the hit, highlights that
+label and saves a screenshot to ``--output`` (default ``build/examples/explorer.png``).
 """
 import pyvista as pv
 
@@ -13,6 +15,7 @@ import vtksvdag
 from _example import CELLS, finish, parse_args
 
 LODS = ["block", "leaf", "voxel", "auto"]  # the mapper's SetLOD values 0 .. 3
+DIM = 0.35  # the other labels' brightness while one is highlighted
 
 
 def main():
@@ -28,6 +31,14 @@ def main():
               f"label {hit['label']} at ({', '.join(f'{c:.1f}' for c in hit['position'])})")
         return hit
 
+    def highlight_at(x, y):
+        hit = pick_at(x, y)
+        # A material upload only: the next frame restarts refining, the BVH stays.
+        actor.set_highlight(None if hit is None else [hit["label"]], dim=DIM)
+        if hit is not None:
+            print(f"highlighted label {hit['label']}")
+        plotter.render()
+
     def hide_picked():
         hit = pick_at(*plotter.iren.get_event_position())
         if hit is not None:
@@ -36,6 +47,7 @@ def main():
 
     def show_all():
         mapper.GetLabelProperties().ShowAllLabels()
+        actor.set_highlight(None)
         plotter.render()
 
     def cycle_lod():
@@ -47,17 +59,15 @@ def main():
     if args.off_screen:
         vtksvdag.refine(plotter, timeout=30)
         width, height = plotter.window_size
-        hit = pick_at(width / 2, height / 2)
-        if hit is not None:
-            mapper.GetLabelProperties().SetVisibility(hit["label"], False)
+        highlight_at(width / 2, height / 2)
         vtksvdag.refine(plotter, timeout=30)
         finish(plotter, args)
         return
     plotter.add_key_event("h", hide_picked)
     plotter.add_key_event("a", show_all)
     plotter.add_key_event("l", cycle_lod)
-    plotter.iren.track_click_position(lambda pos: pick_at(*pos), side="left", viewport=True)
-    plotter.add_text("click: pick   h: hide   a: show all   l: LOD", font_size=8)
+    plotter.iren.track_click_position(lambda pos: highlight_at(*pos), side="left", viewport=True)
+    plotter.add_text("click: pick + highlight   h: hide   a: show all   l: LOD", font_size=8)
     finish(plotter, args)
 
 

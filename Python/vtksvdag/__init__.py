@@ -24,11 +24,13 @@ __version__ = "0.1.0"
 from .build import from_image, from_numpy  # noqa: E402 (needs the extended __path__)
 from .fileio import read  # noqa: E402
 from .plotting import add_segmentation, pick, refine  # noqa: E402
+from .slicing import add_segmentation_slice  # noqa: E402
 from .volume import SegmentationVolume  # noqa: E402
 
 __all__ = [
     "SegmentationVolume",
     "add_segmentation",
+    "add_segmentation_slice",
     "from_image",
     "from_numpy",
     "pick",

@@ -19,10 +19,13 @@ from .volume import SegmentationVolume
 # works without them (a machine without Vulkan, a script that only compresses).
 
 _LODS = {"block": 0, "leaf": 1, "voxel": 2, "auto": 3}
+_SHADINGS = {"voxel": 0, "smooth": 1}  # vtkSegmentationSVDAGRenderSettings.SHADING_*
 
 # Keyword arguments of add_segmentation beyond the named ones (documented there).
 _EXTRA_OPTIONS = ("exposure", "seed", "next_event_estimation", "write_depth", "error_target",
                   "auto_adjust", "samples_per_pass")
+# Label attribute and highlight options beyond the named ones (documented there too).
+_EXTRA_OPTIONS += ("clim", "nan_color", "highlight_color", "highlight_intensity", "others_opacity")
 
 
 def _segmentation_volume(data):
@@ -140,6 +143,54 @@ def _apply_environment(settings, environment):
     settings.SetEnvironmentColor(*_rgb(environment))
 
 
+def _clipping_plane(plane):
+    """A vtkPlane from ``(origin, normal)``; ValueError for a non-finite origin or a zero or
+    non-finite normal."""
+    from vtkmodules.vtkCommonDataModel import vtkPlane
+
+    try:
+        origin, normal = plane
+        origin = np.asarray(origin, dtype=float).reshape(3)
+        normal = np.asarray(normal, dtype=float).reshape(3)
+    except (TypeError, ValueError):
+        raise ValueError(f"a clipping plane is (origin, normal) with 3 numbers each, got {plane!r}") from None
+    if not np.all(np.isfinite(origin)):
+        raise ValueError(f"clipping plane origin must be finite, got {tuple(origin)}")
+    if not (np.all(np.isfinite(normal)) and np.linalg.norm(normal) > 0):
+        raise ValueError(f"clipping plane normal must be finite and non-zero, got {tuple(normal)}")
+    result = vtkPlane()
+    result.SetOrigin(*origin)
+    result.SetNormal(*normal)
+    return result
+
+
+def _crop_box(crop):
+    """The 6 crop bounds as floats; ValueError unless finite with min <= max on every axis."""
+    try:
+        bounds = np.asarray(crop, dtype=float).reshape(6)
+    except (TypeError, ValueError):
+        raise ValueError(f"crop must be (xmin, xmax, ymin, ymax, zmin, zmax), got {crop!r}") from None
+    if not np.all(np.isfinite(bounds)):
+        raise ValueError(f"crop bounds must be finite, got {tuple(bounds)}")
+    for axis, (lo, hi) in zip("xyz", bounds.reshape(3, 2)):
+        if lo > hi:
+            raise ValueError(f"crop box is inverted along {axis}: min {lo} > max {hi}")
+    return [float(b) for b in bounds]
+
+
+def _apply_clipping(mapper, clipping_planes, crop):
+    if clipping_planes is not None:
+        planes = [_clipping_plane(p) for p in clipping_planes]
+        most = mapper.GetSettings().GetMaximumNumberOfClippingPlanes()
+        if len(planes) > most:
+            raise ValueError(f"at most {most} clipping planes are supported, got {len(planes)}")
+        for plane in planes:
+            mapper.AddClippingPlane(plane)
+    if crop is not None:
+        mapper.SetCroppingRegionPlanes(*_crop_box(crop))
+        mapper.CroppingOn()
+
+
 def add_segmentation(
     plotter,
     data,
@@ -148,11 +199,19 @@ def add_segmentation(
     cmap=None,
     opacity=1.0,
     hidden_labels=None,
+    attributes=None,
+    color_by=None,
+    query=None,
+    highlight=None,
+    dim=None,
     lod="auto",
+    shading="voxel",
     spp=64,
     bounces=4,
     sun=None,
     environment=None,
+    clipping_planes=None,
+    crop=None,
     name=None,
     reset_camera=None,
     **kwargs,
@@ -177,14 +236,44 @@ def add_segmentation(
         Colors of the labels ``colors`` does not name: a listed (categorical) colormap cycles
         through its colors in label order, a continuous one is sampled evenly; a VTK lookup
         table maps the label values. Without either, colors come from a hash of each label.
+        With ``color_by``, the colormap of that column instead (a matplotlib colormap or name).
     opacity : float or dict, default: 1.0
         Opacity of every label, or ``{label value: opacity}``. 0 hides a label; values between
         0 and 1 let that share of the light pass the label's surface (path-traced transmission).
     hidden_labels : iterable of int, optional
         Label values not drawn.
+    attributes : pandas.DataFrame, str or os.PathLike, optional
+        Per-label attributes: a DataFrame with a ``label`` column (or indexed by label value,
+        index name ``label``), or the path of a CSV file with a ``label`` column. It is joined
+        on the label value with the volume's own label table (voxel counts, volume, bounds,
+        ...; see :meth:`SegmentationVolume.label_table`); rows of labels the volume does not
+        hold are left out (with a warning). Attribute columns must not be named like the
+        computed ones (ValueError).
+    color_by : str, optional
+        A column of the joined table that colors the labels with ``cmap``: numbers on a
+        continuous scale over the column's range (or ``clim``; default colormap viridis),
+        anything else (strings, bools, categories) one color per category in sorted order
+        (default tab10, or tab20 beyond 10 categories). Labels without a value get
+        ``nan_color`` (default a neutral grey, 0.5 0.5 0.5). ``colors`` wins over it.
+    query : str, optional
+        A pandas query expression over the joined table (``"volume > 1e4 and type ==
+        'pyramidal'"``): labels whose row does not satisfy it are hidden. Missing values (labels
+        without a row or a value) follow pandas: a comparison with them is false, except ``!=``.
+        ValueError for an expression pandas cannot evaluate (the message lists the columns).
+    highlight : int or iterable of int, optional
+        Labels drawn with an emissive tint (``highlight_color``, default amber, times
+        ``highlight_intensity``, default 1).
+    dim : float, optional
+        While labels are highlighted, the other labels' base color is multiplied by ``dim``
+        (in [0, 1]; default 1: not dimmed); ``others_opacity`` (default 1) makes them
+        see-through.
     lod : {"auto", "block", "leaf", "voxel"}, default: "auto"
         Level of detail of still frames: ``"voxel"`` is lossless, ``"auto"`` draws coarser
         levels where a voxel is smaller than a pixel.
+    shading : {"voxel", "smooth"}, default: "voxel"
+        The normal surfaces are lit with: the voxel faces' (blocky), or ``"smooth"``, estimated
+        from each label's occupancy around the hit point (no mesh; the hit stays the lossless
+        voxel surface). Smooth uploads a neighbour table of 108 bytes per block.
     spp : int, default: 64
         Samples per pixel a still view refines to.
     bounces : int, default: 4
@@ -194,6 +283,15 @@ def add_segmentation(
         ``direction``, ``irradiance`` and ``angular_radius`` (degrees).
     environment : color or str, optional
         The environment light: a constant color, or the path of an equirectangular ``.exr`` map.
+    clipping_planes : sequence of (origin, normal), optional
+        Up to 6 clipping planes in world coordinates (VTK's, after the actor's matrix), each
+        keeping the side its normal points to. Every ray is clipped, so cut-away parts cast no
+        shadow, and a cut through a label shows its cut face (at ``"block"`` / ``"leaf"`` LOD the
+        cross-section of the block or leaf box). Later changes: the mapper's
+        ``AddClippingPlane`` / ``RemoveAllClippingPlanes`` (``examples/clipping.py``).
+    crop : sequence of 6 floats, optional
+        ``(xmin, xmax, ymin, ymax, zmin, zmax)``: only what lies inside this axis-aligned box (the
+        data's world coordinates, like ``vtkVolumeMapper``'s cropping planes) is drawn.
     name : str, optional
         Actor name (replaces an actor of the same name).
     reset_camera : bool, optional
@@ -202,12 +300,18 @@ def add_segmentation(
         ``exposure`` (float), ``seed`` (int), ``next_event_estimation`` (bool),
         ``write_depth`` (bool), ``error_target`` (float: stop refining at this error estimate),
         ``auto_adjust`` (bool: keep interactive frames within the time budget),
-        ``samples_per_pass`` (int: samples each render adds).
+        ``samples_per_pass`` (int: samples each render adds); ``clim`` (low, high) and
+        ``nan_color`` for ``color_by``; ``highlight_color``, ``highlight_intensity`` and
+        ``others_opacity`` for ``highlight``.
 
     Returns
     -------
-    pyvista.Volume
-        The actor; ``actor.GetMapper()`` is the ``vtkSegmentationSVDAGVolumeMapper``.
+    vtksvdag.actor.SegmentationActor
+        The actor, a ``pyvista.Volume``; ``actor.GetMapper()`` is the
+        ``vtkSegmentationSVDAGVolumeMapper``. Its methods ``set_query``, ``set_color_by`` and
+        ``set_highlight`` change the options above after adding (a query change rebuilds the
+        acceleration structure only, a color or highlight change uploads the materials only),
+        and ``label_table`` is the joined table.
 
     Raises
     ------
@@ -234,6 +338,8 @@ def add_segmentation(
         raise TypeError(f"add_segmentation got unknown options {sorted(unknown)}")
     if lod not in _LODS:
         raise ValueError(f"lod must be one of {sorted(_LODS)}, got {lod!r}")
+    if shading not in _SHADINGS:
+        raise ValueError(f"shading must be one of {sorted(_SHADINGS)}, got {shading!r}")
     for value, what, lo, hi in ((spp, "spp", 1, 1 << 24), (bounces, "bounces", 0, 64),
                                 (kwargs.get("samples_per_pass", 1), "samples_per_pass", 1, 65536)):
         if isinstance(value, bool) or not isinstance(value, numbers.Integral) or not lo <= value <= hi:
@@ -244,6 +350,7 @@ def add_segmentation(
     mapper.SetInputData(volume.dataobject)
     settings = mapper.GetSettings()
     settings.SetLOD(_LODS[lod])
+    settings.SetShading(_SHADINGS[shading])
     settings.SetMaximumBounces(int(bounces))
     settings.SetSamplesPerPixel(int(kwargs.get("samples_per_pass", 1)))
     mapper.SetTargetSamplesPerPixel(int(spp))
@@ -270,9 +377,11 @@ def add_segmentation(
         mapper.SetErrorTarget(target)
     _apply_sun(settings, sun)
     _apply_environment(settings, environment)
+    _apply_clipping(mapper, clipping_planes, crop)
 
     props = mapper.GetLabelProperties()
-    _apply_colors(props, volume, colors, cmap)
+    # With color_by, cmap colors the column (below), not the labels in order.
+    _apply_colors(props, volume, colors, None if color_by is not None else cmap)
     if hasattr(opacity, "items"):
         values = list(opacity)
         for key, value in zip(_label_keys(volume, values, "opacity label"), values):
@@ -285,20 +394,50 @@ def add_segmentation(
     if hidden_labels is not None:
         for key in _label_keys(volume, list(hidden_labels), "hidden label"):
             props.SetVisibility(key, False)
+    style = _label_style(volume, props, attributes, colors, hidden_labels, color_by, cmap, query,
+                         highlight, dim, kwargs)
 
     with vtk_errors_raised(mapper, RuntimeError):
         mapper.InitializeDevice()
 
-    actor = pv.Volume()
+    from .actor import SegmentationActor
+
+    actor = SegmentationActor()
     actor.SetMapper(mapper)
     # Keep the Python wrapper (and so the SegmentationVolume) alive as long as the actor.
     actor._vtksvdag_volume = volume
+    actor._vtksvdag_style = style
     if reset_camera is None:
         # Not `not renderer.actors`: pyvista puts a border actor in every subplot.
         reset_camera = not plotter.renderer.camera_set
     plotter.add_actor(actor, name=name, reset_camera=bool(reset_camera))
     _enable_refinement(plotter)
     return actor
+
+
+def _label_style(volume, props, attributes, colors, hidden_labels, color_by, cmap, query,
+                 highlight, dim, kwargs):
+    """The attribute table, color column, query and highlight of add_segmentation, applied."""
+    from ._attributes import NAN_COLOR, LabelStyle
+
+    explicit = {}
+    if colors is not None:
+        values = list(colors)
+        explicit = {k: _rgb(colors[v]) for k, v in zip(_label_keys(volume, values, "colors label"), values)}
+    hidden = _label_keys(volume, list(hidden_labels), "hidden label") if hidden_labels is not None else []
+    style = LabelStyle(volume, props, attributes=attributes, colors=explicit, hidden=hidden)
+    if color_by is not None:
+        nan = _rgb(kwargs["nan_color"]) if "nan_color" in kwargs else NAN_COLOR
+        style.set_color_by(color_by, cmap=cmap, clim=kwargs.get("clim"), nan_color=nan)
+    if query is not None:
+        style.set_query(query)
+    if any(v is not None for v in (highlight, dim, kwargs.get("highlight_color"),
+                                   kwargs.get("highlight_intensity"), kwargs.get("others_opacity"))):
+        color = kwargs.get("highlight_color")
+        style.set_highlight(highlight, dim=dim, color=None if color is None else _rgb(color),
+                            intensity=kwargs.get("highlight_intensity"),
+                            others_opacity=kwargs.get("others_opacity"))
+    return style
 
 
 def _segmentation_mappers(plotter):
@@ -405,8 +544,11 @@ def pick(plotter, x, y):
     Returns
     -------
     dict or None
-        ``{"label": value, "position": (x, y, z), "normal": (nx, ny, nz)}`` in world
-        coordinates for the nearest segmentation hit, or ``None`` on background.
+        ``{"label": value, "position": (x, y, z), "normal": (nx, ny, nz),
+        "shading_normal": (sx, sy, sz)}`` in world coordinates for the nearest segmentation
+        hit, or ``None`` on background: ``normal`` is the entered voxel face's, ``shading_normal``
+        the one the frame was lit with (the same with ``shading="voxel"``, the smooth estimate
+        with ``shading="smooth"``).
 
     Examples
     --------
@@ -420,15 +562,17 @@ def pick(plotter, x, y):
             continue
         position = [0.0, 0.0, 0.0]
         normal = [0.0, 0.0, 0.0]
+        shading_normal = [0.0, 0.0, 0.0]
         mapper.GetPickedPosition(position)
         mapper.GetPickedNormal(normal)
+        mapper.GetPickedShadingNormal(shading_normal)
         camera = np.array(renderer.GetActiveCamera().GetPosition())
         distance = float(np.linalg.norm(np.array(position) - camera))
         if best is None or distance < best[0]:
             # The mapper names labels by their 64-bit pattern as an int64.
             value = np.array(mapper.GetPickedLabel(), dtype=np.int64).astype(_label_dtype(mapper))
             best = (distance, {"label": value.item(), "position": tuple(position),
-                               "normal": tuple(normal)})
+                               "normal": tuple(normal), "shading_normal": tuple(shading_normal)})
     return None if best is None else best[1]
 
 

@@ -5,12 +5,42 @@ import numpy as np
 from vtkmodules.util.numpy_support import vtk_to_numpy
 from vtkmodules.vtkCommonDataModel import vtkImageData
 
-from ._labels import numpy_dtype_of_vtk_type
+from vtkmodules.vtkCommonCore import vtkDoubleArray, vtkIdTypeArray
+
+from ._labels import label_pattern, numpy_dtype_of_vtk_type
 from ._svdagfile import write_svdag
-from ._vtkrun import run_algorithm
-from .vtkSVDAGCore import vtkSegmentationSVDAG, vtkSegmentationSVDAGToImageData
+from ._vtkrun import run_algorithm, vtk_errors_raised
+from .vtkSVDAGCore import (
+    vtkSegmentationSVDAG,
+    vtkSegmentationSVDAGSlice,
+    vtkSegmentationSVDAGToImageData,
+)
 
 _AXIS_ORDERS = ("xyz", "zyx")
+_AXES = {"x": 0, "y": 1, "z": 2, 0: 0, 1: 1, 2: 2}
+
+
+def _is_int(value):
+    return isinstance(value, (numbers.Integral, np.integer)) and not isinstance(value, (bool, np.bool_))
+
+
+def check_axis(axis):
+    """0, 1 or 2 from "x"/"y"/"z" or 0/1/2; ValueError otherwise."""
+    key = axis.lower() if isinstance(axis, str) else axis
+    if isinstance(key, (bool, np.bool_)) or not (isinstance(key, str) or _is_int(key)) or key not in _AXES:
+        raise ValueError(f"axis must be 'x', 'y', 'z' or 0, 1, 2, not {axis!r}")
+    return _AXES[key]
+
+
+def _vector3(value, what):
+    """Three finite floats, or ValueError."""
+    try:
+        v = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(f"{what} must be 3 numbers, not {value!r}") from None
+    if v.shape != (3,) or not np.all(np.isfinite(v)):
+        raise ValueError(f"{what} must be 3 finite numbers, not {value!r}")
+    return v
 
 
 def check_axis_order(axis_order):
@@ -215,7 +245,7 @@ class SegmentationVolume:
         image.ShallowCopy(decoder.GetOutput())
         return image
 
-    def to_numpy(self, axis_order="xyz", progress=None):
+    def to_numpy(self, axis_order="xyz", progress=None, bounds=None):
         """Decode losslessly into a numpy array of :attr:`dtype`.
 
         Parameters
@@ -225,12 +255,27 @@ class SegmentationVolume:
             decoded VTK buffer, no copy). "zyx": shape ``(nz, ny, nx)``, C-ordered, as
             ``nrrd.read(..., index_order="C")`` returns.
         progress : callable, optional
-            Called with the decoding progress in [0, 1].
+            Called with the decoding progress in [0, 1] (whole-volume decodes only).
+        bounds : sequence of 6 int, optional
+            Decode only the box ``(xmin, xmax, ymin, ymax, zmin, zmax)`` of INCLUSIVE voxel
+            indices (the convention of :attr:`label_bounds` and VTK extents): only the 16^3
+            cells that meet the box are decoded. The result has shape
+            ``(xmax - xmin + 1, ymax - ymin + 1, zmax - zmin + 1)`` (reversed for "zyx") and
+            equals ``to_numpy()[xmin:xmax + 1, ymin:ymax + 1, zmin:zmax + 1]``.
 
         Returns
         -------
         numpy.ndarray
-            The label volume.
+            The label volume (or box).
+
+        Raises
+        ------
+        TypeError
+            A bound is not an integer.
+        ValueError
+            ``bounds`` is not 6 values, or a minimum is above its maximum (an empty box).
+        IndexError
+            The box is not inside the volume.
 
         Examples
         --------
@@ -242,16 +287,344 @@ class SegmentationVolume:
         (5, 4, 3)
         >>> volume.to_numpy("zyx")[1, 2, 3], volume.to_numpy()[3, 2, 1]
         (9, 9)
+        >>> volume.to_numpy(bounds=(3, 4, 2, 2, 0, 2))[0, 0]
+        array([0, 9, 0], dtype=uint32)
         """
         check_axis_order(axis_order)
+        if bounds is not None:
+            box = self._check_bounds(bounds, "bounds")
+            image = vtkImageData()
+            with vtk_errors_raised(self._obj, ValueError):
+                self._obj.DecodeExtentTo(box, image)
+            return self._image_array(image, axis_order)
         image = self.to_image(progress=progress)
+        return self._image_array(image, axis_order)
+
+    def _image_array(self, image, axis_order, dtype=None):
+        """The point scalars of a decoded image (of any extent) as an array in axis_order."""
         flat = vtk_to_numpy(image.GetPointData().GetScalars())  # x fastest; keeps the buffer alive
-        if flat.dtype != self._dtype:  # same width, other spelling (e.g. VTK_LONG for int64)
-            flat = flat.view(self._dtype)
-        dims = self.dims
+        dtype = self._dtype if dtype is None else dtype
+        if flat.dtype != dtype:  # same width, other spelling (e.g. VTK_LONG for int64)
+            flat = flat.view(dtype)
+        dims = image.GetDimensions()
         if axis_order == "xyz":
             return flat.reshape(dims, order="F")
         return flat.reshape(dims[::-1])
+
+    def _check_bounds(self, bounds, what):
+        """bounds as a list of 6 ints inside the volume (see to_numpy for the errors)."""
+        if isinstance(bounds, (str, bytes)) or not hasattr(bounds, "__len__") or len(bounds) != 6:
+            raise ValueError(f"{what} must be 6 integers (xmin, xmax, ymin, ymax, zmin, zmax), "
+                             f"not {bounds!r}")
+        for v in bounds:
+            if not _is_int(v):
+                raise TypeError(f"{what} must be integers, not {v!r}")
+        box = [int(v) for v in bounds]
+        for a in range(3):
+            if box[2 * a] > box[2 * a + 1]:
+                raise ValueError(f"{what} {tuple(box)} are empty along {'xyz'[a]} (min > max)")
+        dims = self.dims
+        for a in range(3):
+            if box[2 * a] < 0 or box[2 * a + 1] >= dims[a]:
+                raise IndexError(f"{what} {tuple(box)} are not inside the volume of {dims} voxels "
+                                 f"(0 .. {dims[a] - 1} along {'xyz'[a]}; inclusive bounds)")
+        return box
+
+    # -- random access ----------------------------------------------------------------------
+    def slice(self, axis="z", index=None, *, as_image=False, axis_order="xyz"):
+        """One axis-aligned slice, decoded from the compressed form alone.
+
+        Only the 16^3 cells the slice crosses are decoded, and in them only the part of each
+        block's occupancy tree the slice meets: a small fraction of :meth:`to_numpy`'s time.
+
+        Parameters
+        ----------
+        axis : {"x", "y", "z", 0, 1, 2}, default: "z"
+            The axis the slice is perpendicular to.
+        index : int, optional
+            Voxel index along ``axis``, 0 .. dims[axis] - 1 (no negative indices); the middle
+            slice ``dims[axis] // 2`` by default.
+        as_image : bool, default: False
+            Return a ``pyvista.ImageData`` one voxel thick, in the volume's world geometry
+            (its extent is the slice's within the volume), with point data "Labels".
+        axis_order : {"xyz", "zyx"}, default: "xyz"
+            Order of the two remaining axes, as in :meth:`to_numpy`: for ``axis="z"``, "xyz"
+            gives shape ``(nx, ny)`` and "zyx" ``(ny, nx)``.
+
+        Returns
+        -------
+        numpy.ndarray or pyvista.ImageData
+            ``to_numpy(axis_order)`` with the axis removed: for "xyz", ``slice("z", k)`` equals
+            ``to_numpy()[:, :, k]``.
+
+        Raises
+        ------
+        ValueError
+            A bad ``axis`` or ``axis_order``.
+        TypeError
+            ``index`` is not an integer.
+        IndexError
+            ``index`` is outside the volume.
+
+        Examples
+        --------
+        >>> import numpy as np, vtksvdag
+        >>> labels = np.arange(24, dtype=np.int16).reshape(2, 3, 4)
+        >>> volume = vtksvdag.from_numpy(labels)
+        >>> volume.slice("y", 1)
+        array([[ 4,  5,  6,  7],
+               [16, 17, 18, 19]], dtype=int16)
+        >>> bool((volume.slice("z", 3) == labels[:, :, 3]).all())
+        True
+        """
+        a = check_axis(axis)
+        check_axis_order(axis_order)
+        n = self.dims[a]
+        if index is None:
+            index = n // 2
+        if not _is_int(index):
+            raise TypeError(f"slice index must be an integer, not {index!r}")
+        index = int(index)
+        if not 0 <= index < n:
+            raise IndexError(f"slice index {index} is outside the volume along {'xyz'[a]} "
+                             f"(0 .. {n - 1})")
+        slicer = vtkSegmentationSVDAGSlice()
+        slicer.SetInputDataObject(0, self._obj)
+        slicer.SetAxis(a)
+        slicer.SetIndex(index)
+        image = self._run_slicer(slicer)
+        if as_image:
+            import pyvista
+
+            return pyvista.wrap(image)
+        array = self._image_array(image, axis_order)
+        return array.take(0, axis=a if axis_order == "xyz" else 2 - a)
+
+    def resample_plane(self, normal, origin=None, *, shape=None, spacing=None, x_axis=None,
+                       as_image=False):
+        """An oblique plane through the volume, resampled nearest, from the compressed form.
+
+        The plane is sampled on a regular grid; each sample takes the label of the voxel whose
+        center is nearest (``floor(index + 0.5)`` per continuous index coordinate), samples
+        outside the volume the :attr:`background`. Everything is in world coordinates (the
+        volume's origin, spacing and direction apply).
+
+        Parameters
+        ----------
+        normal : {"x", "y", "z"} or sequence of 3 float
+            The plane normal (world); an axis name means that index axis's world direction.
+        origin : sequence of 3 float, optional
+            A point of the plane (world); the center of the volume by default.
+        shape : (int, int), optional
+            Samples ``(nu, nv)`` of the grid, centered on ``origin``. By default the grid covers
+            the projection of the volume's voxel centers on the plane, from its smallest corner.
+        spacing : float or (float, float), optional
+            World distance between samples; the smallest voxel spacing by default.
+        x_axis : sequence of 3 float, optional
+            Direction of the grid's first axis u (projected on the plane). By default the
+            volume axis most nearly in the plane (x for a z normal, y for an x normal). The
+            second axis is ``v = normal x u``.
+        as_image : bool, default: False
+            Return a ``pyvista.ImageData`` (one sample thick, placed in world space: origin at
+            sample (0, 0), direction matrix columns u, v, normal) with point data "Labels".
+
+        Returns
+        -------
+        numpy.ndarray or pyvista.ImageData
+            An array of shape ``(nu, nv)`` indexed ``[a, b]`` for the sample at
+            ``image origin + a * su * u + b * sv * v``.
+
+        Raises
+        ------
+        ValueError
+            A zero or non-finite normal, origin or axis, an axis along the normal, a
+            non-positive spacing or shape, or a grid too large for memory.
+
+        Examples
+        --------
+        >>> import numpy as np, vtksvdag
+        >>> labels = np.arange(27, dtype=np.uint8).reshape(3, 3, 3)
+        >>> volume = vtksvdag.from_numpy(labels)
+        >>> bool((volume.resample_plane("z", origin=(1, 1, 2)) == labels[:, :, 2]).all())
+        True
+        >>> # u is z here: the volume axis in the plane
+        >>> volume.resample_plane((1, 1, 0), origin=(1, 1, 1), shape=(3, 1))[:, 0]
+        array([12, 13, 14], dtype=uint8)
+        """
+        if isinstance(normal, str):
+            normal = self.direction[:, check_axis(normal)]
+        n = _vector3(normal, "normal")
+        if not np.any(n):
+            raise ValueError("the plane normal must not be (0, 0, 0)")
+        if origin is None:
+            dims = np.asarray(self.dims, float)
+            center = (dims - 1) / 2 * np.asarray(self.spacing, float)
+            origin = np.asarray(self.origin, float) + self.direction @ center
+        o = _vector3(origin, "origin")
+        slicer = vtkSegmentationSVDAGSlice()
+        slicer.SetInputDataObject(0, self._obj)
+        slicer.SetModeToOblique()
+        slicer.SetPlaneNormal(*n)
+        slicer.SetPlaneOrigin(*o)
+        if x_axis is not None:
+            u = _vector3(x_axis, "x_axis")
+            if not np.any(u):
+                raise ValueError("x_axis must not be (0, 0, 0)")
+            slicer.SetPlaneXAxis(*u)
+        if shape is not None:
+            if (isinstance(shape, (str, bytes)) or not hasattr(shape, "__len__") or len(shape) != 2
+                    or not all(_is_int(v) for v in shape)):
+                raise ValueError(f"shape must be 2 integers (nu, nv), not {shape!r}")
+            if not all(0 < int(v) < 2**31 for v in shape):
+                raise ValueError(f"shape must be positive, not {tuple(shape)!r}")
+            slicer.SetOutputDimensions(int(shape[0]), int(shape[1]))
+        if spacing is not None:
+            s = np.broadcast_to(np.asarray(spacing, dtype=float), (2,)) if np.ndim(spacing) <= 1 else None
+            if s is None or not np.all(np.isfinite(s)) or np.any(s <= 0):
+                raise ValueError(f"spacing must be one or two positive numbers, not {spacing!r}")
+            slicer.SetOutputSpacing(float(s[0]), float(s[1]))
+        image = self._run_slicer(slicer)
+        if as_image:
+            import pyvista
+
+            return pyvista.wrap(image)
+        return self._image_array(image, "xyz")[:, :, 0]
+
+    def _run_slicer(self, slicer):
+        run_algorithm(slicer, what="cannot slice the volume")
+        image = vtkImageData()
+        image.ShallowCopy(slicer.GetOutput())
+        return image
+
+    def mask(self, label_value, *, bounds=None, axis_order="xyz"):
+        """Where the volume holds one label, decoded from that label's blocks alone.
+
+        Parameters
+        ----------
+        label_value : int
+            A label value of :attr:`dtype` (the :attr:`background` too: then the mask is where
+            no label is stored). A value the volume does not hold gives an all-False mask.
+        bounds : "label" or sequence of 6 int, optional
+            The box the mask covers: the whole volume by default, ``"label"`` for the label's
+            own inclusive bounds (:attr:`label_bounds`), or inclusive voxel bounds
+            ``(xmin, xmax, ymin, ymax, zmin, zmax)`` as in :meth:`to_numpy`.
+        axis_order : {"xyz", "zyx"}, default: "xyz"
+            As in :meth:`to_numpy`.
+
+        Returns
+        -------
+        numpy.ndarray of bool
+            ``to_numpy(axis_order, bounds=...) == label_value``.
+
+        Raises
+        ------
+        TypeError
+            ``label_value`` or a bound is not an integer.
+        ValueError
+            ``label_value`` does not fit :attr:`dtype`; bad bounds (see :meth:`to_numpy`);
+            ``bounds="label"`` for a value the volume does not hold.
+        IndexError
+            The box is not inside the volume.
+
+        Examples
+        --------
+        >>> import numpy as np, vtksvdag
+        >>> labels = np.zeros((4, 4, 4), dtype=np.uint8)
+        >>> labels[1:3, 2, 0] = 5
+        >>> volume = vtksvdag.from_numpy(labels)
+        >>> int(volume.mask(5).sum())
+        2
+        >>> volume.mask(5, bounds="label").shape
+        (2, 1, 1)
+        """
+        check_axis_order(axis_order)
+        if isinstance(label_value, (bool, np.bool_)):
+            raise TypeError(f"label_value must be an integer, not {label_value!r}")
+        label_pattern(label_value, self._dtype, "label_value")  # type and range checks
+        value = int(label_value)
+        matches = np.nonzero(self.labels == np.array(value, dtype=self._dtype))[0]
+        if isinstance(bounds, str):
+            if bounds != "label":
+                raise ValueError(f"bounds must be 'label' or 6 integers, not {bounds!r}")
+            if not len(matches):
+                raise ValueError(f"bounds='label': {value} is not a label of the volume")
+            box = [int(b) for b in self.label_bounds[matches[0]]]
+        else:
+            box = self._check_bounds(bounds, "bounds") if bounds is not None else \
+                [0, self.dims[0] - 1, 0, self.dims[1] - 1, 0, self.dims[2] - 1]
+        if value == int(self.background):
+            return self.to_numpy(axis_order, bounds=box) == self.background
+        if not len(matches):
+            shape = (box[1] - box[0] + 1, box[3] - box[2] + 1, box[5] - box[4] + 1)
+            return np.zeros(shape if axis_order == "xyz" else shape[::-1], dtype=bool)
+        image = vtkImageData()
+        with vtk_errors_raised(self._obj, ValueError):
+            self._obj.DecodeLabelMaskTo(int(matches[0]), box, image)
+        return self._image_array(image, axis_order, dtype=np.uint8).view(bool)
+
+    def label_table(self, attributes=None):
+        """Per-label statistics as a ``pandas.DataFrame``, computed from the compressed form.
+
+        Counts and bounds come from the label table; centroids and surface voxels are computed
+        block by block, one 16-voxel layer of cells at a time (no dense decode).
+
+        Parameters
+        ----------
+        attributes : pandas.DataFrame, str or os.PathLike, optional
+            Extra columns per label (names, classes, ...): a DataFrame, or the path of a CSV
+            file, with a ``label`` column (or an index named ``label``) of integer label
+            values. It is LEFT-joined on the label value: every label of the volume is kept
+            (NaN where the attributes have no row); attribute rows of labels the volume does
+            not hold are left out with a ``UserWarning`` naming them.
+
+        Returns
+        -------
+        pandas.DataFrame
+            One row per stored label (the background is not a row), indexed by the original
+            label value (index name "label", :attr:`dtype`), ascending, with columns:
+
+            - ``voxel_count`` (int64) and ``volume`` (voxel_count times the voxel volume,
+              the product of the spacing, in world units cubed);
+            - ``xmin``, ``xmax``, ``ymin``, ``ymax``, ``zmin``, ``zmax``: inclusive voxel
+              index bounds (int64), as :attr:`label_bounds`;
+            - ``centroid_i``, ``centroid_j``, ``centroid_k``: mean voxel index of the label's
+              voxels; ``centroid_x``, ``centroid_y``, ``centroid_z``: the same point in world
+              coordinates (origin + direction @ (spacing * index));
+            - ``surface_voxels`` (int64): voxels of the label with at least one of their 6
+              face neighbours of another label (background included) or outside the volume.
+
+            followed by the attribute columns.
+
+        Raises
+        ------
+        TypeError
+            ``attributes`` is neither a DataFrame nor a path.
+        FileNotFoundError
+            The CSV file does not exist.
+        ValueError
+            No ``label`` column, non-integer or repeated labels, or attribute columns named
+            like the table's own.
+
+        Examples
+        --------
+        >>> import numpy as np, pandas as pd, vtksvdag
+        >>> labels = np.zeros((4, 4, 4), dtype=np.uint16)
+        >>> labels[0:2, 0:2, 0:2] = 3
+        >>> volume = vtksvdag.from_numpy(labels, spacing=(1, 1, 2))
+        >>> table = volume.label_table(pd.DataFrame({"label": [3], "name": ["cell"]}))
+        >>> table.loc[3, ["voxel_count", "volume", "centroid_z", "surface_voxels", "name"]].tolist()
+        [8, 16.0, 1.0, 8, 'cell']
+        """
+        from ._labeltable import label_table
+
+        centroids = vtkDoubleArray()
+        surface = vtkIdTypeArray()
+        with vtk_errors_raised(self._obj, ValueError):
+            self._obj.ComputeLabelStatistics(centroids, surface)
+        n = len(self.labels)
+        c = vtk_to_numpy(centroids).reshape(n, 3) if n else np.empty((0, 3))
+        s = vtk_to_numpy(surface) if n else np.empty(0, dtype=np.int64)
+        return label_table(self, c, s, attributes)
 
     def to_pyvista(self):
         """Decode into a ``pyvista.ImageData`` with point data "Labels".

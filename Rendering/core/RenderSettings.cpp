@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <stdexcept>
+#include <string>
 
 namespace svdag
 {
@@ -28,6 +29,26 @@ Lod parseLod(const std::string& name)
       return lod;
   }
   throw std::invalid_argument("unknown LOD '" + name + "' (block, leaf, voxel or auto)");
+}
+
+const char* shadingName(Shading shading)
+{
+  switch (shading)
+  {
+    case Shading::Voxel: return "voxel";
+    case Shading::Smooth: return "smooth";
+  }
+  return "?";
+}
+
+Shading parseShading(const std::string& name)
+{
+  for (Shading s : { Shading::Voxel, Shading::Smooth })
+  {
+    if (name == shadingName(s))
+      return s;
+  }
+  throw std::invalid_argument("unknown shading '" + name + "' (voxel or smooth)");
 }
 
 namespace
@@ -58,12 +79,14 @@ bool tracesSameImage(const RenderSettings& a, const RenderSettings& b)
     a.sun.on == b.sun.on && a.sun.direction == b.sun.direction &&
     a.sun.irradiance == b.sun.irradiance &&
     a.sun.angularRadiusDegrees == b.sun.angularRadiusDegrees &&
-    a.maximumBlocksPerBlas == b.maximumBlocksPerBlas;
+    a.maximumBlocksPerBlas == b.maximumBlocksPerBlas && a.shading == b.shading &&
+    a.clipPlanes == b.clipPlanes && a.crop == b.crop;
 }
 
 void validate(const RenderSettings& s)
 {
   require(uint32_t(s.lod) <= uint32_t(Lod::Auto), "LOD must be block, leaf, voxel or auto");
+  require(uint32_t(s.shading) <= uint32_t(Shading::Smooth), "shading must be voxel or smooth");
   require(s.autoLodPixels > 0 && std::isfinite(s.autoLodPixels),
     "auto LOD pixels must be a finite value > 0");
   require(s.samplesPerPixel >= 1 && s.samplesPerPixel <= MaximumSamplesPerPixel,
@@ -79,6 +102,37 @@ void validate(const RenderSettings& s)
   require(nonNegative(s.sun.irradiance), "the sun irradiance must be finite and >= 0");
   require(s.sun.angularRadiusDegrees >= 0 && s.sun.angularRadiusDegrees <= MaximumSunAngularRadius,
     "the sun's angular radius must be in [0, 89.9] degrees");
+  validateClipping(s.clipPlanes, s.crop);
+}
+
+void validateClipping(const std::vector<ClipPlane>& planes, const CropBox& crop)
+{
+  if (planes.size() > MaximumClipPlanes)
+    throw std::invalid_argument("at most " + std::to_string(MaximumClipPlanes) +
+      " clipping planes are supported, got " + std::to_string(planes.size()));
+  for (size_t i = 0; i < planes.size(); ++i)
+  {
+    const auto& o = planes[i].origin;
+    const auto& n = planes[i].normal;
+    const std::string which = "clipping plane " + std::to_string(i);
+    require(std::isfinite(o[0]) && std::isfinite(o[1]) && std::isfinite(o[2]),
+      (which + ": the origin must be finite").c_str());
+    const double length = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    require(length > 0 && std::isfinite(length),
+      (which + ": the normal must be a finite, non-zero vector").c_str());
+  }
+  if (crop.on)
+  {
+    const char* axes = "xyz";
+    for (int a = 0; a < 3; ++a)
+    {
+      const double lo = crop.bounds[2 * a], hi = crop.bounds[2 * a + 1];
+      require(std::isfinite(lo) && std::isfinite(hi), "the crop box must be finite");
+      if (!(lo <= hi))
+        throw std::invalid_argument(std::string("the crop box is inverted along ") + axes[a] +
+          ": min " + std::to_string(lo) + " > max " + std::to_string(hi));
+    }
+  }
 }
 
 } // namespace render

@@ -7,6 +7,8 @@
 #include "svdag_render/Pipeline.h"
 #include "svdag_render/Scene.h"
 
+#include <svdag/RayCaster.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -61,6 +63,50 @@ Buffer storageBuffer(Context& context, const std::vector<T>& values)
   return uploadBuffer(context, data.data(), data.size() * sizeof(T),
     VK_BUFFER_USAGE_STORAGE_BUFFER_BIT);
 }
+
+// The clipping planes and crop box as Clipping.h planes relative to the scene's reference point:
+// unit normals (world units), each moved into the kept side by `margin`. Throws like validate().
+uint32_t gpuClipPlanes(const RenderSettings& settings, const std::array<double, 3>& reference,
+  double margin, glm::vec4* out)
+{
+  static_assert(MaximumClipPlanes == SVDAG_CLIP_MAX_PLANES, "one limit for clipping planes");
+  static_assert(SVDAG_CLIP_MAX_SLOTS == SVDAG_CLIP_MAX_PLANES + 6, "the crop box adds 6 planes");
+  validateClipping(settings.clipPlanes, settings.crop);
+  uint32_t count = 0;
+  // dot(n, x - origin) >= 0 with x = shifted + reference, n unit: w = dot(n, reference - origin).
+  auto add = [&](const std::array<double, 3>& origin, const std::array<double, 3>& normal) {
+    const double length =
+      std::sqrt(normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2]);
+    double w = -margin;
+    glm::vec4 plane;
+    for (int a = 0; a < 3; ++a)
+    {
+      const double n = normal[a] / length;
+      plane[a] = float(n);
+      w += n * (reference[a] - origin[a]);
+    }
+    plane.w = float(w);
+    out[count++] = plane;
+  };
+  for (const ClipPlane& p : settings.clipPlanes)
+    add(p.origin, p.normal);
+  if (settings.crop.on)
+  {
+    const auto& b = settings.crop.bounds;
+    for (int a = 0; a < 3; ++a)
+    {
+      std::array<double, 3> lo{ { 0, 0, 0 } }, hi{ { 0, 0, 0 } }, up{ { 0, 0, 0 } },
+        down{ { 0, 0, 0 } };
+      lo[a] = b[2 * a];
+      hi[a] = b[2 * a + 1];
+      up[a] = 1;
+      down[a] = -1;
+      add(lo, up);
+      add(hi, down);
+    }
+  }
+  return count;
+}
 } // namespace
 
 // Everything that lives on the device. Declaration order is destruction order in reverse:
@@ -70,6 +116,10 @@ struct Renderer::Gpu
   Context context;
   Pipeline pipeline{ context };
   std::unique_ptr<Scene> scene;
+  // Smooth shading's neighbour table of the scene's volume (svdag::neighbourTable), built on the
+  // first smooth frame; empty (no buffer) otherwise.
+  Buffer neighbours;
+  bool hasNeighbours = false;
   VkDescriptorPool pool = VK_NULL_HANDLE;
   VkDescriptorSet set = VK_NULL_HANDLE;
   Buffer uniforms{ context, sizeof(gpu::FrameUniforms), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT,
@@ -122,7 +172,8 @@ struct Renderer::Gpu
     const VkBufferUsageFlags usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
     label = Buffer(context, pixels * sizeof(uint32_t), usage, MemoryUse::Readback);
     depth = Buffer(context, pixels * sizeof(float), usage, MemoryUse::Readback);
-    normal = Buffer(context, pixels * 3 * sizeof(float), usage, MemoryUse::Readback);
+    // Shading normals, then entry face normals (GpuLayout.h).
+    normal = Buffer(context, pixels * 6 * sizeof(float), usage, MemoryUse::Readback);
     hdr = Buffer(context, pixels * 4 * sizeof(float), usage, MemoryUse::Readback);
     color = Buffer(context, pixels * sizeof(uint32_t), usage, MemoryUse::Readback);
     variance = Buffer(context, pixels * sizeof(float), usage, MemoryUse::Readback);
@@ -186,6 +237,8 @@ void Renderer::setVolume(std::shared_ptr<const Volume> volume)
   if (!volume)
     throw std::invalid_argument("setVolume needs a volume");
   this->Device->scene.reset();
+  this->Device->neighbours = Buffer();
+  this->Device->hasNeighbours = false;
   this->Materials.clear();
   const auto start = Clock::now();
   this->Device->scene = std::make_unique<Scene>(this->Device->context, std::move(volume));
@@ -373,6 +426,23 @@ void Renderer::setEnvironmentMap(const std::string& exrPath)
   ++this->EnvironmentGeneration;
 }
 
+void Renderer::setClipping(const std::vector<ClipPlane>& planes, const CropBox& crop)
+{
+  validateClipping(planes, crop);
+  this->Settings.clipPlanes = planes;
+  this->Settings.crop = crop;
+}
+
+void Renderer::setShading(Shading shading)
+{
+  this->Settings = edited(this->Settings, [shading](RenderSettings& s) { s.shading = shading; });
+}
+
+uint64_t Renderer::neighbourTableBytes() const
+{
+  return this->Device->hasNeighbours ? this->Device->neighbours.size() : 0;
+}
+
 void Renderer::setSun(const SunLight& sun)
 {
   this->Settings = edited(this->Settings, [&sun](RenderSettings& s) { s.sun = sun; });
@@ -542,10 +612,18 @@ const Image& Renderer::render()
   u.display = glm::vec4(settings.exposure, 0.0f, 0.0f, 0.0f);
   u.autoLod = glm::vec4(float(std::min({ s[0], s[1], s[2] })), settings.autoLodPixels,
     float(footprint.footprint0), float(footprint.footprintSlope));
-  u.image = glm::uvec4(this->Width, this->Height, uint32_t(settings.lod), 0u);
+  u.image = glm::uvec4(this->Width, this->Height, uint32_t(settings.lod), uint32_t(settings.shading));
   u.grid = glm::uvec4(uint32_t(cells[0]), uint32_t(cells[1]), g.scene->primitivesPerBlas(), 0u);
   u.widths = glm::uvec4(w.cellBits, w.labelBits, w.rootRefBits, w.midRefBits);
-  u.widths2 = glm::uvec4(w.leafRefBits, w.blockBits(), 0u, 0u);
+  if (settings.shading == Shading::Smooth && !g.hasNeighbours)
+  {
+    g.neighbours = storageBuffer(g.context, neighbourTable(volume));
+    g.hasNeighbours = true;
+  }
+  const VkDeviceAddress neighbours =
+    settings.shading == Shading::Smooth ? g.neighbours.address() : VkDeviceAddress(0);
+  u.widths2 = glm::uvec4(w.leafRefBits, w.blockBits(), uint32_t(neighbours),
+    uint32_t(neighbours >> 32));
   u.volumeStreams = addresses(g.scene->blocksAddress(), g.scene->rootsAddress());
   u.volumeStreams2 = addresses(g.scene->midsAddress(), g.scene->leavesAddress());
   u.sceneOutputs = addresses(g.scene->primitiveBlocksAddress(), g.label.address());
@@ -576,6 +654,10 @@ const Image& Renderer::render()
   }
   const double epsilon =
     std::max(1e-3 * std::min({ s[0], s[1], s[2] }), 4e-6 * (extent + originDistance));
+  // Clipping: the margin (Clipping.h) is a quarter of the ray epsilon, so that secondary rays
+  // leaving a cut face start outside the kept region.
+  u.clipping =
+    glm::uvec4(gpuClipPlanes(settings, reference, 0.25 * epsilon, u.clipPlanes), 0u, 0u, 0u);
   const auto& env = settings.environmentColor;
   u.environment = glm::vec4(env[0], env[1], env[2], float(epsilon));
   u.lighting = glm::uvec4(g.envSize.x, g.envSize.y, settings.maximumBounces,
@@ -671,6 +753,9 @@ const Image& Renderer::render()
     }
   }
   read(out.normal, g.normal, size_t(pixels) * 3);
+  out.faceNormal.resize(size_t(pixels) * 3);
+  std::memcpy(out.faceNormal.data(), static_cast<const float*>(g.normal.mapped()) + size_t(pixels) * 3,
+    size_t(pixels) * 3 * sizeof(float));
   read(out.hdr, g.hdr, size_t(pixels) * 4);
   read(out.color, g.color, pixels);
   read(out.variance, g.variance, pixels);

@@ -49,19 +49,26 @@ layout(buffer_reference, std430, buffer_reference_align = 16) buffer SvdagVec4Ac
   vec4 v[];
 };
 
-// Closest-hit -> raygen. label: label index + 1 (0: miss); t: world distance; normal: world.
+// Closest-hit -> raygen. label: label index + 1 (0: miss); t: world distance; normal: world
+// entry face; shading.xyz: world shading normal (the face normal unless smooth shading,
+// GpuLayout.h), shading.w: the world distance along it that shadow rays start at (PathHit.lift).
 struct SvdagPayload
 {
   vec3 normal;
   float t;
   uint label;
+  vec4 shading;
 };
 
-// Intersection -> closest-hit (16 bytes; the limit is 32). normal: object-space entry face.
+// Intersection -> closest-hit (24 bytes; the limit is 32). normal: object-space entry face;
+// block: the block index of a voxel-level hit (smooth shading reads its neighbour table),
+// SVDAG_NO_BLOCK for block and leaf LOD hits (shaded with the face normal); cell: its cell index.
 struct SvdagHitAttributes
 {
   vec3 normal;
   uint label;
+  uint block;
+  uint cell;
 };
 
 #endif

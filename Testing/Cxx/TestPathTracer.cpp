@@ -92,6 +92,8 @@ PathHit traceScene(glm::vec3 o, glm::vec3 d, float tmax)
       h.normal = glm::vec3(0, 0, 1);
     }
   }
+  h.shading = h.normal; // no smooth shading in these analytic scenes
+  h.lift = 0.0f;
   return h;
 }
 } // namespace shading

@@ -19,6 +19,8 @@ EXAMPLES = [
     ("label_colors", "png"),
     ("turntable", "gif"),
     ("lod_comparison", "png"),
+    ("labels_over_intensity", "png"),
+    ("clipping", "png"),
 ]
 
 
@@ -44,8 +46,11 @@ def distinct_colors(frame):
 def test_example_runs_off_screen(name, ext, tmp_path):
     output = tmp_path / f"{name}.{ext}"
     result = run_example(name, output)
-    if name == "explorer":  # the simulated pick at the image center hits a cell
+    if name == "explorer":  # the simulated pick at the image center hits a cell, highlighted
         assert "label " in result.stdout and " at (" in result.stdout, result.stdout
+        assert "highlighted label " in result.stdout, result.stdout
+    if name == "clipping":  # the pick at the image center is on the cut face: the plane's normal
+        assert "normal (-0.28, -0.94, -0.19)" in result.stdout, result.stdout
     with Image.open(output) as image:
         if ext == "gif":
             frames = [frame.copy() for frame in ImageSequence.Iterator(image)]

@@ -49,6 +49,9 @@ struct RayHit
   std::array<int32_t, 3> voxel{ {} };   // voxel where the ray enters the hit box (Lod::Voxel: the voxel hit)
   std::array<int32_t, 3> normal{ {} };  // entry face, e.g. (-1, 0, 0); zero when starting inside
                                         // (never for entryOnly rays)
+  // The clipping plane whose cut face was hit (setClipPlanes: the ray entered the kept region
+  // inside the hit voxel or box, at t; normal is zero then), or -1.
+  int32_t clipPlane = -1;
 };
 
 class RayCaster
@@ -67,12 +70,37 @@ public:
   void castMany(const std::vector<Ray>& rays, Lod lod, std::vector<RayHit>& hits,
     const ParallelFor& parallel = sequentialFor) const;
 
+  // The smooth shading normal (SmoothNormal.h: the gradient of the hit label's smoothed
+  // occupancy, facing the ray) of a hit that cast(ray, lod) returned, as a unit vector in index
+  // space; the entry face normal for Lod::Block and Lod::Leaf hits and where the gradient
+  // vanishes; zero for a miss or where the ray started inside.
+  std::array<float, 3> smoothNormal(const Ray& ray, const RayHit& hit, Lod lod) const;
+
+  // Clipping planes (svdag/Clipping.h, the code the GPU renderer runs): every ray's interval is
+  // clipped to the region kept by all planes, each (a, b, c, d) keeping the index-space points p
+  // with a p.x + b p.y + c p.z + d >= 0. A ray that enters the region inside a solid hits there
+  // (RayHit::clipPlane). Callers that mirror the GPU renderer give planes whose function is a
+  // world distance, moved into the kept side by a small margin (Clipping.h). Throws
+  // std::invalid_argument for more than SVDAG_CLIP_MAX_SLOTS (12) planes or non-finite values.
+  void setClipPlanes(const std::vector<std::array<double, 4>>& planes);
+  const std::vector<std::array<double, 4>>& clipPlanes() const { return this->ClipPlanes; }
+
 private:
   struct UnitRay;
   // Nearest hit among the blocks of one cell, the ray anchored at the cell's corner and at
   // parameter s (distance along the unit direction) where it enters the cell.
   RayHit castCell(const UnitRay& ray, const std::array<int32_t, 3>& cell, double s, Lod lod) const;
   const Volume& volume;
+  std::vector<std::array<double, 4>> ClipPlanes;
 };
+
+// Root references of the blocks of block b's label in the 3 x 3 x 3 cells around b's cell, at
+// (dx + 1) + 3 (dy + 1) + 9 (dz + 1) (13: b itself), 0xFFFFFFFF (SmoothNormal.h's SVDAG_NO_BLOCK)
+// where that cell holds none of the label or lies outside the volume.
+std::array<uint32_t, 27> neighbourRoots(const Volume& volume, uint64_t block);
+// neighbourRoots of every block, 27 words per block in block order: the renderer's neighbour
+// table for smooth shading. Throws std::runtime_error if a root reference equals the marker.
+std::vector<uint32_t> neighbourTable(const Volume& volume,
+  const ParallelFor& parallel = sequentialFor);
 
 } // namespace svdag

@@ -6,12 +6,15 @@ The camera frames the whole volume (like VTK's ResetCamera, then an orbit by --a
 driver's shader compilation, when there are several). PNG holds the tone-mapped color, EXR the
 linear color with depth (Z) and label channels.
 """
+import argparse
 import math
 import sys
 import time
 
 import numpy as np
 
+from .._attributes import add_render_arguments as add_attribute_arguments
+from .._attributes import apply_render_options as apply_attribute_options
 from .._vtkrun import vtk_errors_raised
 from ._common import (
     add_input_options, finite_float, int_in, label_value, load, output_path, print_json,
@@ -22,6 +25,7 @@ NAME = "render"
 HELP = "path-trace a label volume or .svdag file to a PNG or EXR image (Vulkan ray tracing)"
 
 LODS = ("block", "leaf", "voxel", "auto")
+SHADINGS = ("voxel", "smooth")  # vtkSegmentationSVDAGRenderSettings.SHADING_* in order
 
 
 #: Ranges of the numeric options (the renderer would clamp the image size silently).
@@ -44,6 +48,9 @@ def add_arguments(parser):
     parser.add_argument("--bounces", type=int_in(0, MAX_BOUNCES), default=4,
                         help=f"maximum bounces, 0-{MAX_BOUNCES} (default: 4)")
     parser.add_argument("--lod", choices=LODS, default="voxel", help="level of detail (default: voxel)")
+    parser.add_argument("--shading", choices=SHADINGS, default="voxel",
+                        help="normals for lighting: voxel faces, or smooth ones estimated from the "
+                             "label occupancy (no mesh; the hits stay the voxels) (default: voxel)")
     parser.add_argument("--seed", type=int_in(0, 2**32 - 1), default=0,
                         help=f"random seed, 0-{2**32 - 1} (default: 0)")
     parser.add_argument("--azimuth", type=finite_float(), default=30.0,
@@ -63,8 +70,43 @@ def add_arguments(parser):
     parser.add_argument("--sky", type=finite_float(0.0), nargs=3, metavar=("R", "G", "B"),
                         help="constant environment radiance, finite and >= 0 (default: 1 1 1, or a "
                              "dim 0.25 0.27 0.3 sky with --sun so that the sun shapes the image)")
+    add_attribute_arguments(parser)
+    parser.add_argument("--clip", type=_clip_plane, action="append", default=[],
+                        metavar="OX,OY,OZ,NX,NY,NZ",
+                        help="a clipping plane (world): origin and normal, keeping the side the "
+                             "normal points to; repeatable, up to the renderer's limit of 6")
+    parser.add_argument("--crop", type=_crop_box, metavar="XMIN,XMAX,YMIN,YMAX,ZMIN,ZMAX",
+                        help="draw only what lies inside this axis-aligned box (world)")
     parser.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
     parser.add_argument("--no-progress", action="store_true", help="(no progress bar is shown)")
+
+
+def _numbers(text, count, what):
+    parts = text.split(",")
+    try:
+        values = [float(p) for p in parts]
+    except ValueError:
+        values = []
+    if len(values) != count or not all(math.isfinite(v) for v in values):
+        raise argparse.ArgumentTypeError(f"{what} must be {count} finite numbers separated by commas, got {text!r}")
+    return values
+
+
+def _clip_plane(text):
+    """argparse type of --clip: OX,OY,OZ,NX,NY,NZ with a non-zero normal."""
+    values = _numbers(text, 6, "--clip")
+    if not any(values[3:]):
+        raise argparse.ArgumentTypeError(f"--clip: the normal must not be zero, got {text!r}")
+    return values
+
+
+def _crop_box(text):
+    """argparse type of --crop: XMIN,XMAX,YMIN,YMAX,ZMIN,ZMAX with min <= max."""
+    values = _numbers(text, 6, "--crop")
+    for axis, lo, hi in zip("xyz", values[0::2], values[1::2]):
+        if lo > hi:
+            raise argparse.ArgumentTypeError(f"--crop: inverted along {axis} (min {lo:g} > max {hi:g})")
+    return values
 
 
 def _fail(message):
@@ -107,6 +149,7 @@ def run(args):
     renderer.SetHeight(args.height)
     settings = renderer.GetSettings()
     settings.SetLOD(LODS.index(args.lod))
+    settings.SetShading(SHADINGS.index(args.shading))
     settings.SetMaximumBounces(args.bounces)
     settings.SetSeed(args.seed)
     settings.SetNextEventEstimation(not args.no_nee)
@@ -119,9 +162,20 @@ def run(args):
         az, el = (math.radians(a) for a in args.sun)
         settings.SunOn()
         settings.SetSunDirection(math.cos(el) * math.cos(az), math.cos(el) * math.sin(az), math.sin(el))
+    most = settings.GetMaximumNumberOfClippingPlanes()
+    if len(args.clip) > most:
+        raise ValueError(f"--clip: at most {most} clipping planes, got {len(args.clip)}")
+    for plane in args.clip:
+        if settings.AddClippingPlane(*plane) < 0:
+            raise ValueError(f"--clip: rejected plane {plane}")
+    if args.crop:
+        settings.SetCroppingRegionPlanes(*args.crop)
+        settings.CroppingOn()
     for value in args.hide:
         # A uint64 label of 2^63 or more is named by the int64 with the same bits.
         renderer.GetLabelProperties().SetVisibility(value - 2 ** 64 if value >= 2 ** 63 else value, False)
+    # --attributes, --color-by, --query, --highlight, --dim (ValueError names the option).
+    style = apply_attribute_options(args, volume, renderer.GetLabelProperties(), args.hide)
     try:
         check(lambda: renderer.ResetCamera(args.azimuth, args.elevation, args.zoom), "camera")
         start = time.perf_counter()
@@ -147,14 +201,22 @@ def run(args):
         "nee": not args.no_nee,
         "seed": args.seed,
         "lod": args.lod,
+        "shading": args.shading,
         "setup_seconds": renderer.GetSetupSeconds(),
         "render_seconds": renderer.GetRenderSeconds(),
         "wall_seconds": wall,
         "ms_per_frame": float(np.mean(timed)),
         "bytes_blas": renderer.GetBLASBytes(),
         "bytes_tlas": renderer.GetTLASBytes(),
+        "bytes_neighbour_table": renderer.GetNeighbourTableBytes(),
         "hidden_labels": args.hide,
+        "clip": args.clip,
+        "crop": args.crop,
     }
+    if style is not None:
+        result["visible_labels"] = [v for v, k in zip(style.values, style.keys)
+                                    if renderer.GetLabelProperties().GetVisibility(k)]
+        result["highlighted_labels"] = style.highlighted
     if args.json:
         print_json(result)
     else:
@@ -162,6 +224,7 @@ def run(args):
             ("input", args.input),
             ("device", result["device"]),
             ("image", f"{args.width} x {args.height}, {result['spp']} spp, LOD {args.lod}, "
+                      f"{args.shading} shading, "
                       f"{args.bounces} bounces, NEE {'on' if result['nee'] else 'off'}"),
             ("setup", f"{result['setup_seconds']:.3f} s (upload + BVH)"),
             ("render", f"{result['render_seconds']:.3f} s ({result['ms_per_frame']:.1f} ms per pass)"),

@@ -25,8 +25,11 @@
  *   label   uint32  label index + 1, 0 where the ray hits nothing (background)
  *   depth   float   distance from the ray origin along the ray (world units); SVDAG_DEPTH_MISS where
  *                   label == 0. Never NaN or inf.
- *   normal  3 float world-space unit normal of the entry face; (0, 0, 0) on a miss and where the
- *                   camera is inside the hit voxel/box (no entry face)
+ *   normal  3 float world-space unit shading normal: the entry face's, or with smooth shading
+ *                   the smooth estimate (SmoothNormal.h); (0, 0, 0) on a miss and where the
+ *                   camera is inside the hit voxel/box (no entry face); on a cut face
+ *                   (Clipping.h) the clipping plane's outward normal. The same buffer then holds,
+ *                   from float 3 * width * height on, the entry face normal of every pixel.
  *   hdr     4 float linear RGBA: the mean of all samples accumulated since the last reset (below)
  *   color   RGBA8   the tone-mapped display color, R in the lowest byte (bytes R, G, B, A in memory):
  *                   per channel x = exposure * hdr, then Reinhard's curve x / (1 + x), then the
@@ -48,6 +51,9 @@
  */
 #ifndef SVDAG_RENDER_GPU_LAYOUT_H
 #define SVDAG_RENDER_GPU_LAYOUT_H
+
+// SVDAG_CLIP_MAX_SLOTS: the size of the clipping plane array below.
+#include "svdag/Clipping.h"
 
 #ifdef __cplusplus
 #include <cstdint>
@@ -99,6 +105,10 @@ SVDAG_GPU_CONST SVDAG_RENDER_LOD_LEAF = 1u;
 SVDAG_GPU_CONST SVDAG_RENDER_LOD_VOXEL = 2u;
 SVDAG_GPU_CONST SVDAG_RENDER_LOD_AUTO = 3u;
 
+/* Shading normal (frame.image.w): the entry face's, or SmoothNormal.h's estimate. */
+SVDAG_GPU_CONST SVDAG_SHADING_VOXEL = 0u;
+SVDAG_GPU_CONST SVDAG_SHADING_SMOOTH = 1u;
+
 /* Depth written where a ray hits nothing (FLT_MAX; finite, so no inf ever reaches an output). */
 #define SVDAG_DEPTH_MISS 3.402823466e38f
 
@@ -116,12 +126,15 @@ SVDAG_UNIFORMS_BEGIN(FrameUniforms)
                        //    (16 voxels) may cover to be drawn at that coarser level; z: world
                        //    size of a pixel at the ray origin, w: its growth per unit distance (a
                        //    voxel at distance t covers x / (z + w t) pixels)
-  uvec4 image;         // x: width, y: height, z: LOD (SVDAG_RENDER_LOD_*), w: unused
+  uvec4 image;         // x: width, y: height, z: LOD (SVDAG_RENDER_LOD_*), w: shading
+                       // (SVDAG_SHADING_*)
   uvec4 grid;          // x, y: cells along x and y (cell index = cx + nx * (cy + ny * cz));
                        // z: primitives per BLAS (instance i's primitive p is entry
                        // i * z + p of the primitive -> block buffer); w: unused
   uvec4 widths;        // x: cell bits, y: label bits, z: root ref bits, w: mid ref bits
-  uvec4 widths2;       // x: leaf ref bits, y: bits per block record; z, w unused
+  uvec4 widths2;       // x: leaf ref bits, y: bits per block record; zw: address of the
+                       // neighbour table (smooth shading only: 27 root refs per block,
+                       // svdag::neighbourTable; 0 otherwise)
   uvec4 volumeStreams; // addresses: xy blocks, zw roots
   uvec4 volumeStreams2; // addresses: xy mids, zw leaves
   uvec4 sceneOutputs;  // addresses: xy primitive -> block index (uint32), zw label output
@@ -140,6 +153,12 @@ SVDAG_UNIFORMS_BEGIN(FrameUniforms)
   uvec4 environmentMap2; // addresses: xy texels (vec4 per texel, rgb radiance); z, w unused
   uvec4 rayLimits;     // addresses: xy per-pixel ray limit (float; 0: none); z, w unused
   uvec4 statistics;    // addresses: xy luminance sums of squares (float per pixel), zw variance
+  // Clipping (Module/core/svdag/Clipping.h): every ray, primary and secondary, is clipped to the
+  // region the planes keep. x: planes used in clipPlanes (0: no clipping); y, z, w unused.
+  uvec4 clipping;
+  // (unit normal, w) relative to the scene's reference point like rayOrigin, w including the
+  // margin: up to SVDAG_CLIP_MAX_PLANES user planes, then the crop box's six faces.
+  vec4 clipPlanes[SVDAG_CLIP_MAX_SLOTS];
 SVDAG_UNIFORMS_END(frame)
 
 /* Reinhard's tone curve on exposure-scaled linear radiance (the color output). */
@@ -168,7 +187,9 @@ SVDAG_GPU_FN vec3 svdagLabelColor(uint labelIndex)
 }
 
 #ifdef __cplusplus
-static_assert(sizeof(FrameUniforms) == 28 * 16, "FrameUniforms must stay a list of 16-byte members");
+// 29 members and the clipping plane array (a vec4 array has a 16-byte stride in std140 too).
+static_assert(sizeof(FrameUniforms) == (29 + SVDAG_CLIP_MAX_SLOTS) * 16,
+  "FrameUniforms must stay a list of 16-byte members");
 } // namespace gpu
 } // namespace render
 } // namespace svdag

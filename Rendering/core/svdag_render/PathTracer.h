@@ -18,6 +18,7 @@
  *       (the renderer's entry-only hit group, Traversal.h "Entry only"); where a trace never
  *       reports a hit from inside anyway, it may be the plain trace
  *   SVDAG_TRACE_OCCLUDED(result, origin, direction, tmax)  sets result = true if anything is hit
+ *   optionally SVDAG_TRACE_OCCLUDED_LIFTED (below)
  *   SVDAG_MATERIAL(labelIndex)  the Material of a label
  *   and the environment macros of Shading.h.
  * Feature switches (specialization constants on the GPU, so a scene that does not use a feature
@@ -28,6 +29,14 @@
 #define SVDAG_RENDER_PATHTRACER_H
 
 #include "svdag_render/Shading.h"
+
+// Occlusion and closest-hit rays that leave a smooth-shaded hit start lifted above the voxel
+// staircase (PathHit.lift), possibly inside a voxel of a touching label: where the includer can,
+// these traces skip the solid they start in (the renderer: its entry-only hit group, like
+// SVDAG_TRACE_CLOSEST_THROUGH); by default the plain traces.
+#ifndef SVDAG_TRACE_OCCLUDED_LIFTED
+#define SVDAG_TRACE_OCCLUDED_LIFTED(result, o, d, tmax) SVDAG_TRACE_OCCLUDED(result, o, d, tmax)
+#endif
 
 #ifdef __cplusplus
 namespace svdag
@@ -107,11 +116,12 @@ SHADING_FN vec3 tracePath(
   vec3 o = origin;
   vec3 d = direction;
   bool through = false; // the ray continues through the surface it has just crossed
+  bool liftedPath = false; // the ray leaves a smooth-shaded hit from above the staircase
   for (uint bounce = 0u; bounce <= maxBounces; ++bounce)
   {
     PathHit h;
     float tmax = bounce == 0u ? cameraTmax : 1e30f;
-    if (SVDAG_FEATURE_TRANSMISSION && through)
+    if ((SVDAG_FEATURE_TRANSMISSION && through) || liftedPath)
       SVDAG_TRACE_CLOSEST_THROUGH(h, o, d, tmax);
     else
       SVDAG_TRACE_CLOSEST(h, o, d, tmax);
@@ -133,35 +143,52 @@ SHADING_FN vec3 tracePath(
     vec3 n = h.inside ? -h.normal : h.normal;
     if (dot(n, d) > 0.0f)
       n = -n;
+    // The BSDF sees the shading normal. Shadow rays and reflected paths of a smooth-shaded hit
+    // start above the staircase (shadowOrigin below); with face normals a path continuing below
+    // the geometric surface n ends (its ray would start into the solid).
+    vec3 ns = h.inside ? n : h.shading;
+    if (!(dot(ns, d) < 0.0f))
+      ns = n;
     vec3 wo = -d;
     vec3 position = o + h.t * d;
     vec3 above = position + epsilon * n;
+    // Shadow rays and reflected paths of a smooth-shaded hit start h.lift further along the
+    // shading normal: the voxel staircase next to the hit would otherwise shadow the smooth
+    // surface it stands for (dark dots in every step's corner, stripes near the terminator).
+    bool lifted = !h.inside && h.lift > 0.0f;
+    vec3 shadowOrigin = lifted ? above + h.lift * ns : above;
 
     if (nee)
     {
       float lightPdf;
       vec3 wl = environmentSample(p, vec2(random01(rng), random01(rng)), lightPdf);
-      vec3 f = bsdfEval(m, n, wo, wl);
+      vec3 f = bsdfEval(m, ns, wo, wl);
       if (lightPdf > 0.0f && max(f.x, max(f.y, f.z)) > 0.0f)
       {
         bool blocked;
-        SVDAG_TRACE_OCCLUDED(blocked, above, wl, 1e30f);
+        if (lifted)
+          SVDAG_TRACE_OCCLUDED_LIFTED(blocked, shadowOrigin, wl, 1e30f);
+        else
+          SVDAG_TRACE_OCCLUDED(blocked, shadowOrigin, wl, 1e30f);
         if (!blocked)
           radiance += throughput * f * environmentRadiance(p, wl) *
-            (powerHeuristic(lightPdf, bsdfPdf(m, n, wo, wl)) / lightPdf);
+            (powerHeuristic(lightPdf, bsdfPdf(m, ns, wo, wl)) / lightPdf);
       }
       if (SVDAG_FEATURE_SUN && p.sunRadiance.a > 0.0f)
       {
         float sunPdf;
         vec3 ws = sunSample(p, vec2(random01(rng), random01(rng)), sunPdf);
-        vec3 fs = bsdfEval(m, n, wo, ws);
+        vec3 fs = bsdfEval(m, ns, wo, ws);
         if (max(fs.x, max(fs.y, fs.z)) > 0.0f)
         {
           bool blocked;
-          SVDAG_TRACE_OCCLUDED(blocked, above, ws, 1e30f);
+          if (lifted)
+            SVDAG_TRACE_OCCLUDED_LIFTED(blocked, shadowOrigin, ws, 1e30f);
+          else
+            SVDAG_TRACE_OCCLUDED(blocked, shadowOrigin, ws, 1e30f);
           // Radiance E / omega over pdf 1 / omega is the irradiance E; a disk sun is MIS-weighted
           // against BSDF sampling, a delta sun (pdf 0) only reachable here.
-          float w = sunPdf > 0.0f ? powerHeuristic(sunPdf, bsdfPdf(m, n, wo, ws)) : 1.0f;
+          float w = sunPdf > 0.0f ? powerHeuristic(sunPdf, bsdfPdf(m, ns, wo, ws)) : 1.0f;
           vec3 contribution = w * fs * vec3(p.sunRadiance);
           if (!blocked)
             radiance += throughput * contribution;
@@ -172,15 +199,19 @@ SHADING_FN vec3 tracePath(
     Material sm = m;
     if (!SVDAG_FEATURE_TRANSMISSION)
       sm.params.z = 0.0f;
-    BsdfSample s = bsdfSample(sm, n, wo, !h.inside, vec3(random01(rng), random01(rng), random01(rng)));
-    if (max(s.weight.x, max(s.weight.y, s.weight.z)) <= 0.0f)
+    BsdfSample s = bsdfSample(sm, ns, wo, !h.inside, vec3(random01(rng), random01(rng), random01(rng)));
+    if (max(s.weight.x, max(s.weight.y, s.weight.z)) <= 0.0f ||
+      (!s.transmitted && !lifted && !(dot(s.direction, n) > 0.0f)))
       break;
     throughput *= s.weight;
     previousPdf = s.pdf;
     previousDelta = s.delta;
-    o = s.transmitted ? position - epsilon * n : above;
+    // A reflected path of a smooth-shaded hit leaves from above the staircase, like the shadow
+    // rays.
+    o = s.transmitted ? position - epsilon * n : shadowOrigin;
     d = s.direction;
     through = s.transmitted;
+    liftedPath = lifted && !s.transmitted;
     if (bounce >= 2u)
     {
       float q = min(max(throughput.x, max(throughput.y, throughput.z)), 0.95f);

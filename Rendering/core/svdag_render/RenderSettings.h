@@ -6,6 +6,7 @@
 #include <array>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 namespace svdag
 {
@@ -24,6 +25,20 @@ const char* lodName(Lod lod);
 // Parses lodName's names; throws std::invalid_argument otherwise.
 Lod parseLod(const std::string& name);
 
+// The normal that lights a voxel hit (the hit itself, position, label and depth, is always the
+// lossless voxel surface): the entry face's (axis-aligned, blocky), or a smooth estimate from the
+// occupancy of the hit label around the hit point (Module/core/svdag/SmoothNormal.h; the face
+// normal still offsets rays). Smooth shading uploads a neighbour table of 27 words per block.
+enum class Shading : uint32_t
+{
+  Voxel = 0,
+  Smooth = 1
+};
+// "voxel", "smooth".
+const char* shadingName(Shading shading);
+// Parses shadingName's names; throws std::invalid_argument otherwise.
+Shading parseShading(const std::string& name);
+
 // A directional light: a disk of the given angular radius (0: a delta light) in `direction`
 // (towards the light, world space), with `irradiance` at normal incidence (linear RGB).
 struct SunLight
@@ -34,10 +49,30 @@ struct SunLight
   double angularRadiusDegrees = 0.27;
 };
 
+// A clipping plane in world coordinates: keeps the half-space the normal points to, the points x
+// with dot(normal, x - origin) >= 0 (VTK's convention for vtkPlane clipping planes).
+struct ClipPlane
+{
+  std::array<double, 3> origin{ { 0, 0, 0 } };
+  std::array<double, 3> normal{ { 0, 0, 1 } }; // finite, non-zero; need not be unit length
+  bool operator==(const ClipPlane& o) const { return origin == o.origin && normal == o.normal; }
+};
+
+// An axis-aligned crop box in world coordinates (xmin, xmax, ymin, ymax, zmin, zmax): only what
+// is inside it is drawn (when on).
+struct CropBox
+{
+  bool on = false;
+  std::array<double, 6> bounds{ { 0, 0, 0, 0, 0, 0 } };
+  bool operator==(const CropBox& o) const { return on == o.on && (!on || bounds == o.bounds); }
+};
+
 // The ranges validate() checks (the VTK setters clamp to the same ones).
 constexpr uint32_t MaximumSamplesPerPixel = 65536;
 constexpr uint32_t MaximumBounces = 64;
 constexpr double MaximumSunAngularRadius = 89.9;
+// Clipping planes at most (VTK's usual limit; Clipping.h's SVDAG_CLIP_MAX_PLANES).
+constexpr uint32_t MaximumClipPlanes = 6;
 
 struct RenderSettings
 {
@@ -64,6 +99,15 @@ struct RenderSettings
   SunLight sun;
   // Most blocks per bottom-level acceleration structure; 0: the device's limit.
   uint32_t maximumBlocksPerBlas = 0;
+  // Voxel face normals or smooth normals for shading (path tracer and the Normal output).
+  Shading shading = Shading::Voxel;
+  // What is drawn is the intersection of the clipping planes' half-spaces and the crop box: every
+  // ray (camera, shadow, bounce) is clipped to it, so cut-away parts cast no shadow, and where a
+  // ray enters the region inside a solid voxel it hits the cut face (the plane's or box face's
+  // outward normal, the voxel's label). At block and leaf LOD the solid is the block box or the
+  // leaf box: a cut shows their cross-sections. A change is a uniform update (no BVH rebuild).
+  std::vector<ClipPlane> clipPlanes;
+  CropBox crop;
 };
 
 // Whether two settings trace the same image: every member but exposure (applied to the traced
@@ -73,8 +117,11 @@ bool tracesSameImage(const RenderSettings& a, const RenderSettings& b);
 // The valid ranges, checked in one place: throws std::invalid_argument naming the setting and
 // its range (samplesPerPixel 1 .. MaximumSamplesPerPixel, maximumBounces 0 .. MaximumBounces,
 // exposure and autoLodPixels finite > 0, colors finite >= 0, a finite non-zero sun direction,
-// sun radius in [0, MaximumSunAngularRadius]).
+// sun radius in [0, MaximumSunAngularRadius], at most MaximumClipPlanes clipping planes with finite
+// origins and finite non-zero normals, a finite crop box with min <= max on every axis).
 void validate(const RenderSettings& settings);
+// The clipping part of validate() (also for the mapper's own planes and cropping).
+void validateClipping(const std::vector<ClipPlane>& planes, const CropBox& crop);
 
 } // namespace render
 } // namespace svdag

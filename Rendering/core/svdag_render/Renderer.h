@@ -10,7 +10,7 @@
 //
 // Progressive accumulation: every render() adds samplesPerPixel samples to the running mean
 // while nothing that changes the image changed since the last one (camera, image size, LOD,
-// materials, visibility, lighting, bounces, NEE, seed, background, volume); any such change
+// materials, visibility, lighting, bounces, NEE, seed, background, clipping, volume); any such change
 // starts a new accumulation. Exposure and samplesPerPixel do not restart it.
 //
 // Materials are per label index (defaultMaterial: base color svdagLabelColor, roughness 0.6,
@@ -51,7 +51,9 @@ struct Image
   uint32_t height = 0;
   std::vector<uint32_t> label; // label index + 1, 0 = background
   std::vector<float> depth;    // world distance along the ray; SVDAG_DEPTH_MISS (FLT_MAX) on a miss
-  std::vector<float> normal;   // 3 per pixel, world unit normal; 0 on a miss or inside
+  std::vector<float> normal;   // 3 per pixel, world unit shading normal (the entry face's, or the
+                               // smooth estimate with Shading::Smooth); 0 on a miss or inside
+  std::vector<float> faceNormal; // 3 per pixel, world unit normal of the entry face; 0 likewise
   std::vector<float> hdr;      // 4 per pixel, linear RGBA: the mean of the accumulated samples
   std::vector<uint32_t> color; // RGBA8, tone-mapped sRGB, R in the lowest byte
   // Per pixel, the variance of the accumulated mean's luminance (the sample variance over the
@@ -130,6 +132,22 @@ public:
   // irradiance, or an angular radius outside [0, 90) degrees.
   void setSun(const SunLight& sun);
   const SunLight& sun() const { return this->Settings.sun; }
+
+  // Voxel face normals or smooth normals for shading (RenderSettings::shading). Smooth builds
+  // and uploads the neighbour table on the next render() (once per volume).
+  void setShading(Shading shading);
+  Shading shading() const { return this->Settings.shading; }
+  // Bytes of the smooth-shading neighbour table on the device (0 until smooth shading needs it).
+  uint64_t neighbourTableBytes() const;
+
+  // Clipping planes and crop box (world coordinates, RenderSettings::clipPlanes): every ray is
+  // clipped to what they keep; cut faces are drawn where the region cuts a solid. Throws
+  // std::invalid_argument like validate() (more than MaximumClipPlanes planes, a zero or
+  // non-finite normal, an inverted crop box). A change restarts the accumulation, it does not
+  // rebuild the BVH (the planes are uniforms).
+  void setClipping(const std::vector<ClipPlane>& planes, const CropBox& crop = CropBox());
+  const std::vector<ClipPlane>& clipPlanes() const { return this->Settings.clipPlanes; }
+  const CropBox& crop() const { return this->Settings.crop; }
 
   static Material defaultMaterial(uint32_t labelIndex);
   // The material of a label index (needs a volume; std::invalid_argument for an index outside

@@ -404,6 +404,11 @@ struct PathHit
   float t;     // distance along the (unit) direction
   uint label;  // label index
   vec3 normal; // unit geometric normal of the face crossed, world space, pointing out of the solid
+  vec3 shading; // unit shading normal for the BSDF (smooth shading; else equal to normal), facing
+                // the ray; the geometric normal still offsets the rays that leave the surface
+  float lift;   // world distance along `shading` that shadow rays and reflected paths start at,
+                // to clear the voxel staircase a smooth normal stands for (SmoothNormal.h); 0 with
+                // face normals
 };
 
 #ifdef __cplusplus
