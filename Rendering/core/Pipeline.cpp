@@ -75,11 +75,47 @@ bool Pipeline::setFeatures(const ShaderFeatures& features)
 {
   if (features == this->Features && this->Handle)
     return false;
-  this->destroyPipeline();
+  if (this->Handle)
+    this->Kept.push_back(this->release());
+  for (auto it = this->Kept.begin(); it != this->Kept.end(); ++it)
+  {
+    if (it->features == features)
+    {
+      Built kept = std::move(*it);
+      this->Kept.erase(it);
+      this->use(std::move(kept));
+      return false;
+    }
+  }
   this->Features = features;
   this->createPipeline();
   this->createShaderBindingTable();
   return true;
+}
+
+Pipeline::Built Pipeline::release()
+{
+  Built built;
+  built.features = this->Features;
+  built.handle = this->Handle;
+  built.table = std::move(this->Table);
+  built.raygen = this->Raygen;
+  built.miss = this->Miss;
+  built.hit = this->Hit;
+  built.callable = this->Callable;
+  this->Handle = VK_NULL_HANDLE;
+  return built;
+}
+
+void Pipeline::use(Built&& built)
+{
+  this->Features = built.features;
+  this->Handle = built.handle;
+  this->Table = std::move(built.table);
+  this->Raygen = built.raygen;
+  this->Miss = built.miss;
+  this->Hit = built.hit;
+  this->Callable = built.callable;
 }
 
 void Pipeline::destroyPipeline()
@@ -88,6 +124,12 @@ void Pipeline::destroyPipeline()
   if (this->Handle)
     vkDestroyPipeline(this->Ctx.device(), this->Handle, nullptr);
   this->Handle = VK_NULL_HANDLE;
+  for (Built& kept : this->Kept)
+  {
+    kept.table.reset();
+    vkDestroyPipeline(this->Ctx.device(), kept.handle, nullptr);
+  }
+  this->Kept.clear();
 }
 
 void Pipeline::destroy()

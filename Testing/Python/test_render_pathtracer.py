@@ -301,6 +301,17 @@ def test_material_edit_does_not_rebuild(volume):
     r.GetLabelProperties().SetVisibility(VALUES[2], False)
     render(r)
     assert r.GetNumberOfBVHBuilds() == builds + 1
+    # Emission off and on again (a highlighted label hidden and shown): the pipelines of both
+    # feature sets are kept, nothing more is compiled, and each traces as it did.
+    r.GetLabelProperties().SetVisibility(VALUES[2], True)
+    images = []
+    for value in (0, 1, 0, 1):
+        r.GetLabelProperties().SetEmission(VALUES[2], value, value, value)
+        images.append(render(r)["HDR"])
+    assert r.GetNumberOfPipelineBuilds() == pipelines + 1
+    np.testing.assert_array_equal(images[2], images[0])
+    np.testing.assert_array_equal(images[3], images[1])
+    assert not np.array_equal(images[1], images[0])
 
 
 def test_bad_settings_fail_cleanly(volume, tmp_path):

@@ -17,6 +17,7 @@
 #include "svdag_render/GpuLayout.h"
 
 #include <array>
+#include <vector>
 
 namespace svdag
 {
@@ -60,8 +61,11 @@ public:
   Pipeline(const Pipeline&) = delete;
   Pipeline& operator=(const Pipeline&) = delete;
 
-  // Rebuilds the pipeline and its shader binding table if the features differ; returns whether
-  // it rebuilt. Call only while no frame is in flight (the renderer waits for every frame).
+  // Switches to the pipeline (and shader binding table) of these features, building it the first
+  // time they are asked for; returns whether it built one. The pipelines built before are kept
+  // (a few: one per feature set a session uses), so toggling a feature back, such as emission
+  // when a highlighted label is hidden and shown, costs no shader compilation. Call only while
+  // no frame is in flight (the renderer waits for every frame).
   bool setFeatures(const ShaderFeatures& features);
   const ShaderFeatures& features() const { return this->Features; }
   // Pipelines built so far (the constructor's included): a test sees rebuilds.
@@ -83,6 +87,18 @@ private:
   void destroyPipeline();
   void destroy();
 
+  // One built pipeline: its features, handle, shader binding table and the table's regions.
+  struct Built
+  {
+    ShaderFeatures features;
+    VkPipeline handle = VK_NULL_HANDLE;
+    Buffer table;
+    VkStridedDeviceAddressRegionKHR raygen{}, miss{}, hit{}, callable{};
+  };
+  // Moves the pipeline in use out (leaving none in use), or in.
+  Built release();
+  void use(Built&& built);
+
   Context& Ctx;
   ShaderFeatures Features;
   uint64_t Builds = 0;
@@ -91,6 +107,7 @@ private:
   VkPipeline Handle = VK_NULL_HANDLE;
   Buffer Table;
   VkStridedDeviceAddressRegionKHR Raygen{}, Miss{}, Hit{}, Callable{};
+  std::vector<Built> Kept; // the pipelines of other feature sets, built before
 };
 
 } // namespace render
