@@ -25,9 +25,11 @@ from .build import from_image, from_numpy  # noqa: E402 (needs the extended __pa
 from .fileio import read  # noqa: E402
 from .plotting import add_segmentation, pick, refine  # noqa: E402
 from .slicing import add_segmentation_slice  # noqa: E402
+from .streaming import Builder  # noqa: E402
 from .volume import SegmentationVolume  # noqa: E402
 
 __all__ = [
+    "Builder",
     "SegmentationVolume",
     "add_segmentation",
     "add_segmentation_slice",
