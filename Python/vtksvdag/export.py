@@ -6,12 +6,12 @@ import numpy as np
 from ._vtkrun import run_algorithm
 
 #: Output suffixes :func:`write_label_volume` understands.
-LABEL_VOLUME_SUFFIXES = (".nrrd", ".nhdr", ".vti", ".npy")
+LABEL_VOLUME_SUFFIXES = (".nrrd", ".nhdr", ".vti", ".npy", ".zarr")
 
 
 def label_volume_suffix(path):
     """The suffix of ``path`` that selects its format; ValueError for unsupported ones."""
-    lower = os.fsdecode(path).lower()
+    lower = os.fsdecode(path).lower().rstrip("/" + os.sep)  # a .zarr store may be "out.zarr/"
     for suffix in LABEL_VOLUME_SUFFIXES:
         if lower.endswith(suffix):
             return suffix
@@ -60,9 +60,11 @@ def write_label_volume(volume, path, progress=None):
     path : str, bytes or os.PathLike
         ``.nrrd`` (gzip encoding, space directions and origin), ``.nhdr`` (detached NRRD
         header plus gzip data file), ``.vti`` (VTK XML image data, zlib) or ``.npy`` (numpy
-        array indexed ``[x, y, z]``, Fortran order, the original dtype; no geometry).
+        array indexed ``[x, y, z]``, Fortran order, the original dtype; no geometry) or
+        ``.zarr`` (a new OME-Zarr 0.4 / Zarr v2 store directory, (z, y, x), written slab by
+        slab with tensorstore: :func:`vtksvdag.stores.write_zarr`).
     progress : callable, optional
-        Called with the writing progress in [0, 1] (VTI only).
+        Called with the writing progress in [0, 1] (VTI and Zarr only).
 
     Raises
     ------
@@ -84,5 +86,9 @@ def write_label_volume(volume, path, progress=None):
         _write_nrrd(volume, path)
     elif suffix == ".vti":
         _write_vti(volume, path, progress)
+    elif suffix == ".zarr":
+        from .stores import write_zarr
+
+        write_zarr(volume, path, progress=progress)
     else:
         np.save(path, volume.to_numpy("xyz"), allow_pickle=False)

@@ -22,8 +22,36 @@ def _check_input_file(path):
     return path
 
 
-def read(path, background=0, exclude=(), dataset=None, progress=None):
-    """Read a label volume file, or a compressed ``.svdag`` file, as a SegmentationVolume.
+def _chunked_store(path, dataset):
+    """(location, kind) when ``path`` is a URL or a directory holding a chunked store (see
+    vtksvdag.stores), else None (a file, or a directory that read() reports)."""
+    from . import stores
+
+    if stores.is_url(path):
+        location, kind = stores.find_store(path, dataset)
+        if kind is None:
+            if location.local is not None and not os.path.exists(location.local):
+                raise FileNotFoundError(2, "No such file or directory", location.text)
+            raise OSError(f"{location.text}: no Zarr, N5 or neuroglancer precomputed store there")
+        return location, kind
+    try:
+        text = os.fsdecode(path)
+    except TypeError:
+        return None  # _check_input_file names the type
+    if not os.path.isdir(text):
+        return None
+    location, kind = stores.find_store(text, dataset)
+    if kind is None:
+        if dataset is not None and os.path.isdir(location.local):
+            raise IsADirectoryError(21, "Is a directory (no chunked store)", location.text)
+        return None  # IsADirectoryError from _check_input_file
+    return location, kind
+
+
+def read(path, background=0, exclude=(), dataset=None, progress=None, *, scale=None,
+         axis_order=None):
+    """Read a label volume file, a chunked store, or a compressed ``.svdag`` file, as a
+    SegmentationVolume.
 
     Label volume files (NRRD ``.nrrd``/``.nhdr`` including gzip encoding, MetaImage
     ``.mha``/``.mhd``, VTK ``.vti``, NIfTI ``.nii``/``.nii.gz``, TIFF ``.tif``, HDF5 ``.h5``)
@@ -31,20 +59,38 @@ def read(path, background=0, exclude=(), dataset=None, progress=None):
     ``.npy`` file is taken as an integer array indexed ``[x, y, z]`` (as ``vtksvdag
     decompress`` writes it), with unit spacing.
 
+    A directory (or a ``file://``, ``gs://``, ``s3://``, ``http(s)://`` URL) holding a chunked
+    store is opened with tensorstore and compressed slab by slab (z-slabs of 16·k slices,
+    tensorstore's chunk cache bounded), never read whole: a Zarr v2 (``.zarray``) or v3
+    (``zarr.json``) array, an OME-Zarr multiscale group, an N5 array (``attributes.json``) or
+    a neuroglancer precomputed volume (``info``); see :mod:`vtksvdag.stores`. Zarr arrays are
+    taken as (z, y, x), x fastest, unless OME-Zarr ``axes`` say otherwise; N5 and precomputed
+    as (x, y, z) (precomputed's channel must be 1). Spacing and origin come from OME-Zarr's
+    ``scale``/``translation``, precomputed's ``resolution``/``voxel_offset`` (times the
+    resolution) and N5's ``resolution``/``pixelResolution``. Only local stores and ``file://``
+    URLs are tested; remote URLs are passed to tensorstore untested.
+
     Parameters
     ----------
     path : str, bytes or os.PathLike
-        The file.
+        The file, store directory or store URL.
     background : int, default: 0
         Label value that is not stored; it must fit the file's label dtype. A ``.svdag`` file
         whose own background differs is compressed again with this one.
     exclude : sequence of int, default: ()
         Labels left out; they decode as background (each must fit the file's label dtype).
     dataset : str, optional
-        Name of the dataset inside an HDF5 file (an error for other files).
+        Name of the dataset inside an HDF5 file, or the path of the array (or OME-Zarr group)
+        inside a chunked store's directory (an error for other files).
     progress : callable, optional
         Called with the reading progress in [0, 1]; an exception it raises stops the reading
         and is raised from here.
+    scale : int, optional
+        Chunked stores only: the index of the OME-Zarr or precomputed scale to read (0, the
+        default, is full resolution); a plain array has the one scale 0.
+    axis_order : {"zyx", "xyz"}, optional
+        Chunked stores only: the order of the store's spatial dimensions, overriding the
+        conventions above.
 
     Returns
     -------
@@ -56,11 +102,17 @@ def read(path, background=0, exclude=(), dataset=None, progress=None):
     ------
     FileNotFoundError
         The file does not exist.
+    IsADirectoryError
+        ``path`` is a directory that holds no known chunked store.
+    ImportError
+        ``path`` is a chunked store and tensorstore is not installed.
     OSError
         The file cannot be read (unknown format, truncated, corrupt).
     ValueError
         The file holds no integer label volume, ``background`` or an excluded label does not
-        fit the file's dtype, or ``dataset`` is given for a file that is not HDF5.
+        fit the file's dtype, ``dataset`` is given for a file that is not HDF5, ``scale`` or
+        ``axis_order`` for a file that is no chunked store, ``scale`` is out of range, or a
+        store's non-spatial axis (channel) has more than one element.
 
     Examples
     --------
@@ -69,10 +121,23 @@ def read(path, background=0, exclude=(), dataset=None, progress=None):
     >>> volume.dims  # doctest: +SKIP
     (64, 64, 64)
     """
-    path = _check_input_file(path)
-    exclude = label_list(exclude)  # a generator is read once
     if dataset is not None and not isinstance(dataset, str):
         raise TypeError(f"dataset must be a str (an HDF5 dataset path), not {dataset!r}")
+    if axis_order is not None and axis_order not in ("zyx", "xyz"):
+        raise ValueError(f"axis_order must be 'zyx' or 'xyz' (or None), not {axis_order!r}")
+    store = _chunked_store(path, dataset)
+    if store is not None:
+        from .stores import read_store
+
+        exclude = label_list(exclude)
+        return read_store(*store, background=background, exclude=exclude, scale=scale,
+                          axis_order=axis_order, progress=progress)
+    path = _check_input_file(path)
+    exclude = label_list(exclude)  # a generator is read once
+    for name, value in (("scale", scale), ("axis_order", axis_order)):
+        if value is not None:
+            raise ValueError(f"{path}: {name}={value!r} is only for chunked stores (Zarr, N5, "
+                             f"neuroglancer precomputed)")
     if path.lower().endswith(".npy"):
         from .build import from_numpy
 

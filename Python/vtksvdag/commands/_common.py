@@ -8,6 +8,7 @@ import sys
 from .._labels import LabelRangeError
 from ..fileio import read
 from ..progress import ProgressBar
+from ..stores import is_url
 
 INT64_MIN = -(2**63)
 UINT64_MAX = 2**64 - 1
@@ -97,7 +98,20 @@ def add_input_options(parser):
         "--exclude", type=label_value, nargs="+", default=[], metavar="N",
         help="labels left out (they decode as background); each must fit the file's label type",
     )
-    parser.add_argument("--dataset", metavar="NAME", help="dataset name inside an HDF5 file")
+    parser.add_argument(
+        "--dataset", metavar="NAME",
+        help="dataset name inside an HDF5 file, or array path inside a chunked store directory",
+    )
+    parser.add_argument(
+        "--scale", type=int_in(0, 2**31 - 1), metavar="N",
+        help="chunked stores (OME-Zarr, neuroglancer precomputed): scale index to read "
+        "(default: 0, full resolution)",
+    )
+    parser.add_argument(
+        "--axis-order", choices=("zyx", "xyz"),
+        help="chunked stores: order of the spatial dimensions (default: zyx for Zarr unless "
+        "OME-Zarr axes say otherwise, xyz for N5 and precomputed)",
+    )
 
 
 def progress_bar(args, label):
@@ -135,6 +149,8 @@ def load(args, path):
                 exclude=getattr(args, "exclude", ()),
                 dataset=getattr(args, "dataset", None),
                 progress=progress,
+                scale=getattr(args, "scale", None),
+                axis_order=getattr(args, "axis_order", None),
             ),
         )
     except LabelRangeError as e:
@@ -146,7 +162,13 @@ def load(args, path):
 
 
 def file_bytes(path):
-    """Size of a file in bytes."""
+    """Size of a file in bytes; of all files under a directory (a chunked store); None for a
+    URL (a remote store is not listed)."""
+    if is_url(path):
+        return None
+    if os.path.isdir(path):
+        return sum(os.path.getsize(os.path.join(root, name))
+                   for root, _, names in os.walk(path) for name in names)
     return os.path.getsize(path)
 
 

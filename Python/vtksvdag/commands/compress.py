@@ -6,11 +6,12 @@ from ._common import (
 )
 
 NAME = "compress"
-HELP = "compress a label volume file (NRRD, MetaImage, VTI, NIfTI, TIFF, HDF5, .npy) to .svdag"
+HELP = ("compress a label volume file (NRRD, MetaImage, VTI, NIfTI, TIFF, HDF5, .npy) or chunked "
+        "store (Zarr, OME-Zarr, N5, neuroglancer precomputed) to .svdag")
 
 
 def add_arguments(parser):
-    parser.add_argument("input", metavar="INPUT", help="label volume file")
+    parser.add_argument("input", metavar="INPUT", help="label volume file, or chunked store directory or URL")
     parser.add_argument(
         "-o", "--output", required=True, type=output_path((".svdag",), "compress"),
         metavar="OUT.svdag", help="output file (.svdag)",

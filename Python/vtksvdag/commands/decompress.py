@@ -6,7 +6,8 @@ from ..export import LABEL_VOLUME_SUFFIXES, label_volume_suffix, write_label_vol
 from ._common import add_output_options, file_bytes, load, print_json, print_table, run_with_progress
 
 NAME = "decompress"
-HELP = "decode a .svdag file into NRRD (.nrrd/.nhdr), VTK XML (.vti) or numpy (.npy, [x, y, z])"
+HELP = ("decode a .svdag file into NRRD (.nrrd/.nhdr), VTK XML (.vti), numpy (.npy, [x, y, z]) or "
+        "an OME-Zarr store (.zarr, Zarr v2, (z, y, x))")
 
 
 def _output_path(text):
@@ -22,7 +23,8 @@ def add_arguments(parser):
     parser.add_argument(
         "-o", "--output", required=True, type=_output_path, metavar="OUT",
         help=f"output file; its suffix picks the format ({', '.join(LABEL_VOLUME_SUFFIXES)}). "
-        ".npy arrays are indexed [x, y, z]",
+        ".npy arrays are indexed [x, y, z]; a .zarr store is a new OME-Zarr 0.4 directory "
+        "(Zarr v2 array '0', (z, y, x), x fastest, spacing/origin as its scale/translation)",
     )
     add_output_options(parser)
 

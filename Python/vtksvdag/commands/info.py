@@ -8,7 +8,7 @@ HELP = "print the statistics of a .svdag file or of a label volume compressed on
 
 
 def add_arguments(parser):
-    parser.add_argument("input", metavar="FILE", help=".svdag file or label volume file")
+    parser.add_argument("input", metavar="FILE", help=".svdag file, label volume file or chunked store (directory or URL)")
     add_input_options(parser)
     add_output_options(parser)
 
@@ -20,5 +20,6 @@ def run(args):
     if args.json:
         print_json(stats)
     else:
-        print_table([("input", f"{args.input}  ({stats['file_bytes']:,} bytes)")] + stats_rows(stats))
+        size = "remote" if stats["file_bytes"] is None else f"{stats['file_bytes']:,} bytes"
+        print_table([("input", f"{args.input}  ({size})")] + stats_rows(stats))
     return 0
