@@ -279,11 +279,9 @@ void vtkSegmentationSVDAGRenderSettings::SetCroppingRegionPlanes(
   double xmin, double xmax, double ymin, double ymax, double zmin, double zmax)
 {
   core::CropBox box;
-  box.on = true;
-  box.bounds = { { xmin, xmax, ymin, ymax, zmin, zmax } };
   try
   {
-    core::validateClipping({}, box);
+    box = core::validCropBox({ { xmin, xmax, ymin, ymax, zmin, zmax } });
   }
   catch (const std::exception& e)
   {

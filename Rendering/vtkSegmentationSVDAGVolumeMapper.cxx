@@ -563,11 +563,9 @@ void vtkSegmentationSVDAGVolumeMapper::SetCroppingRegionPlanes(
   double xmin, double xmax, double ymin, double ymax, double zmin, double zmax)
 {
   core::CropBox box;
-  box.on = true;
-  box.bounds = { { xmin, xmax, ymin, ymax, zmin, zmax } };
   try
   {
-    core::validateClipping({}, box);
+    box = core::validCropBox({ { xmin, xmax, ymin, ymax, zmin, zmax } });
   }
   catch (const std::exception& e)
   {

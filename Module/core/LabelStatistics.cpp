@@ -30,22 +30,18 @@ void decodeLayer(const Volume& v, int32_t cz, std::vector<uint32_t>& out, const 
   const uint32_t perLayer = uint32_t(n[0]) * uint32_t(n[1]);
   parallel(0, perLayer, 1, [&](uint64_t begin, uint64_t end) {
     std::vector<uint8_t> occ(S * S * S);
+    std::vector<uint32_t> labels(S * S * S);
     for (uint64_t c = begin; c < end; ++c)
     {
       const uint32_t cell = uint32_t(cz) * perLayer + uint32_t(c);
       const size_t cx = size_t(c % uint32_t(n[0])) * S, cy = size_t(c / uint32_t(n[0])) * S;
-      const auto range = v.cellBlocks(cell);
-      for (uint64_t b = range.first; b < range.second; ++b)
-      {
-        const Block blk = v.block(b);
-        occupancyInBox(v, b, { { blk.lo[0], blk.lo[1], blk.lo[2] } },
-          { { blk.hi[0], blk.hi[1], blk.hi[2] } }, occ.data());
-        for (uint32_t z = blk.lo[2]; z <= blk.hi[2]; ++z)
-          for (uint32_t y = blk.lo[1]; y <= blk.hi[1]; ++y)
-            for (uint32_t x = blk.lo[0]; x <= blk.hi[0]; ++x)
-              if (occ[x + S * (y + S * z)])
-                out[cx + x + nx * (cy + y + ny * z)] = blk.label;
-      }
+      decodeCellLabels(v, cell, NoLabel, labels.data(), occ.data());
+      // The cell's part inside the volume (edge cells are partial).
+      const size_t ex = std::min<size_t>(S, nx - cx), ey = std::min<size_t>(S, ny - cy);
+      for (size_t z = 0; z < lz; ++z)
+        for (size_t y = 0; y < ey; ++y)
+          for (size_t x = 0; x < ex; ++x)
+            out[cx + x + nx * (cy + y + ny * z)] = labels[x + S * (y + S * z)];
     }
   });
 }

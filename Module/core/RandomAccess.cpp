@@ -275,6 +275,28 @@ void occupancyInBox(const Volume& v, uint64_t blockIndex, const std::array<uint3
   }
 }
 
+void decodeCellLabels(
+  const Volume& v, uint64_t cell, uint32_t empty, uint32_t* out4096, uint8_t* scratch4096)
+{
+  std::fill(out4096, out4096 + S * S * S, empty);
+  const auto range = v.cellBlocks(cell);
+  for (uint64_t b = range.first; b < range.second; ++b)
+  {
+    const Block blk = v.block(b);
+    occupancyInBox(v, b, { { blk.lo[0], blk.lo[1], blk.lo[2] } },
+      { { blk.hi[0], blk.hi[1], blk.hi[2] } }, scratch4096);
+    // The blocks of a cell are disjoint: each solid voxel is written once.
+    for (uint32_t z = blk.lo[2]; z <= blk.hi[2]; ++z)
+      for (uint32_t y = blk.lo[1]; y <= blk.hi[1]; ++y)
+        for (uint32_t x = blk.lo[0]; x <= blk.hi[0]; ++x)
+        {
+          const size_t i = x + S * (y + S * z);
+          if (scratch4096[i])
+            out4096[i] = blk.label;
+        }
+  }
+}
+
 void decodeBox(const Volume& v, const Box& box, void* out, const ParallelFor& parallel)
 {
   checkBox(v, box, "decodeBox");
@@ -384,22 +406,7 @@ void resamplePlane(const Volume& v, const PlaneSampling& p, void* out, const Par
       nextSlot = (nextSlot + 1) % CacheSize;
       cacheCell[s] = cell;
       uint32_t* labels = cacheLabels.data() + s * S * S * S;
-      std::fill(labels, labels + S * S * S, NoLabel);
-      const auto range = v.cellBlocks(cell);
-      for (uint64_t b = range.first; b < range.second; ++b)
-      {
-        const Block blk = v.block(b);
-        occupancyInBox(v, b, { { blk.lo[0], blk.lo[1], blk.lo[2] } },
-          { { blk.hi[0], blk.hi[1], blk.hi[2] } }, occ.data());
-        for (uint32_t z = blk.lo[2]; z <= blk.hi[2]; ++z)
-          for (uint32_t y = blk.lo[1]; y <= blk.hi[1]; ++y)
-            for (uint32_t x = blk.lo[0]; x <= blk.hi[0]; ++x)
-            {
-              const size_t i = x + S * (y + S * z);
-              if (occ[i])
-                labels[i] = blk.label;
-            }
-      }
+      decodeCellLabels(v, cell, NoLabel, labels, occ.data());
       return labels;
     };
     for (uint64_t t = begin; t < end; ++t)

@@ -135,5 +135,14 @@ void validateClipping(const std::vector<ClipPlane>& planes, const CropBox& crop)
   }
 }
 
+CropBox validCropBox(const std::array<double, 6>& bounds)
+{
+  CropBox box;
+  box.on = true;
+  box.bounds = bounds;
+  validateClipping({}, box);
+  return box;
+}
+
 } // namespace render
 } // namespace svdag

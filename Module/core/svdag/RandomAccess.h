@@ -43,6 +43,11 @@ Box sliceBox(const Volume& volume, int axis, int32_t index);
 void occupancyInBox(const Volume& volume, uint64_t blockIndex, const std::array<uint32_t, 3>& lo,
   const std::array<uint32_t, 3>& hi, uint8_t* out4096);
 
+// The label index of every voxel of cell `cell` (cell-local, out4096[x + 16 * (y + 16 * z)]),
+// `empty` where no block is; `scratch4096` is occupancy scratch space of 4096 bytes.
+void decodeCellLabels(const Volume& volume, uint64_t cell, uint32_t empty, uint32_t* out4096,
+  uint8_t* scratch4096);
+
 // Decodes the labels of `box` into `out` (boxVoxels(box) values of the volume's scalar type,
 // x fastest). Voxels of no block hold the background.
 void decodeBox(const Volume& volume, const Box& box, void* out,

@@ -122,6 +122,8 @@ bool tracesSameImage(const RenderSettings& a, const RenderSettings& b);
 void validate(const RenderSettings& settings);
 // The clipping part of validate() (also for the mapper's own planes and cropping).
 void validateClipping(const std::vector<ClipPlane>& planes, const CropBox& crop);
+// A crop box that is on, with these bounds (xmin, xmax, ...); throws like validateClipping.
+CropBox validCropBox(const std::array<double, 6>& bounds);
 
 } // namespace render
 } // namespace svdag
