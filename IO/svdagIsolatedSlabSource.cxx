@@ -55,9 +55,16 @@ bool sendAll(int fd, const void* data, size_t size)
   return true;
 }
 
-// Reads exactly `size` bytes. Returns false on end of stream; throws TimeoutError-style
-// svdagReadError when nothing arrives for `timeoutSeconds` (a negative timeout waits forever).
-bool receiveAll(int fd, void* data, size_t size, int timeoutSeconds)
+enum class Received
+{
+  All,    // exactly the bytes asked for
+  Closed, // the peer closed its end (or the socket failed) first
+  Silent  // nothing arrived for the timeout
+};
+
+// Reads exactly `size` bytes, waiting at most `timeoutSeconds` for each (a negative timeout
+// waits forever).
+Received receiveAll(int fd, void* data, size_t size, int timeoutSeconds)
 {
   char* p = static_cast<char*>(data);
   while (size > 0)
@@ -69,17 +76,17 @@ bool receiveAll(int fd, void* data, size_t size, int timeoutSeconds)
       if (ready < 0 && errno == EINTR)
         continue;
       if (ready == 0)
-        throw std::runtime_error("timeout");
+        return Received::Silent;
     }
     const ssize_t n = ::recv(fd, p, size, 0);
     if (n < 0 && errno == EINTR)
       continue;
     if (n <= 0)
-      return false;
+      return Received::Closed;
     p += n;
     size -= size_t(n);
   }
-  return true;
+  return Received::All;
 }
 
 void sendError(int fd, unsigned long code, const std::string& message)
@@ -132,7 +139,7 @@ bool reportingErrors(int fd, Body&& body)
     _exit(0);
   std::vector<char> slab;
   Request request{};
-  while (receiveAll(fd, &request, sizeof request, -1))
+  while (receiveAll(fd, &request, sizeof request, -1) == Received::All)
   {
     const bool read = reportingErrors(fd, [&] {
       slab.resize(size_t(request.nz) * size_t(geometry.dims[0]) * size_t(geometry.dims[1]) *
@@ -187,12 +194,8 @@ struct svdagIsolatedSlabSource::Impl
 
   void receive(void* data, size_t size, const std::string& what)
   {
-    bool complete = false;
-    try
-    {
-      complete = receiveAll(this->fd, data, size, SilenceTimeoutSeconds);
-    }
-    catch (const std::runtime_error&)
+    const Received received = receiveAll(this->fd, data, size, SilenceTimeoutSeconds);
+    if (received == Received::Silent)
     {
       ::kill(this->child, SIGKILL);
       this->childFate();
@@ -200,7 +203,7 @@ struct svdagIsolatedSlabSource::Impl
         this->fileName + ": the reader sent nothing for " + std::to_string(SilenceTimeoutSeconds) +
           " s while " + what + " (a corrupt file that makes " + this->library + " loop?)");
     }
-    if (!complete)
+    if (received == Received::Closed)
       throw svdagReadError(vtkErrorCode::FileFormatError,
         this->fileName + ": " + this->library + " " + this->childFate() + " while " + what +
           " (corrupt file?)");

@@ -33,6 +33,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -205,14 +206,16 @@ struct FrameKey
 {
   Matrix matrix{};
   core::RenderSettings settings;
-  std::vector<uint64_t> ids;
-  std::vector<float> sceneDepth; // viewport pixels; empty when nothing was drawn before
-  int depthWidth = 0;
+  std::vector<uint64_t> ids; // ids[0]: the viewport's width
+  // The viewport's depth as drawn before the volume (shared, not copied, by the keys of one
+  // frame); null when nothing was.
+  std::shared_ptr<const std::vector<float>> sceneDepth;
 
   bool matches(const FrameKey& o) const
   {
     if (ids.empty() || ids != o.ids || !core::tracesSameImage(settings, o.settings) ||
-      sceneDepth.size() != o.sceneDepth.size() || depthWidth != o.depthWidth)
+      bool(sceneDepth) != bool(o.sceneDepth) ||
+      (sceneDepth && sceneDepth->size() != o.sceneDepth->size()))
       return false;
     for (size_t i = 0; i < matrix.size(); ++i)
     {
@@ -220,23 +223,22 @@ struct FrameKey
       if (!(std::abs(a - b) <= 1e-6 * std::max({ 1.0, std::abs(a), std::abs(b) })))
         return false;
     }
-    return this->sameSceneDepth(o);
+    return !sceneDepth || sameSceneDepth(*sceneDepth, *o.sceneDepth, size_t(ids[0]));
   }
 
 private:
-  bool sameSceneDepth(const FrameKey& o) const
+  static bool sameSceneDepth(const std::vector<float>& a, const std::vector<float>& b, size_t w)
   {
-    const size_t w = size_t(std::max(this->depthWidth, 1));
-    const size_t h = sceneDepth.size() / w;
+    const size_t h = a.size() / w;
     size_t silhouettes = 0;
     for (size_t y = 0; y < h; ++y)
     {
       for (size_t x = 0; x < w; ++x)
       {
         const size_t i = x + w * y;
-        if (std::abs(sceneDepth[i] - o.sceneDepth[i]) <= 1e-6f)
+        if (std::abs(a[i] - b[i]) <= 1e-6f)
           continue;
-        if (!o.onSilhouette(x, y, w, h) || ++silhouettes > sceneDepth.size() / 100)
+        if (!onSilhouette(b, x, y, w, h) || ++silhouettes > a.size() / 100)
           return false;
       }
     }
@@ -244,14 +246,14 @@ private:
   }
 
   // Whether the depth steps (by more than 1e-3) between pixel (x, y) and a neighbour.
-  bool onSilhouette(size_t x, size_t y, size_t w, size_t h) const
+  static bool onSilhouette(const std::vector<float>& depth, size_t x, size_t y, size_t w, size_t h)
   {
-    const float d = sceneDepth[x + w * y];
+    const float d = depth[x + w * y];
     for (size_t ny = (y > 0 ? y - 1 : y); ny <= std::min(y + 1, h - 1); ++ny)
     {
       for (size_t nx = (x > 0 ? x - 1 : x); nx <= std::min(x + 1, w - 1); ++nx)
       {
-        if (std::abs(sceneDepth[nx + w * ny] - d) > 1e-3f)
+        if (std::abs(depth[nx + w * ny] - d) > 1e-3f)
           return true;
       }
     }
@@ -439,7 +441,9 @@ void vtkSegmentationSVDAGVolumeMapper::Render(vtkRenderer* renderer, vtkVolume* 
     const core::ViewRays rays = core::viewRaysFromClipToWorld(clipToModel);
 
     // Depth in: each traced pixel's ray ends at the surface drawn there before the volume.
-    const std::vector<float> sceneDepth = in.Compositor.readDepth(window, vp);
+    const auto sceneDepthShared =
+      std::make_shared<const std::vector<float>>(in.Compositor.readDepth(window, vp));
+    const std::vector<float>& sceneDepth = *sceneDepthShared;
     const core::RenderSettings& base = in.Session.settings()->GetCoreSettings();
     const bool drawnBefore =
       std::any_of(sceneDepth.begin(), sceneDepth.end(), [](float d) { return d < 1.0f; });
@@ -471,10 +475,7 @@ void vtkSegmentationSVDAGVolumeMapper::Render(vtkRenderer* renderer, vtkVolume* 
       // What was drawn before the volume: the depth itself (FrameKey), not the ray limits derived
       // from it, which change in their last bits with the camera matrices.
       if (drawnBefore)
-      {
-        f.key.sceneDepth = sceneDepth;
-        f.key.depthWidth = vp.width;
-      }
+        f.key.sceneDepth = sceneDepthShared;
       return f;
     };
     const core::FrameLevel fullLevel{ base.lod, 1 };

@@ -1,5 +1,6 @@
 // Lossless round trips and structural invariants of the builder: every scalar type, odd shapes,
 // label values at the type's limits, thread-count independence and exact deduplication.
+#include "ThreadedFor.h"
 #include "svdag/Builder.h"
 #include "svdag/Decoder.h"
 
@@ -10,40 +11,13 @@
 #ifdef __GLIBC__
 #include <malloc.h>
 #endif
-#include <atomic>
 #include <random>
 #include <set>
-#include <thread>
 #include <tuple>
 
 namespace
 {
 using svdag::ScalarType;
-
-// A parallel-for on std::threads that splits the range into uneven chunks, run in any order:
-// the builder's output must not depend on it.
-svdag::ParallelFor threadedFor(unsigned threads)
-{
-  return [threads](uint64_t begin, uint64_t end, uint64_t, const svdag::RangeFunction& f) {
-    std::atomic<uint64_t> next(begin);
-    std::vector<std::thread> pool;
-    for (unsigned t = 0; t < threads; ++t)
-    {
-      pool.emplace_back([&, t] {
-        for (;;)
-        {
-          const uint64_t chunk = 1 + (t % 3);
-          const uint64_t b = next.fetch_add(chunk);
-          if (b >= end)
-            return;
-          f(b, std::min(end, b + chunk));
-        }
-      });
-    }
-    for (auto& th : pool)
-      th.join();
-  };
-}
 
 // Patterns of the values a volume of type t holds (sign-extended for signed types).
 std::vector<uint64_t> typedPatterns(ScalarType t, const std::vector<int64_t>& values)

@@ -1,5 +1,6 @@
 // Random access (RandomAccess.h) and label statistics (LabelStatistics.h) against brute force
 // on the raw labels the volume was built from.
+#include "ThreadedFor.h"
 #include "svdag/Builder.h"
 #include "svdag/Decoder.h"
 #include "svdag/LabelStatistics.h"
@@ -7,40 +8,16 @@
 
 #include <gtest/gtest.h>
 
-#include <atomic>
 #include <cmath>
 #include <map>
 #include <random>
 #include <stdexcept>
-#include <thread>
 
 using svdag::Box;
 using svdag::ScalarType;
 
 namespace
 {
-// A parallel-for that splits the range unevenly over real threads: results must not change.
-svdag::ParallelFor threadedFor(unsigned threads)
-{
-  return [threads](uint64_t begin, uint64_t end, uint64_t, const svdag::RangeFunction& f) {
-    std::atomic<uint64_t> next(begin);
-    std::vector<std::thread> pool;
-    for (unsigned t = 0; t < threads; ++t)
-      pool.emplace_back([&, t] {
-        for (;;)
-        {
-          const uint64_t chunk = 1 + (t % 3);
-          const uint64_t b = next.fetch_add(chunk);
-          if (b >= end)
-            return;
-          f(b, std::min(end, b + chunk));
-        }
-      });
-    for (auto& th : pool)
-      th.join();
-  };
-}
-
 struct Fixture
 {
   svdag::Geometry g;

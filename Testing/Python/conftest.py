@@ -157,6 +157,18 @@ def caster_pick(caster, origin, direction, to_world=None):
     return label, position, normal
 
 
+def interior(mask):
+    """The pixels of an image mask whose 8 neighbours are all in it too, without the image's
+    border: where two layers are composited, the silhouette pixels mix them at sub-pixel level."""
+    inner = mask.copy()
+    for dy in (-1, 0, 1):
+        for dx in (-1, 0, 1):
+            inner &= np.roll(np.roll(mask, dy, 0), dx, 1)
+    inner[[0, -1], :] = False
+    inner[:, [0, -1]] = False
+    return inner
+
+
 def mapper_scene(svdag, camera_position=(80, -60, 90), focal=(20, 20, 20), up=(0, 0, 1),
                  parallel=False, clipping=(20.0, 300.0), size=(200, 150)):
     """An off-screen VTK window with one volume drawn by vtkSegmentationSVDAGVolumeMapper and a

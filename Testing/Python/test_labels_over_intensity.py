@@ -11,7 +11,7 @@ import sys
 import numpy as np
 import pytest
 import vtkmodules.vtkRenderingOpenGL2  # noqa: F401 (the OpenGL factory overrides)
-from conftest import REPO, display_to_world
+from conftest import REPO, display_to_world, interior
 from vtkmodules.util.numpy_support import vtk_to_numpy
 from vtkmodules.vtkCommonCore import vtkFloatArray
 from vtkmodules.vtkRenderingCore import vtkWindowToImageFilter
@@ -41,17 +41,6 @@ def colors(plotter):
     grab.Update()
     scalars = grab.GetOutput().GetPointData().GetScalars()
     return vtk_to_numpy(scalars).reshape(H, W, -1)[:, :, :3].astype(int)
-
-
-def interior(mask):
-    """The mask without its border pixels (edges mix the two layers at sub-pixel level)."""
-    inner = mask.copy()
-    for dy in (-1, 0, 1):
-        for dx in (-1, 0, 1):
-            inner &= np.roll(np.roll(mask, dy, 0), dx, 1)
-    inner[[0, -1], :] = False
-    inner[:, [0, -1]] = False
-    return inner
 
 
 @pytest.fixture(scope="module")

@@ -13,7 +13,7 @@ import textwrap
 import numpy as np
 import pytest
 import vtkmodules.vtkRenderingOpenGL2  # noqa: F401 (the OpenGL factory overrides)
-from conftest import mapper_scene, REPO, caster_pick, compress_zyx, display_to_world, mapper_pick, pixel_ray
+from conftest import mapper_scene, REPO, caster_pick, interior, compress_zyx, display_to_world, mapper_pick, pixel_ray
 from vtkmodules.util.numpy_support import vtk_to_numpy
 from vtkmodules.vtkCommonCore import vtkFloatArray
 from vtkmodules.vtkCommonMath import vtkMatrix4x4
@@ -214,15 +214,6 @@ def test_depth_compositing_with_mesh(boxes, msaa, spp):
     mesh_front = both & (mesh_depth < volume_depth - 1e-4)
     volume_front = both & (volume_depth < mesh_depth - 1e-4)
     assert mesh_front.sum() > 100 and volume_front.sum() > 100
-
-    def interior(mask):
-        inner = mask.copy()
-        for dy in (-1, 0, 1):
-            for dx in (-1, 0, 1):
-                inner &= np.roll(np.roll(mask, dy, 0), dx, 1)
-        inner[[0, -1], :] = False
-        inner[:, [0, -1]] = False
-        return inner
 
     front = interior(mesh_front)
     assert front.sum() > 50
