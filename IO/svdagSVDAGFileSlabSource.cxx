@@ -26,6 +26,23 @@ svdagSVDAGFileSlabSource::svdagSVDAGFileSlabSource(const std::string& fileName)
   this->checkGeometry(fileName);
 }
 
+svdagSVDAGFileSlabSource::svdagSVDAGFileSlabSource(
+  const uint8_t* data, size_t size, const std::string& name)
+  : impl(new Impl)
+{
+  try
+  {
+    impl->volume = std::make_shared<const svdag::Volume>(svdag::deserialize(data, size));
+  }
+  catch (const svdag::FileError& e)
+  {
+    throw svdagReadError(vtkErrorCode::FileFormatError, name + ": " + e.what());
+  }
+  this->Geometry = impl->volume->geometry;
+  this->Type = impl->volume->scalarType;
+  this->checkGeometry(name);
+}
+
 svdagSVDAGFileSlabSource::~svdagSVDAGFileSlabSource() = default;
 
 std::shared_ptr<const svdag::Volume> svdagSVDAGFileSlabSource::compressedVolume() const

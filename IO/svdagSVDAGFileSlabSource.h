@@ -12,6 +12,8 @@ class svdagSVDAGFileSlabSource : public svdagSlabSource
 {
 public:
   explicit svdagSVDAGFileSlabSource(const std::string& fileName);
+  // The bytes of a whole file held in memory; `name` is what error messages call them.
+  svdagSVDAGFileSlabSource(const uint8_t* data, size_t size, const std::string& name);
   ~svdagSVDAGFileSlabSource() override;
   const char* formatName() const override { return "SVDAG"; }
   void readSlab(int32_t z0, int32_t nz, void* dst) override;

@@ -8,6 +8,10 @@
 
 #include "svdag/File.h"
 
+#include <algorithm>
+#include <string>
+#include <vector>
+
 vtkStandardNewMacro(vtkSegmentationSVDAGWriter);
 
 vtkSegmentationSVDAGWriter::vtkSegmentationSVDAGWriter() = default;
@@ -23,9 +27,15 @@ int vtkSegmentationSVDAGWriter::FillInputPortInformation(int, vtkInformation* in
   return 1;
 }
 
+vtkUnsignedCharArray* vtkSegmentationSVDAGWriter::GetOutputBytes()
+{
+  return this->OutputBytes;
+}
+
 void vtkSegmentationSVDAGWriter::WriteData()
 {
-  if (!this->FileName || !*this->FileName)
+  this->OutputBytes->Initialize();
+  if (!this->WriteToOutputString && (!this->FileName || !*this->FileName))
   {
     vtkErrorMacro("No FileName set.");
     this->SetErrorCode(vtkErrorCode::NoFileNameError);
@@ -34,7 +44,8 @@ void vtkSegmentationSVDAGWriter::WriteData()
   vtkSegmentationSVDAG* input = vtkSegmentationSVDAG::SafeDownCast(this->GetInput());
   if (!input || !input->HasVolume())
   {
-    vtkErrorMacro("The input holds no compressed volume; nothing written to " << this->FileName);
+    vtkErrorMacro("The input holds no compressed volume; nothing written"
+      << (this->WriteToOutputString ? std::string() : std::string(" to ") + this->FileName) << ".");
     this->SetErrorCode(vtkErrorCode::UnknownError);
     return;
   }
@@ -45,7 +56,14 @@ void vtkSegmentationSVDAGWriter::WriteData()
   // The core throws; VTK code reports. Each failure kind maps to the matching VTK error code.
   try
   {
-    svdag::writeFile(*input->GetVolume(), this->FileName, options);
+    if (this->WriteToOutputString)
+    {
+      const std::vector<uint8_t> bytes = svdag::serialize(*input->GetVolume(), options);
+      this->OutputBytes->SetNumberOfValues(vtkIdType(bytes.size()));
+      std::copy(bytes.begin(), bytes.end(), this->OutputBytes->GetPointer(0));
+    }
+    else
+      svdag::writeFile(*input->GetVolume(), this->FileName, options);
   }
   catch (const svdag::FileOpenError& e)
   {
@@ -61,7 +79,9 @@ void vtkSegmentationSVDAGWriter::WriteData()
   }
   catch (const std::exception& e)
   {
-    vtkErrorMacro("Cannot write " << this->FileName << ": " << e.what());
+    this->OutputBytes->Initialize();
+    vtkErrorMacro("Cannot write " << (this->WriteToOutputString ? "the volume" : this->FileName)
+                                  << ": " << e.what());
     this->SetErrorCode(vtkErrorCode::UnknownError);
     return;
   }
@@ -73,4 +93,6 @@ void vtkSegmentationSVDAGWriter::PrintSelf(ostream& os, vtkIndent indent)
   this->Superclass::PrintSelf(os, indent);
   os << indent << "FileName: " << (this->FileName ? this->FileName : "(none)") << "\n";
   os << indent << "CompressionLevel: " << this->CompressionLevel << "\n";
+  os << indent << "WriteToOutputString: " << (this->WriteToOutputString ? "On" : "Off") << "\n";
+  os << indent << "OutputBytes: " << this->OutputBytes->GetNumberOfValues() << " bytes\n";
 }

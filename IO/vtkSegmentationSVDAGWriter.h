@@ -18,6 +18,8 @@
 #define vtkSegmentationSVDAGWriter_h
 
 #include "vtkSVDAGIOModule.h" // for export macro
+#include "vtkNew.h"               // for vtkNew
+#include "vtkUnsignedCharArray.h" // for vtkNew<vtkUnsignedCharArray>
 #include "vtkWriter.h"
 
 class VTKSVDAGIO_EXPORT vtkSegmentationSVDAGWriter : public vtkWriter
@@ -42,6 +44,23 @@ public:
   vtkGetMacro(CompressionLevel, int);
   ///@}
 
+  ///@{
+  /**
+   * When on, Write() produces the file's bytes in memory (GetOutputBytes) instead of writing
+   * FileName: to send a volume to another process (pickling, Dask) or to store it elsewhere.
+   * Default off.
+   */
+  vtkSetMacro(WriteToOutputString, bool);
+  vtkGetMacro(WriteToOutputString, bool);
+  vtkBooleanMacro(WriteToOutputString, bool);
+  ///@}
+
+  /**
+   * The bytes of the last Write() with WriteToOutputString on (one component per byte), or an
+   * empty array. Read them back with vtkSegmentationVolumeReader's ReadFromInputString.
+   */
+  vtkUnsignedCharArray* GetOutputBytes();
+
 protected:
   vtkSegmentationSVDAGWriter();
   ~vtkSegmentationSVDAGWriter() override;
@@ -51,6 +70,8 @@ protected:
 
   char* FileName = nullptr;
   int CompressionLevel = 3;
+  bool WriteToOutputString = false;
+  vtkNew<vtkUnsignedCharArray> OutputBytes;
 
 private:
   vtkSegmentationSVDAGWriter(const vtkSegmentationSVDAGWriter&) = delete;

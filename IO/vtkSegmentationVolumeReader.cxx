@@ -6,7 +6,9 @@
 #include "vtkObjectFactory.h"
 #include "vtkSVDAGParallel.h"
 #include "vtkSegmentationSVDAG.h"
+#include "vtkUnsignedCharArray.h"
 
+#include "svdagSVDAGFileSlabSource.h"
 #include "svdagSlabSourceFactory.h"
 
 #include "svdag/Builder.h"
@@ -33,7 +35,10 @@ vtkSegmentationVolumeReader::~vtkSegmentationVolumeReader()
   delete this->Internal;
   this->SetFileName(nullptr);
   this->SetDatasetName(nullptr);
+  this->SetInputArray(nullptr);
 }
+
+vtkCxxSetObjectMacro(vtkSegmentationVolumeReader, InputArray, vtkUnsignedCharArray);
 
 int vtkSegmentationVolumeReader::CanReadFile(const char* fileName)
 {
@@ -67,6 +72,36 @@ svdagSlabSourceOptions sourceOptions(const char* datasetName)
     options.datasetName = datasetName;
   return options;
 }
+
+// What error messages call the input.
+const char* InputArrayName = "the input array";
+}
+
+const char* vtkSegmentationVolumeReader::InputName() const
+{
+  return this->ReadFromInputString ? InputArrayName : (this->FileName ? this->FileName : "");
+}
+
+bool vtkSegmentationVolumeReader::CheckInputGiven()
+{
+  const bool given = this->ReadFromInputString ? this->InputArray != nullptr
+                                               : (this->FileName && *this->FileName);
+  if (!given)
+  {
+    vtkErrorMacro(<< (this->ReadFromInputString ? "ReadFromInputString is on but no InputArray is set."
+                                               : "No FileName set."));
+    this->SetErrorCode(vtkErrorCode::NoFileNameError);
+  }
+  return given;
+}
+
+std::unique_ptr<svdagSlabSource> vtkSegmentationVolumeReader::OpenSource()
+{
+  if (!this->ReadFromInputString)
+    return svdagOpenSlabSource(this->FileName, sourceOptions(this->DatasetName));
+  const auto* bytes = this->InputArray->GetPointer(0);
+  return std::unique_ptr<svdagSlabSource>(new svdagSVDAGFileSlabSource(
+    bytes, size_t(this->InputArray->GetNumberOfValues()), InputArrayName));
 }
 
 int vtkSegmentationVolumeReader::RequestInformation(
@@ -83,27 +118,24 @@ int vtkSegmentationVolumeReader::RequestInformation(
       output->Initialize();
     return 0;
   };
-  if (!this->FileName || !*this->FileName)
-  {
-    vtkErrorMacro("No FileName set.");
+  if (!this->CheckInputGiven())
     return fail(vtkErrorCode::NoFileNameError);
-  }
+  const char* name = this->InputName();
   try
   {
     // Opening a source reads and checks the whole header.
-    this->Internal->Source =
-      svdagOpenSlabSource(this->FileName, sourceOptions(this->DatasetName));
+    this->Internal->Source = this->OpenSource();
     this->FileFormat = this->Internal->Source->formatName();
   }
   catch (const svdagReadError& e)
   {
     vtkErrorMacro(
-      "Cannot read " << this->FileName << ": " << withoutFileName(e.what(), this->FileName));
+      "Cannot read " << name << ": " << withoutFileName(e.what(), name));
     return fail(e.code());
   }
   catch (const std::exception& e)
   {
-    vtkErrorMacro("Cannot read " << this->FileName << ": " << e.what());
+    vtkErrorMacro("Cannot read " << name << ": " << e.what());
     return fail(vtkErrorCode::UnknownError);
   }
   return 1;
@@ -120,12 +152,9 @@ int vtkSegmentationVolumeReader::RequestData(
   }
   output->Initialize();
   this->SetErrorCode(vtkErrorCode::NoError);
-  if (!this->FileName || !*this->FileName)
-  {
-    vtkErrorMacro("No FileName set.");
-    this->SetErrorCode(vtkErrorCode::NoFileNameError);
+  if (!this->CheckInputGiven())
     return 0;
-  }
+  const char* name = this->InputName();
 
   const svdag::BuildOptions options = this->GetBuildOptions();
 
@@ -135,7 +164,7 @@ int vtkSegmentationVolumeReader::RequestData(
     // rewind, so a source serves one RequestData).
     std::unique_ptr<svdagSlabSource> source = std::move(this->Internal->Source);
     if (!source)
-      source = svdagOpenSlabSource(this->FileName, sourceOptions(this->DatasetName));
+      source = this->OpenSource();
     this->FileFormat = source->formatName();
     const svdag::Geometry& geometry = source->geometry();
     const svdag::ScalarType type = source->scalarType();
@@ -161,7 +190,7 @@ int vtkSegmentationVolumeReader::RequestData(
     const uint64_t memory = svdagPhysicalMemoryBytes();
     if (memory > 0 && slabBytes > memory)
     {
-      vtkErrorMacro("Cannot read " << this->FileName << ": one slab of 16 z-slices takes "
+      vtkErrorMacro("Cannot read " << name << ": one slab of 16 z-slices takes "
                                    << slabBytes << " bytes, more than this machine's memory.");
       this->SetErrorCode(vtkErrorCode::OutOfDiskSpaceError);
       return 0;
@@ -174,7 +203,7 @@ int vtkSegmentationVolumeReader::RequestData(
     {
       if (this->GetAbortExecute())
       {
-        vtkWarningMacro("Reading " << this->FileName << " was aborted.");
+        vtkWarningMacro("Reading " << name << " was aborted.");
         return 0;
       }
       const int32_t nz = std::min(svdag::Builder::SlabDepth, geometry.dims[2] - z0);
@@ -187,19 +216,19 @@ int vtkSegmentationVolumeReader::RequestData(
   catch (const svdagReadError& e)
   {
     vtkErrorMacro(
-      "Cannot read " << this->FileName << ": " << withoutFileName(e.what(), this->FileName));
+      "Cannot read " << name << ": " << withoutFileName(e.what(), name));
     this->SetErrorCode(e.code());
     return 0;
   }
   catch (const std::bad_alloc&)
   {
-    vtkErrorMacro("Out of memory reading " << this->FileName << ".");
+    vtkErrorMacro("Out of memory reading " << name << ".");
     this->SetErrorCode(vtkErrorCode::OutOfDiskSpaceError);
     return 0;
   }
   catch (const std::exception& e)
   {
-    vtkErrorMacro("Cannot compress " << this->FileName << ": " << e.what());
+    vtkErrorMacro("Cannot compress " << name << ": " << e.what());
     this->SetErrorCode(vtkErrorCode::UnknownError);
     return 0;
   }
@@ -211,5 +240,7 @@ void vtkSegmentationVolumeReader::PrintSelf(ostream& os, vtkIndent indent)
   this->Superclass::PrintSelf(os, indent);
   os << indent << "FileName: " << (this->FileName ? this->FileName : "(none)") << "\n";
   os << indent << "DatasetName: " << (this->DatasetName ? this->DatasetName : "(none)") << "\n";
+  os << indent << "ReadFromInputString: " << (this->ReadFromInputString ? "On" : "Off") << "\n";
+  os << indent << "InputArray: " << this->InputArray << "\n";
   os << indent << "FileFormat: " << this->FileFormat << "\n";
 }

@@ -32,8 +32,12 @@
 #include "vtkSVDAGIOModule.h" // for export macro
 #include "vtkSegmentationSVDAGAlgorithm.h"
 
+#include <memory> // for std::unique_ptr
 #include <string> // for std::string
 #include <vector> // for std::vector
+
+class svdagSlabSource;
+class vtkUnsignedCharArray;
 
 class VTKSVDAGIO_EXPORT vtkSegmentationVolumeReader : public vtkSegmentationSVDAGAlgorithm
 {
@@ -68,6 +72,18 @@ public:
   vtkGetStringMacro(DatasetName);
   ///@}
 
+  ///@{
+  /**
+   * When on, the reader parses InputArray (the bytes of a .svdag file, as
+   * vtkSegmentationSVDAGWriter gives them with WriteToOutputString) instead of FileName: to
+   * receive a volume from another process. Default off. Only the .svdag format is read this way.
+   */
+  vtkSetMacro(ReadFromInputString, bool);
+  vtkGetMacro(ReadFromInputString, bool);
+  vtkBooleanMacro(ReadFromInputString, bool);
+  virtual void SetInputArray(vtkUnsignedCharArray* bytes);
+  vtkGetObjectMacro(InputArray, vtkUnsignedCharArray);
+  ///@}
   /**
    * Format detected by the last RequestInformation ("NRRD", "MetaImage", "VTKImageData",
    * "NIfTI", "TIFF", "HDF5", "SVDAG"), or "" before an update or when the file was not read.
@@ -83,9 +99,15 @@ protected:
 
   char* FileName = nullptr;
   char* DatasetName = nullptr;
+  bool ReadFromInputString = false;
+  vtkUnsignedCharArray* InputArray = nullptr;
   std::string FileFormat;
 
 private:
+  const char* InputName() const;
+  bool CheckInputGiven();
+  std::unique_ptr<svdagSlabSource> OpenSource();
+
   // The source opened by RequestInformation, handed to the next RequestData (a file is opened and
   // its header parsed once per update).
   struct Internals;

@@ -12,6 +12,7 @@
 #include <cstring>
 #include <exception>
 #include <memory>
+#include <stdexcept>
 #include <string>
 
 vtkStandardNewMacro(vtkSegmentationSVDAGStreamBuilder);
@@ -268,6 +269,48 @@ bool vtkSegmentationSVDAGStreamBuilder::AddSlices(vtkDataArray* values, int z0, 
     vtkErrorMacro("Cannot compress the slices: " << e.what() << " (the volume was discarded).");
     return false;
   }
+  this->Modified();
+  return true;
+}
+
+bool vtkSegmentationSVDAGStreamBuilder::AddVolume(vtkSegmentationSVDAG* part)
+{
+  Internals& m = *this->Internal;
+  if (!m.Builder)
+  {
+    vtkErrorMacro("AddVolume before Initialize (or after Finish).");
+    return false;
+  }
+  if (!part || !part->GetVolume())
+  {
+    vtkErrorMacro("AddVolume needs a vtkSegmentationSVDAG that holds a volume.");
+    return false;
+  }
+  if (m.Buffered != 0)
+  {
+    vtkErrorMacro("Cannot append a volume at z = " << m.NextSlice()
+                                                   << ": the slices added so far do not end on a "
+                                                      "16-slice slab.");
+    return false;
+  }
+  try
+  {
+    m.Builder->addVolume(*part->GetVolume());
+  }
+  catch (const std::logic_error& e) // also std::invalid_argument: nothing was changed
+  {
+    vtkErrorMacro("Cannot append the volume: " << e.what() << ".");
+    return false;
+  }
+  catch (const std::exception& e)
+  {
+    m.Builder.reset();
+    m.Buffer = std::vector<uint8_t>();
+    vtkErrorMacro("Cannot append the volume: " << e.what() << " (the volume was discarded).");
+    return false;
+  }
+  this->Progress = double(m.Builder->nextSlab()) / m.Geometry.dims[2];
+  this->InvokeEvent(vtkCommand::ProgressEvent, &this->Progress);
   this->Modified();
   return true;
 }

@@ -81,6 +81,16 @@ public:
   bool AddSlab(vtkDataArray* values, int z0, int nz);
   ///@}
 
+  /**
+   * Appends `part`, a volume built elsewhere (another process or machine) from the next
+   * part->GetDimensions()[2] z-slices, with the same scalar type, background and excluded labels;
+   * its spacing, origin and direction are not used. The result is byte-identical to adding
+   * those slices with AddSlab, so the volumes of consecutive z-ranges built in parallel merge in
+   * z order into the single-machine result. The slices added so far must end on a 16-slice slab
+   * (or the volume's end), and a part whose depth is not a multiple of 16 must be the last.
+   * False (and an error) otherwise, with the builder unchanged.
+   */
+  bool AddVolume(vtkSegmentationSVDAG* part);
   /** The index of the next z-slice expected (dims[2] once all were added; 0 when not started). */
   int GetNextSlice() const;
 

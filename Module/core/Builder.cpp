@@ -303,6 +303,129 @@ struct Builder::Impl
   }
 };
 
+void Builder::addVolume(const Volume& part)
+{
+  Impl& m = *impl;
+  const auto& d = m.geometry.dims;
+  const auto& pd = part.geometry.dims;
+  if (m.nextZ % int32_t(S) != 0)
+    throw std::logic_error("cannot append a volume after a partial slab (next z0 = " +
+      std::to_string(m.nextZ) + ")");
+  if (pd[0] != d[0] || pd[1] != d[1])
+    throw std::invalid_argument("the appended volume is " + std::to_string(pd[0]) + " x " +
+      std::to_string(pd[1]) + " voxels in x and y, not " + std::to_string(d[0]) + " x " +
+      std::to_string(d[1]));
+  if (int64_t(pd[2]) > int64_t(d[2]) - m.nextZ ||
+    (pd[2] % int32_t(S) != 0 && m.nextZ + pd[2] != d[2]))
+    throw std::logic_error("an appended volume of " + std::to_string(pd[2]) +
+      " slices does not fit at z0 = " + std::to_string(m.nextZ) + " of " + std::to_string(d[2]) +
+      " (only the last one may end inside a 16-slice slab)");
+  if (part.scalarType != m.type)
+    throw std::invalid_argument(std::string("the appended volume holds ") +
+      scalarName(part.scalarType) + " labels, not " + scalarName(m.type));
+  if (part.background != m.options.background)
+    throw std::invalid_argument("the appended volume was built with another background label");
+  const auto& excluded = m.options.excluded;
+  std::vector<uint32_t> labelIds(part.labels.size());
+  for (size_t i = 0; i < part.labels.size(); ++i)
+  {
+    if (std::binary_search(excluded.begin(), excluded.end(), part.labels[i].value))
+      throw std::invalid_argument("the appended volume holds a label this builder excludes");
+  }
+
+  // Each pool is interned in the part's id order, which is the order its own scan first saw
+  // the nodes: the ids of the merged pools are then the first-seen order of one scan over both.
+  std::vector<uint32_t> leafIds(part.leaves.size());
+  for (size_t i = 0; i < part.leaves.size(); ++i)
+    leafIds[i] = m.leaves.intern(part.leaves[i]);
+
+  // Node references in the part are bit offsets; offsets[k] is node k's, ascending.
+  auto remapStream = [](const std::vector<uint32_t>& stream, uint64_t count, uint32_t refBits,
+                       const auto& remapRef, const auto& intern, std::vector<uint32_t>& offsets,
+                       std::vector<uint32_t>& ids) {
+    offsets.resize(size_t(count));
+    ids.resize(size_t(count));
+    uint64_t at = 0;
+    for (uint64_t k = 0; k < count; ++k)
+    {
+      offsets[k] = uint32_t(at);
+      const uint32_t header = Volume::nodeHeader(stream, at);
+      const uint32_t n = build::popcount8(layout::nodeMixedMask(header));
+      uint32_t refs[8];
+      for (uint32_t r = 0; r < n; ++r)
+        refs[r] = remapRef(Volume::nodeChildRef(stream, at, r, refBits));
+      ids[k] = intern(header, refs);
+      at += layout::NODE_HEADER_BITS + uint64_t(n) * refBits;
+    }
+  };
+  auto idAt = [](const std::vector<uint32_t>& offsets, const std::vector<uint32_t>& ids,
+                uint32_t ref, const char* what) {
+    const auto it = std::lower_bound(offsets.begin(), offsets.end(), ref >> 1);
+    if (it == offsets.end() || *it != (ref >> 1))
+      throw std::runtime_error(std::string("the appended volume has a ") + what +
+        " reference that is not at a node start");
+    return (ids[size_t(it - offsets.begin())] << 1) | (ref & 1u);
+  };
+  std::vector<uint32_t> midOffsets, midIds, rootOffsets, rootIds;
+  remapStream(
+    part.mids, part.midCount, part.widths.leafRefBits,
+    [&](uint32_t ref) {
+      if ((ref >> 1) >= leafIds.size())
+        throw std::runtime_error("the appended volume has a leaf reference out of range");
+      return (leafIds[ref >> 1] << 1) | (ref & 1u);
+    },
+    [&](uint32_t header, const uint32_t* refs) {
+      m.mids.widenTo(m.leaves.refBits());
+      return m.mids.intern(header, refs);
+    },
+    midOffsets, midIds);
+  remapStream(
+    part.roots, part.rootCount, part.widths.midRefBits,
+    [&](uint32_t ref) { return idAt(midOffsets, midIds, ref, "mid"); },
+    [&](uint32_t header, const uint32_t* refs) {
+      m.roots.widenTo(bitWidth(m.mids.size() ? m.mids.size() - 1 : 0) + 1);
+      return m.roots.intern(header, refs);
+    },
+    rootOffsets, rootIds);
+  std::vector<uint32_t>().swap(midOffsets);
+  std::vector<uint32_t>().swap(midIds);
+
+  for (size_t i = 0; i < part.labels.size(); ++i)
+  {
+    const LabelInfo& from = part.labels[i];
+    labelIds[i] = m.labelId(from.value);
+    LabelInfo& info = m.labels[labelIds[i]];
+    info.voxels += from.voxels;
+    for (int a = 0; a < 3; ++a)
+    {
+      const int32_t shift = a == 2 ? m.nextZ : 0;
+      info.bounds[2 * a] = std::min(info.bounds[2 * a], from.bounds[2 * a] + shift);
+      info.bounds[2 * a + 1] = std::max(info.bounds[2 * a + 1], from.bounds[2 * a + 1] + shift);
+    }
+  }
+  m.blocks.widenTo(PendingLabel, bitWidth(m.labels.empty() ? 0 : m.labels.size() - 1));
+  m.blocks.widenTo(PendingRoot, bitWidth(m.roots.size() ? m.roots.size() - 1 : 0) + 1);
+
+  // The part's blocks are in (cell, label) order; its cells are a z-range of this volume's.
+  const uint64_t cellShift =
+    uint64_t(m.cells[0]) * uint64_t(m.cells[1]) * uint64_t(m.nextZ / int32_t(S));
+  for (uint64_t i = 0; i < part.blockCount; ++i)
+  {
+    const Block b = part.block(i);
+    if (b.label >= labelIds.size())
+      throw std::runtime_error("the appended volume has a label index out of range");
+    PendingBlocks::Record r;
+    r[PendingCell] = uint32_t(b.cell + cellShift);
+    r[PendingBox] = 0;
+    for (int a = 0; a < 3; ++a)
+      r[PendingBox] |= (uint32_t(b.lo[a]) << (4 * a)) | (uint32_t(b.hi[a]) << (12 + 4 * a));
+    r[PendingLabel] = labelIds[b.label];
+    r[PendingRoot] = idAt(rootOffsets, rootIds, b.root, "root");
+    m.blocks.push_back(r);
+  }
+  m.nextZ += pd[2];
+}
+
 Builder::Builder(
   const Geometry& geometry, ScalarType type, const BuildOptions& options, ParallelFor parallel)
   : impl(new Impl)

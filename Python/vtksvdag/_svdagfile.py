@@ -1,4 +1,5 @@
-"""Writing the ``.svdag`` file format (what :meth:`SegmentationVolume.save` calls).
+"""The ``.svdag`` format as files and bytes (what :meth:`SegmentationVolume.save`,
+:meth:`SegmentationVolume.to_bytes` and :func:`vtksvdag.from_bytes` call).
 
 Kept apart from ``fileio`` (which builds SegmentationVolumes) so that ``volume`` imports it at
 the top without an import cycle.
@@ -69,3 +70,85 @@ def write_svdag(volume, path, compression_level=3, progress=None):
             with contextlib.suppress(OSError):
                 os.remove(path)
         raise
+
+
+#: Where the .svdag header holds the background label (a little-endian 64-bit pattern).
+_BACKGROUND_OFFSET = 148
+
+
+def svdag_bytes(volume, compression_level=3):
+    """The ``.svdag`` file of ``volume`` (a SegmentationVolume) as bytes.
+
+    See :meth:`SegmentationVolume.to_bytes`.
+    """
+    from vtkmodules.util.numpy_support import vtk_to_numpy
+
+    from .vtkSVDAGIO import vtkSegmentationSVDAGWriter
+
+    level = check_compression_level(compression_level)
+    writer = vtkSegmentationSVDAGWriter()
+    writer.SetInputData(volume.dataobject)
+    writer.WriteToOutputStringOn()
+    writer.SetCompressionLevel(level)
+    run_algorithm(writer, action="Write", error=ValueError, what="to_bytes")
+    return vtk_to_numpy(writer.GetOutputBytes()).tobytes()
+
+
+def from_bytes(data):
+    """Load a volume from the bytes of a ``.svdag`` file.
+
+    The inverse of :meth:`SegmentationVolume.to_bytes`: the bytes are checked as a file is
+    (checksums, structure), so corrupt or truncated data raises rather than loading.
+
+    Parameters
+    ----------
+    data : bytes-like
+        The bytes of a ``.svdag`` file (bytes, bytearray, memoryview or a uint8 array).
+
+    Returns
+    -------
+    SegmentationVolume
+
+    Raises
+    ------
+    TypeError
+        ``data`` is not bytes-like.
+    OSError
+        The bytes are not a valid ``.svdag`` file (the message says which part is wrong).
+
+    Examples
+    --------
+    >>> import numpy as np, vtksvdag
+    >>> volume = vtksvdag.from_numpy(np.eye(8, dtype=np.uint8)[:, :, None])
+    >>> copy = vtksvdag.from_bytes(volume.to_bytes())
+    >>> np.array_equal(copy.to_numpy(), volume.to_numpy())
+    True
+    """
+    from vtkmodules.util.numpy_support import numpy_to_vtk
+
+    from .volume import SegmentationVolume
+    from .vtkSVDAGIO import vtkSegmentationVolumeReader
+
+    try:
+        array = np.frombuffer(data, dtype=np.uint8)
+    except TypeError:
+        raise TypeError(f"data must be bytes-like (the bytes of a .svdag file), not "
+                        f"{type(data).__name__}") from None
+    if array.size == 0:
+        raise OSError("from_bytes: no bytes (an empty buffer is no .svdag file)")
+    bytes_array = numpy_to_vtk(array, deep=False)
+    reader = vtkSegmentationVolumeReader()
+    reader.ReadFromInputStringOn()
+    reader.SetInputArray(bytes_array)
+    # The reader re-encodes a volume whose background is not the one it is given: give it the
+    # file's own (header bytes 148..155, File.h; the header's crc32 is checked all the same).
+    if array.size >= _BACKGROUND_OFFSET + 8:
+        background = array[_BACKGROUND_OFFSET:_BACKGROUND_OFFSET + 8].view("<i8")[0]
+        reader.SetBackgroundLabel(int(background))
+    run_algorithm(reader, error=OSError, what="from_bytes")
+    output = reader.GetOutput()
+    if output is None or not output.HasVolume():
+        raise OSError("from_bytes: the reader produced no volume")
+    volume = SegmentationVolume(output)
+    del array  # the VTK array borrowed it until the reader was done
+    return volume

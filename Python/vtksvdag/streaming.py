@@ -246,6 +246,58 @@ class Builder:
         if not ok:
             raise ValueError("cannot add the slices")
 
+    def add_volume(self, volume):
+        """Add the next z-slices as an already compressed volume.
+
+        ``volume`` must have been compressed from the next ``volume.dims[2]`` z-slices with the
+        same dtype, background and excluded labels (by another :class:`Builder`, on another
+        process or machine: :func:`vtksvdag.build_distributed` merges its parts this way).
+        The result is then the same, byte for byte, as adding those slices with
+        :meth:`add_slab`. Its spacing, origin and direction are not used.
+
+        Parameters
+        ----------
+        volume : SegmentationVolume
+            The compressed slices. A volume whose depth is not a multiple of 16 must be the
+            last one.
+
+        Raises
+        ------
+        TypeError
+            ``volume`` is not a SegmentationVolume.
+        ValueError
+            Its x/y size, dtype or background is not the builder's, it holds a label the
+            builder excludes, it does not fit the slices missing, or the slices added so far
+            do not end on a multiple of 16.
+        RuntimeError
+            The builder was finished (or closed).
+
+        Examples
+        --------
+        >>> import numpy as np, vtksvdag
+        >>> labels = np.arange(4 * 4 * 20, dtype=np.uint8).reshape(4, 4, 20) % 3
+        >>> builder = vtksvdag.Builder((4, 4, 20), np.uint8)
+        >>> builder.add_volume(vtksvdag.from_numpy(labels[:, :, :16]))
+        >>> builder.add_slab(labels[:, :, 16:])
+        >>> builder.finish().to_bytes() == vtksvdag.from_numpy(labels).to_bytes()
+        True
+        """
+        self._check_open()
+        if not isinstance(volume, SegmentationVolume):
+            raise TypeError(f"volume must be a SegmentationVolume, not {type(volume).__name__}")
+        if volume.dtype != self._dtype:
+            raise ValueError(
+                f"the volume has dtype {volume.dtype}, but the builder's dtype is {self._dtype}"
+            )
+        start = time.perf_counter()
+        with vtk_errors_raised(self._cpp, ValueError):
+            ok = self._cpp.AddVolume(volume.dataobject)
+        self._seconds += time.perf_counter() - start
+        if not self._cpp.IsInitialized():
+            self._closed = "appending a volume failed"
+        if not ok:
+            raise ValueError("cannot add the volume")
+
     def finish(self):
         """Compress what remains and return the volume.
 

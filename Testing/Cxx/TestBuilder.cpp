@@ -385,3 +385,146 @@ TEST(Builder, StateStaysNearOutputSize)
 }
 #endif
 } // namespace
+
+// The volumes of consecutive z-ranges, each built on its own, merged in z order.
+namespace merge
+{
+// Splits the 16-slice slabs of dims[2] into `parts` ranges as even as possible (fewer if there
+// are not enough slabs).
+std::vector<std::pair<int, int>> zRanges(int nz, int parts)
+{
+  const int slabs = (nz + 15) / 16;
+  parts = std::min(parts, slabs);
+  std::vector<std::pair<int, int>> out;
+  for (int p = 0, first = 0; p < parts; ++p)
+  {
+    const int count = slabs / parts + (p < slabs % parts ? 1 : 0);
+    out.emplace_back(16 * first, std::min(nz, 16 * (first + count)));
+    first += count;
+  }
+  return out;
+}
+
+svdag::Volume buildRange(const svdag::Geometry& whole, ScalarType t, const std::vector<uint8_t>& data,
+  std::pair<int, int> range, const svdag::BuildOptions& options)
+{
+  svdag::Geometry g = whole;
+  g.dims[2] = range.second - range.first;
+  const size_t slice = size_t(whole.dims[0]) * size_t(whole.dims[1]) * size_t(svdag::scalarSize(t));
+  return svdag::Builder::build(g, t, data.data() + slice * size_t(range.first), options);
+}
+
+// Merges parts [first, last) by halves, as a tree reduction does.
+svdag::Volume mergeTree(const svdag::Geometry& whole, ScalarType t, const std::vector<svdag::Volume>& parts,
+  size_t first, size_t last, const svdag::BuildOptions& options)
+{
+  if (last - first == 1)
+    return parts[first];
+  const size_t mid = first + (last - first) / 2;
+  svdag::Volume lower = mergeTree(whole, t, parts, first, mid, options);
+  svdag::Volume upper = mergeTree(whole, t, parts, mid, last, options);
+  svdag::Geometry g = whole;
+  g.dims[2] = lower.geometry.dims[2] + upper.geometry.dims[2];
+  svdag::Builder b(g, t, options);
+  b.addVolume(lower);
+  b.addVolume(upper);
+  return b.finish();
+}
+} // namespace merge
+
+TEST_P(EveryType, MergedPartsEqualTheWholeBuild)
+{
+  const ScalarType t = GetParam();
+  std::vector<Case> all = cases(t);
+  // A tall case with labels shared across many slabs, so that every partition dedups nodes and
+  // labels that an earlier part already holds.
+  std::mt19937_64 rng(11);
+  Case tall{ "tall 23x19x120", dims(23, 19, 120), {} };
+  for (int z = 0; z < 120; ++z)
+    for (int y = 0; y < 19; ++y)
+      for (int x = 0; x < 23; ++x)
+        tall.labels.push_back(typedPatterns(t, { ((x / 5 + y / 4 + z / 7) % 9) ? int64_t((x / 5 + 3 * (y / 4) + z / 30) % 13) : int64_t(rng() % 3) })[0]);
+  all.push_back(tall);
+  svdag::BuildOptions options;
+  options.background = typedPatterns(t, { 1 })[0];
+  options.excluded = typedPatterns(t, { 5 });
+  for (const svdag::BuildOptions& opts : { svdag::BuildOptions{}, options })
+  {
+    for (const Case& c : all)
+    {
+      SCOPED_TRACE(c.name);
+      const std::vector<uint8_t> input = toTyped(t, c.labels);
+      const svdag::Volume whole = svdag::Builder::build(c.geometry, t, input.data(), opts);
+      for (int parts : { 1, 2, 3, 7 })
+      {
+        SCOPED_TRACE(parts);
+        std::vector<svdag::Volume> built;
+        for (const auto& range : merge::zRanges(c.geometry.dims[2], parts))
+          built.push_back(merge::buildRange(c.geometry, t, input, range, opts));
+        // A chain (one builder fed every part, and slabs after a part) and a tree.
+        svdag::Builder chain(c.geometry, t, opts);
+        for (const svdag::Volume& part : built)
+          chain.addVolume(part);
+        svdag::Volume chained = chain.finish();
+        ASSERT_NO_THROW(chained.validate());
+        EXPECT_TRUE(chained == whole);
+        svdag::Volume tree = merge::mergeTree(c.geometry, t, built, 0, built.size(), opts);
+        EXPECT_TRUE(tree == whole);
+      }
+      if (c.geometry.dims[2] > 16)
+      {
+        // A part then slabs.
+        svdag::Builder mixed(c.geometry, t, opts);
+        mixed.addVolume(merge::buildRange(c.geometry, t, input, { 0, 16 }, opts));
+        const size_t slice = size_t(c.geometry.dims[0]) * size_t(c.geometry.dims[1]) * size_t(svdag::scalarSize(t));
+        for (int z0 = 16; z0 < c.geometry.dims[2]; z0 += 16)
+          mixed.addSlab(z0, std::min(16, c.geometry.dims[2] - z0), input.data() + slice * size_t(z0));
+        EXPECT_TRUE(mixed.finish() == whole);
+      }
+    }
+  }
+}
+
+TEST(Builder, AddVolumeRejectsPartsThatDoNotFit)
+{
+  std::vector<uint8_t> data(8 * 8 * 40, 3);
+  const svdag::Volume whole = svdag::Builder::build(dims(8, 8, 40), ScalarType::UInt8, data.data());
+  const svdag::Volume slab = svdag::Builder::build(dims(8, 8, 16), ScalarType::UInt8, data.data());
+  const svdag::Volume tail = svdag::Builder::build(dims(8, 8, 8), ScalarType::UInt8, data.data());
+  {
+    svdag::Builder b(dims(8, 9, 40), ScalarType::UInt8);
+    EXPECT_THROW(b.addVolume(slab), std::invalid_argument); // other y size
+  }
+  {
+    svdag::Builder b(dims(8, 8, 40), ScalarType::Int8);
+    EXPECT_THROW(b.addVolume(slab), std::invalid_argument); // other type
+  }
+  {
+    svdag::BuildOptions other;
+    other.background = 7;
+    svdag::Builder b(dims(8, 8, 40), ScalarType::UInt8, other);
+    EXPECT_THROW(b.addVolume(slab), std::invalid_argument); // other background
+  }
+  {
+    svdag::BuildOptions excluding;
+    excluding.excluded = { 3 };
+    svdag::Builder b(dims(8, 8, 40), ScalarType::UInt8, excluding);
+    EXPECT_THROW(b.addVolume(slab), std::invalid_argument); // holds an excluded label
+  }
+  {
+    svdag::Builder b(dims(8, 8, 40), ScalarType::UInt8);
+    EXPECT_THROW(b.addVolume(tail), std::logic_error); // 8 slices, not the last ones
+    b.addVolume(slab);
+    b.addVolume(slab);
+    EXPECT_THROW(b.addVolume(slab), std::logic_error); // 16 slices, 8 left
+    b.addVolume(tail);
+    EXPECT_TRUE(b.finish() == whole);
+  }
+  {
+    svdag::Builder b(dims(8, 8, 40), ScalarType::UInt8);
+    b.addSlab(0, 16, data.data());
+    b.addSlab(16, 16, data.data());
+    b.addSlab(32, 8, data.data());
+    EXPECT_THROW(b.addVolume(tail), std::logic_error); // nothing left
+  }
+}

@@ -1,4 +1,5 @@
-// Builds a Volume from a label volume streamed in slabs of 16 z-slices.
+// Builds a Volume from a label volume streamed in slabs of 16 z-slices, or from the volumes of
+// consecutive z-ranges built separately (addVolume).
 //
 // Each 16^3 cell of a slab is scanned independently (in parallel); the per-cell results are then
 // merged in cell order into the deduplicated pools, so the output does not depend on the thread
@@ -39,6 +40,17 @@ public:
   // nz = min(16, dims[2] - z0). `data` holds dims[0] * dims[1] * nz values of the scalar type,
   // x fastest. Throws std::logic_error on a slab out of order.
   void addSlab(int32_t z0, int32_t nz, const void* data);
+  // Appends a volume built elsewhere as the next part.dims[2] z-slices, starting at nextSlab():
+  // the result is byte-identical to adding those slices' slabs, given that `part` was built from
+  // them with the same background and excluded labels. So partial volumes built in parallel
+  // (Dask workers, each over its own z-range) merge in z order, in a chain or a tree, into the
+  // single-machine build. Only the part's dims, scalar type and background are used (its spacing,
+  // origin and direction are not). Throws std::logic_error if nextSlab() is not a multiple of 16
+  // or the part does not fit the slices left, std::invalid_argument if its x and y dims, scalar
+  // type or background differ from this builder's, or it holds a label this builder excludes;
+  // the builder is unchanged then. A part that is not a valid Volume (Volume::validate) throws
+  // std::runtime_error and leaves the builder unusable.
+  void addVolume(const Volume& part);
   // Next expected slab start, or dims[2] when every slab was added.
   int32_t nextSlab() const;
 

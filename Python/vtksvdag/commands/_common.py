@@ -134,8 +134,9 @@ def run_with_progress(args, label, task):
 _OPTION_OF = {"background": "--background", "excluded label": "--exclude"}
 
 
-def load(args, path):
-    """Read ``path`` (a label volume or a .svdag file) with the input options of ``args``.
+def load(args, path, reader=read):
+    """Read ``path`` (a label volume or a .svdag file) with the input options of ``args``,
+    through ``reader`` (vtksvdag.read or a function with its keyword arguments).
 
     Raises UsageError when --background or --exclude does not fit the file's label dtype.
     """
@@ -143,7 +144,7 @@ def load(args, path):
         return run_with_progress(
             args,
             "read",
-            lambda progress: read(
+            lambda progress: reader(
                 path,
                 background=getattr(args, "background", 0),
                 exclude=getattr(args, "exclude", ()),

@@ -1,7 +1,12 @@
 """``vtksvdag compress INPUT -o OUT.svdag``: compress a label volume file into a .svdag file."""
+import argparse
+import functools
+
 from .._svdagfile import COMPRESSION_LEVELS
+from ..distributed import DEFAULT_SLAB, build_distributed
+from ..fileio import read
 from ._common import (
-    add_input_options, add_output_options, file_bytes, int_in, load, output_path, print_json,
+    UsageError, add_input_options, add_output_options, file_bytes, int_in, load, output_path, print_json,
     print_table, run_with_progress, stats_rows,
 )
 
@@ -23,11 +28,33 @@ def add_arguments(parser):
         help=f"zstd compression level of the file, {low + 1}..{high}; {low} stores it "
         "uncompressed (default: 3)",
     )
+    parser.add_argument(
+        "--dask", metavar="CLUSTER",
+        help="chunked stores: compress on Dask, 'local:N' (N local worker processes) or a "
+        "scheduler address such as tcp://scheduler:8786; the output is the same byte for byte",
+    )
+    parser.add_argument(
+        "--slab", type=slab_slices, default=None, metavar="N",
+        help=f"with --dask: z-slices per task, a multiple of 16 (default: {DEFAULT_SLAB})",
+    )
     add_output_options(parser)
 
 
+def slab_slices(text):
+    value = int_in(16, 2**31 - 1)(text)
+    if value % 16:
+        raise argparse.ArgumentTypeError(f"must be a multiple of 16, not {value}")
+    return value
+
+
 def run(args):
-    volume = load(args, args.input)
+    if args.slab is not None and not args.dask:
+        raise UsageError("argument --slab: only with --dask")
+    reader = read
+    if args.dask:
+        reader = functools.partial(build_distributed, client=args.dask,
+                                   slab=args.slab or DEFAULT_SLAB)
+    volume = load(args, args.input, reader=reader)
     run_with_progress(
         args, "write", lambda progress: volume.save(args.output, compression_level=args.level, progress=progress)
     )
