@@ -1,6 +1,7 @@
 #include "svdag_render/Buffer.h"
 
 #include <cstring>
+#include <string>
 #include <stdexcept>
 #include <utility>
 
@@ -46,7 +47,19 @@ Buffer::Buffer(Context& context, VkDeviceSize size, VkBufferUsageFlags usage, Me
     alloc.pNext = &flags;
     alloc.allocationSize = req.size;
     alloc.memoryTypeIndex = context.memoryType(req.memoryTypeBits, required, preferred);
-    check(vkAllocateMemory(this->Device, &alloc, nullptr, &this->Memory), "vkAllocateMemory");
+    context.checkFits(req.size, "A buffer", req.size);
+    const VkResult allocated = vkAllocateMemory(this->Device, &alloc, nullptr, &this->Memory);
+    if (allocated == VK_ERROR_OUT_OF_DEVICE_MEMORY || allocated == VK_ERROR_OUT_OF_HOST_MEMORY)
+    {
+      throw DeviceMemoryError("The device could not allocate a buffer of " +
+        std::to_string(req.size) + " bytes (" + resultName(allocated) + "); " +
+        std::to_string(context.availableBytes()) + " bytes were available by the heap sizes, " +
+        std::to_string(context.allocatedBytes()) + " in use by this renderer");
+    }
+    check(allocated, "vkAllocateMemory");
+    this->Owner = &context;
+    this->Allocated = req.size;
+    context.noteAllocation(int64_t(req.size));
     check(vkBindBufferMemory(this->Device, this->Handle, this->Memory, 0), "vkBindBufferMemory");
     if (use != MemoryUse::Device)
     {
@@ -80,6 +93,8 @@ Buffer& Buffer::operator=(Buffer&& other) noexcept
   {
     this->reset();
     std::swap(this->Device, other.Device);
+    std::swap(this->Owner, other.Owner);
+    std::swap(this->Allocated, other.Allocated);
     std::swap(this->Handle, other.Handle);
     std::swap(this->Memory, other.Memory);
     std::swap(this->Size, other.Size);
@@ -95,6 +110,10 @@ void Buffer::reset()
     vkDestroyBuffer(this->Device, this->Handle, nullptr);
   if (this->Memory)
     vkFreeMemory(this->Device, this->Memory, nullptr); // unmaps implicitly
+  if (this->Owner)
+    this->Owner->noteAllocation(-int64_t(this->Allocated));
+  this->Owner = nullptr;
+  this->Allocated = 0;
   this->Handle = VK_NULL_HANDLE;
   this->Memory = VK_NULL_HANDLE;
   this->Size = 0;

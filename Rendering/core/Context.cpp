@@ -353,9 +353,14 @@ void Context::createDevice()
     VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_RAY_TRACING_PIPELINE_PROPERTIES_KHR
   };
   rtProps.pNext = &asProps;
+  VkPhysicalDeviceMaintenance3Properties m3Props{
+    VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_MAINTENANCE_3_PROPERTIES
+  };
+  asProps.pNext = &m3Props;
   VkPhysicalDeviceProperties2 props{ VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2 };
   props.pNext = &rtProps;
   vkGetPhysicalDeviceProperties2(this->PhysicalDevice, &props);
+  this->Limits.maxMemoryAllocationSize = m3Props.maxMemoryAllocationSize;
   this->Limits.shaderGroupHandleSize = rtProps.shaderGroupHandleSize;
   this->Limits.shaderGroupHandleAlignment = rtProps.shaderGroupHandleAlignment;
   this->Limits.shaderGroupBaseAlignment = rtProps.shaderGroupBaseAlignment;
@@ -366,6 +371,15 @@ void Context::createDevice()
   this->Limits.minScratchOffsetAlignment =
     std::max<uint32_t>(1, asProps.minAccelerationStructureScratchOffsetAlignment);
   vkGetPhysicalDeviceMemoryProperties(this->PhysicalDevice, &this->MemoryProperties);
+  uint64_t localHeaps = 0, allHeaps = 0;
+  for (uint32_t i = 0; i < this->MemoryProperties.memoryHeapCount; ++i)
+  {
+    const VkMemoryHeap& heap = this->MemoryProperties.memoryHeaps[i];
+    allHeaps += heap.size;
+    if (heap.flags & VK_MEMORY_HEAP_DEVICE_LOCAL_BIT)
+      localHeaps += heap.size;
+  }
+  this->HeapBytes = localHeaps ? localHeaps : allHeaps;
 
   FeatureChain enabled;
   enabled.v12.bufferDeviceAddress = VK_TRUE;
@@ -425,6 +439,32 @@ uint32_t Context::memoryType(
     }
   }
   throw std::runtime_error("no Vulkan memory type with the required properties");
+}
+
+uint64_t Context::availableBytes() const
+{
+  const uint64_t cap = this->MemoryLimit ? std::min(this->MemoryLimit, this->HeapBytes) : this->HeapBytes;
+  return cap > this->AllocatedBytes ? cap - this->AllocatedBytes : 0;
+}
+
+void Context::checkFits(uint64_t bytes, const std::string& what, uint64_t largestAllocation) const
+{
+  const uint64_t available = this->availableBytes();
+  if (bytes > available)
+  {
+    throw DeviceMemoryError(what + " needs " + std::to_string(bytes) +
+      " bytes of device memory, but " + std::to_string(available) + " bytes are available (" +
+      this->DeviceName + ": " + std::to_string(this->HeapBytes) + " bytes of memory heaps" +
+      (this->MemoryLimit ? ", a limit of " + std::to_string(this->MemoryLimit) + " bytes" : "") +
+      ", " + std::to_string(this->AllocatedBytes) + " bytes in use by this renderer)");
+  }
+  const uint64_t cap = this->Limits.maxMemoryAllocationSize;
+  if (cap && largestAllocation > cap)
+  {
+    throw DeviceMemoryError(what + " needs one allocation of " + std::to_string(largestAllocation) +
+      " bytes, but " + this->DeviceName + " allocates at most " + std::to_string(cap) +
+      " bytes at once");
+  }
 }
 
 void Context::submitAndWait(const std::function<void(VkCommandBuffer)>& record)

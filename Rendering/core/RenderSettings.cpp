@@ -79,7 +79,8 @@ bool tracesSameImage(const RenderSettings& a, const RenderSettings& b)
     a.sun.on == b.sun.on && a.sun.direction == b.sun.direction &&
     a.sun.irradiance == b.sun.irradiance &&
     a.sun.angularRadiusDegrees == b.sun.angularRadiusDegrees &&
-    a.maximumBlocksPerBlas == b.maximumBlocksPerBlas && a.shading == b.shading &&
+    a.maximumBlocksPerBlas == b.maximumBlocksPerBlas &&
+    a.deviceMemoryLimit == b.deviceMemoryLimit && a.shading == b.shading &&
     a.clipPlanes == b.clipPlanes && a.crop == b.crop;
 }
 

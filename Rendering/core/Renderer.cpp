@@ -241,7 +241,8 @@ void Renderer::setVolume(std::shared_ptr<const Volume> volume)
   this->Device->hasNeighbours = false;
   this->Materials.clear();
   const auto start = Clock::now();
-  this->Device->scene = std::make_unique<Scene>(this->Device->context, std::move(volume));
+  this->Device->scene =
+    std::make_unique<Scene>(this->Device->context, std::move(volume), this->BlockChunkShift);
   // Rebuilds the BVH only if it differs from the default (no cap).
   this->Device->scene->setPrimitivesPerBlasLimit(this->Settings.maximumBlocksPerBlas);
   // Every label starts with its default material; the explicitly hidden labels stay hidden.
@@ -289,6 +290,21 @@ void Renderer::setMaximumBlocksPerBlas(uint32_t limit)
   const auto start = Clock::now();
   const bool rebuilt = this->Device->scene->setPrimitivesPerBlasLimit(limit);
   this->timeSetup(rebuilt, std::chrono::duration<double>(Clock::now() - start).count());
+}
+
+void Renderer::setBlockChunkShift(uint32_t shift)
+{
+  this->BlockChunkShift = shift;
+}
+
+uint64_t Renderer::deviceBytes() const
+{
+  return this->Device->context.allocatedBytes();
+}
+
+size_t Renderer::blockChunkCount() const
+{
+  return this->Device->scene ? this->Device->scene->blockChunkCount() : 0;
 }
 
 size_t Renderer::blasCount() const
@@ -344,6 +360,7 @@ void Renderer::setSettings(const RenderSettings& settings)
   next.maximumBlocksPerBlas = this->Settings.maximumBlocksPerBlas;
   next.environmentMap = this->Settings.environmentMap;
   this->Settings = next;
+  this->Device->context.setMemoryLimit(settings.deviceMemoryLimit);
   this->setMaximumBlocksPerBlas(blasLimit);
   if (environmentChanged)
     this->setEnvironmentMap(environment);
@@ -613,7 +630,8 @@ const Image& Renderer::render()
   u.autoLod = glm::vec4(float(std::min({ s[0], s[1], s[2] })), settings.autoLodPixels,
     float(footprint.footprint0), float(footprint.footprintSlope));
   u.image = glm::uvec4(this->Width, this->Height, uint32_t(settings.lod), uint32_t(settings.shading));
-  u.grid = glm::uvec4(uint32_t(cells[0]), uint32_t(cells[1]), g.scene->primitivesPerBlas(), 0u);
+  u.grid = glm::uvec4(uint32_t(cells[0]), uint32_t(cells[1]), g.scene->primitivesPerBlas(),
+    g.scene->blockChunkShift());
   u.widths = glm::uvec4(w.cellBits, w.labelBits, w.rootRefBits, w.midRefBits);
   if (settings.shading == Shading::Smooth && !g.hasNeighbours)
   {

@@ -82,9 +82,10 @@ void checkAddressable(uint64_t words, const char* what)
 }
 } // namespace
 
-Scene::Scene(Context& context, std::shared_ptr<const Volume> volume)
+Scene::Scene(Context& context, std::shared_ptr<const Volume> volume, uint32_t blockChunkShift)
   : Ctx(context)
   , Source(std::move(volume))
+  , BlockChunkShift(std::min(std::max(blockChunkShift, 4u), MaxBlockChunkShift))
 {
   if (!this->Source)
     throw std::invalid_argument("Scene needs a volume");
@@ -92,15 +93,32 @@ Scene::Scene(Context& context, std::shared_ptr<const Volume> volume)
   const auto bounds = worldBounds(v.geometry);
   for (int a = 0; a < 3; ++a)
     this->Reference[a] = (bounds[2 * a] + bounds[2 * a + 1]) / 2;
-  checkAddressable(v.blocks.size(), "block");
   checkAddressable(v.roots.size(), "root node");
   checkAddressable(v.mids.size(), "mid node");
+  // Refused as a whole before any upload: the error names what the volume needs.
+  const uint64_t chunkWords = uint64_t(1) << this->BlockChunkShift;
+  const uint64_t chunkCount = (v.blocks.size() + chunkWords - 1) / chunkWords;
+  const uint64_t blockBytes = (v.blocks.size() + 4 * chunkCount) * 4 + chunkCount * 8;
+  const uint64_t leafBytes = std::max<uint64_t>(v.leaves.size(), 1) * 8;
+  this->Ctx.checkFits(blockBytes + (v.roots.size() + v.mids.size()) * 4 + leafBytes,
+    "The volume's streams (blocks and DAG)",
+    std::max({ std::min(v.blocks.size(), chunkWords + 4) * 4, v.roots.size() * 4,
+      v.mids.size() * 4, leafBytes }));
   const auto start = Clock::now();
   const VkBufferUsageFlags usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
   auto upload = [&](const auto& words) {
     return uploadBuffer(this->Ctx, words.data(), words.size() * sizeof(words[0]), usage);
   };
-  this->Blocks = upload(v.blocks);
+  // Chunks of the block stream (see Scene.h), each with the 4 words after it.
+  std::vector<VkDeviceAddress> chunkAddresses;
+  for (uint64_t first = 0; first < v.blocks.size(); first += chunkWords)
+  {
+    const uint64_t end = std::min<uint64_t>(v.blocks.size(), first + chunkWords + 4);
+    this->BlockChunks.push_back(uploadBuffer(this->Ctx, v.blocks.data() + first,
+      size_t(end - first) * sizeof(uint32_t), usage));
+    chunkAddresses.push_back(this->BlockChunks.back().address());
+  }
+  this->BlockChunkTable = upload(chunkAddresses);
   this->Roots = upload(v.roots);
   this->Mids = upload(v.mids);
   // A volume without leaves still gets a (never read) one-leaf buffer: buffers cannot be empty.
@@ -148,7 +166,10 @@ uint64_t Scene::blasBytes() const
 
 uint64_t Scene::streamBytes() const
 {
-  return this->Blocks.size() + this->Roots.size() + this->Mids.size() + this->Leaves.size();
+  uint64_t blocks = this->BlockChunkTable.size();
+  for (const Buffer& chunk : this->BlockChunks)
+    blocks += chunk.size();
+  return blocks + this->Roots.size() + this->Mids.size() + this->Leaves.size();
 }
 
 void Scene::build()
@@ -216,14 +237,15 @@ void Scene::build()
   std::vector<VkAccelerationStructureInstanceKHR> instances;
   if (count > 0)
   {
-    Buffer aabbBuffer = uploadBuffer(this->Ctx, aabbs.data(), aabbs.size() * sizeof(aabbs[0]),
-      VK_BUFFER_USAGE_ACCELERATION_STRUCTURE_BUILD_INPUT_READ_ONLY_BIT_KHR);
-    aabbs = {};
     for (uint64_t first = 0; first < count; first += this->PrimitivesPerBlas)
     {
       const uint32_t n = uint32_t(std::min<uint64_t>(this->PrimitivesPerBlas, count - first));
-      this->Blas.push_back(AccelerationStructure::bottomLevel(
-        this->Ctx, aabbBuffer.address() + first * sizeof(VkAabbPositionsKHR), n));
+      // Each BLAS's boxes in their own buffer, freed after its build: the device never holds
+      // more than one BLAS's input (24 bytes a block: 400 MB at lavapipe's 16.7M primitives).
+      const Buffer aabbBuffer = uploadBuffer(this->Ctx, aabbs.data() + first,
+        n * sizeof(VkAabbPositionsKHR),
+        VK_BUFFER_USAGE_ACCELERATION_STRUCTURE_BUILD_INPUT_READ_ONLY_BIT_KHR);
+      this->Blas.push_back(AccelerationStructure::bottomLevel(this->Ctx, aabbBuffer.address(), n));
       VkAccelerationStructureInstanceKHR instance{};
       for (int r = 0; r < 3; ++r)
         for (int c = 0; c < 4; ++c)
@@ -235,8 +257,8 @@ void Scene::build()
       instance.accelerationStructureReference = this->Blas.back().address();
       instances.push_back(instance);
     }
-    // aabbBuffer is freed here: the BVH does not need it after the build.
   }
+  aabbs = {};
   if (instances.size() > this->Ctx.limits().maxInstanceCount ||
     instances.size() >= (size_t(1) << 24))
     throw std::runtime_error("the volume needs more BLAS than one TLAS can hold");

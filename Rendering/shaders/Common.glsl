@@ -13,6 +13,10 @@ layout(buffer_reference, std430, buffer_reference_align = 4) readonly buffer Svd
 {
   uint w[];
 };
+layout(buffer_reference, std430, buffer_reference_align = 8) readonly buffer SvdagAddresses
+{
+  uvec2 a[]; // device addresses (low word, high word)
+};
 layout(buffer_reference, std430, buffer_reference_align = 8) readonly buffer SvdagLeafMasks
 {
   uvec2 m[]; // (bits 0..31, bits 32..63)

@@ -444,3 +444,85 @@ TEST(FrameBudget, ProvisionalFramesCountOnlyUntilMeasured)
   budget.record(Lod::Voxel, 1000, 0.003, 0.0);
   EXPECT_NEAR(budget.predict({ Lod::Voxel, 1 }, 1000), 0.002, 1e-12);
 }
+
+// The block stream in chunks of 16 words (records straddle chunk ends, up to the 4 words of
+// overlap) renders exactly as in one chunk: every output, bit for bit.
+TEST(RenderFrame, ChunkedBlockStreamRendersTheSameImage)
+{
+  svdag::Geometry g = tiltedGeometry();
+  g.dims = { { 96, 80, 64 } };
+  const auto volume = randomVolume(g, 5);
+  auto renderOnce = [&](uint32_t shift, size_t& chunks) {
+    svdag::render::Renderer renderer;
+    renderer.setBlockChunkShift(shift);
+    renderer.setVolume(volume);
+    chunks = renderer.blockChunkCount();
+    renderer.setImageSize(48, 40);
+    renderer.setLod(svdag::render::Lod::Voxel);
+    renderer.setCamera(svdag::render::frameVolume(g, 35, -20, 1.2));
+    return renderer.render();
+  };
+  size_t one = 0, many = 0;
+  const svdag::render::Image whole = renderOnce(svdag::render::Scene::MaxBlockChunkShift, one);
+  const svdag::render::Image chunked = renderOnce(4, many);
+  EXPECT_EQ(one, 1u);
+  EXPECT_GE(many, (volume->blocks.size() - 1) / 16);
+  EXPECT_GT(many, 30u);
+  EXPECT_EQ(whole.label, chunked.label);
+  EXPECT_EQ(whole.depth, chunked.depth);
+  EXPECT_EQ(whole.normal, chunked.normal);
+  EXPECT_EQ(whole.color, chunked.color);
+  size_t hits = 0;
+  for (uint32_t l : whole.label)
+    hits += l != 0;
+  EXPECT_GT(hits, whole.label.size() / 3);
+}
+
+// What does not fit the device memory the renderer may use fails before it is allocated, with
+// the bytes needed and available; the renderer stays usable with more room.
+TEST(RenderDevice, AVolumeThatDoesNotFitNamesTheBytes)
+{
+  svdag::Geometry g = tiltedGeometry();
+  g.dims = { { 96, 80, 64 } };
+  const auto volume = randomVolume(g, 5);
+  const svdag::MemoryUsage usage = volume->memory();
+  svdag::render::Renderer renderer;
+  svdag::render::RenderSettings settings = renderer.settings();
+  settings.deviceMemoryLimit = usage.blocks + usage.dag() / 2; // less than the streams
+  renderer.setSettings(settings);
+  try
+  {
+    renderer.setVolume(volume);
+    FAIL() << "the volume fit in fewer bytes than its streams";
+  }
+  catch (const svdag::render::DeviceMemoryError& e)
+  {
+    const std::string message = e.what();
+    EXPECT_NE(message.find("The volume's streams (blocks and DAG) needs "), std::string::npos)
+      << message;
+    // The bytes needed are at least the streams' bytes, the ones available at most the limit.
+    const auto needs = std::stoull(message.substr(message.find("needs ") + 6));
+    const auto available = std::stoull(message.substr(message.find("but ") + 4));
+    EXPECT_GE(needs, usage.blocks + usage.dag());
+    EXPECT_LE(available, settings.deviceMemoryLimit);
+    EXPECT_NE(message.find("a limit of " + std::to_string(settings.deviceMemoryLimit) + " bytes"),
+      std::string::npos) << message;
+  }
+  settings.deviceMemoryLimit = 0;
+  renderer.setSettings(settings);
+  renderer.setVolume(volume);
+  const uint64_t held = renderer.deviceBytes(); // streams, BVH, materials
+  EXPECT_GT(held, usage.blocks + usage.dag());
+  // One byte less than the volume holds once set up: its last buffer is refused.
+  settings.deviceMemoryLimit = held - 1;
+  renderer.setSettings(settings);
+  EXPECT_THROW(renderer.setVolume(volume), svdag::render::DeviceMemoryError);
+  EXPECT_EQ(renderer.deviceBytes() <= held - 1, true);
+  settings.deviceMemoryLimit = 0;
+  renderer.setSettings(settings);
+  renderer.setVolume(volume);
+  EXPECT_EQ(renderer.deviceBytes(), held);
+  renderer.setImageSize(16, 16);
+  renderer.setCamera(svdag::render::frameVolume(g, 35, -20, 1.2));
+  EXPECT_EQ(renderer.render().label.size(), 256u);
+}

@@ -27,7 +27,8 @@ class Buffer
 public:
   Buffer() = default;
   // A buffer of `size` bytes (> 0). Transfer and device-address usage are always added.
-  // Throws std::runtime_error when Vulkan refuses.
+  // Throws DeviceMemoryError (Context.h) when it does not fit the device's memory, and
+  // std::runtime_error when Vulkan refuses otherwise.
   Buffer(Context& context, VkDeviceSize size, VkBufferUsageFlags usage, MemoryUse use);
   ~Buffer();
   Buffer(Buffer&& other) noexcept;
@@ -45,6 +46,8 @@ public:
 
 private:
   VkDevice Device = VK_NULL_HANDLE;
+  Context* Owner = nullptr;     // counts the allocation (Context::allocatedBytes)
+  VkDeviceSize Allocated = 0;
   VkBuffer Handle = VK_NULL_HANDLE;
   VkDeviceMemory Memory = VK_NULL_HANDLE;
   VkDeviceSize Size = 0;

@@ -17,6 +17,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -45,9 +46,16 @@ struct DeviceFunctions
   PFN_vkCmdTraceRaysKHR cmdTraceRays = nullptr;
 };
 
+// What does not fit the device's memory: what() names the bytes needed and the bytes available.
+struct DeviceMemoryError : std::runtime_error
+{
+  using std::runtime_error::runtime_error;
+};
+
 // Driver limits the renderer depends on (read from the driver, never assumed).
 struct RayTracingLimits
 {
+  uint64_t maxMemoryAllocationSize = 0; // bytes of one allocation (Vulkan 1.1 maintenance3)
   uint32_t shaderGroupHandleSize = 0;
   uint32_t shaderGroupHandleAlignment = 0;
   uint32_t shaderGroupBaseAlignment = 0;
@@ -82,6 +90,19 @@ public:
   uint32_t memoryType(uint32_t typeBits, VkMemoryPropertyFlags required,
     VkMemoryPropertyFlags preferred = 0) const;
 
+  // Device memory this context holds (every Buffer counts itself) and may hold: the size of
+  // the memory heaps, or less if a limit is set (0: none), for a renderer sharing its GPU.
+  uint64_t allocatedBytes() const { return this->AllocatedBytes; }
+  uint64_t heapBytes() const { return this->HeapBytes; }
+  void setMemoryLimit(uint64_t bytes) { this->MemoryLimit = bytes; }
+  uint64_t memoryLimit() const { return this->MemoryLimit; }
+  // Bytes that can still be allocated: min(heaps, limit) - allocated.
+  uint64_t availableBytes() const;
+  // Throws DeviceMemoryError naming `bytes` (for `what`) and availableBytes() when they do not
+  // fit, or when one allocation of `largestAllocation` bytes exceeds the driver's limit.
+  void checkFits(uint64_t bytes, const std::string& what, uint64_t largestAllocation) const;
+  void noteAllocation(int64_t bytes) { this->AllocatedBytes += uint64_t(bytes); }
+
   // Records commands into a one-time command buffer, submits it and waits for completion.
   void submitAndWait(const std::function<void(VkCommandBuffer)>& record);
 
@@ -102,6 +123,9 @@ private:
   std::string DeviceName;
   bool CpuDevice = false;
   VkPhysicalDeviceMemoryProperties MemoryProperties{};
+  uint64_t HeapBytes = 0; // device-local heaps (all heaps if none is device-local)
+  uint64_t AllocatedBytes = 0;
+  uint64_t MemoryLimit = 0;
   DeviceFunctions Functions;
   RayTracingLimits Limits;
 };

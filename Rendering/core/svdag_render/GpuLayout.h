@@ -130,12 +130,13 @@ SVDAG_UNIFORMS_BEGIN(FrameUniforms)
                        // (SVDAG_SHADING_*)
   uvec4 grid;          // x, y: cells along x and y (cell index = cx + nx * (cy + ny * cz));
                        // z: primitives per BLAS (instance i's primitive p is entry
-                       // i * z + p of the primitive -> block buffer); w: unused
+                       // i * z + p of the primitive -> block buffer); w: log2 of the words
+                       // per chunk of the block stream (Scene.h)
   uvec4 widths;        // x: cell bits, y: label bits, z: root ref bits, w: mid ref bits
   uvec4 widths2;       // x: leaf ref bits, y: bits per block record; zw: address of the
                        // neighbour table (smooth shading only: 27 root refs per block,
                        // svdag::neighbourTable; 0 otherwise)
-  uvec4 volumeStreams; // addresses: xy blocks, zw roots
+  uvec4 volumeStreams; // addresses: xy the block stream's chunks (a table of addresses), zw roots
   uvec4 volumeStreams2; // addresses: xy mids, zw leaves
   uvec4 sceneOutputs;  // addresses: xy primitive -> block index (uint32), zw label output
   uvec4 outputs;       // addresses: xy depth, zw normal (3 floats per pixel)

@@ -26,6 +26,7 @@
 #include "svdag_render/Pipeline.h"
 #include "svdag_render/Material.h"
 #include "svdag_render/RenderSettings.h"
+#include "svdag_render/Scene.h"
 
 #include <svdag/Volume.h>
 
@@ -82,6 +83,13 @@ public:
   // Scene::setPrimitivesPerBlasLimit.
   void setMaximumBlocksPerBlas(uint32_t limit);
   size_t blasCount() const;
+  // Chunks of the block stream of the next setVolume, as log2 of their words (Scene.h; default
+  // and maximum Scene::MaxBlockChunkShift). Smaller chunks exist to exercise the chunked path
+  // on small volumes (tests).
+  void setBlockChunkShift(uint32_t shift);
+  // Bytes of device memory the renderer holds now (streams, BVH, materials, images).
+  uint64_t deviceBytes() const;
+  size_t blockChunkCount() const;
   // The primary rays: a pinhole camera (its rays follow the image's aspect), or explicit rays
   // (ViewRays, for example from a VTK camera's projection); the last call wins.
   void setCamera(const Camera& camera);
@@ -209,6 +217,7 @@ private:
   double ErrorEstimate = 0;
 
   std::vector<uint32_t> ExplicitHidden;
+  uint32_t BlockChunkShift = Scene::MaxBlockChunkShift;
   std::vector<Material> Materials;
   bool MaterialsDirty = true;
   bool EnvironmentDirty = true;

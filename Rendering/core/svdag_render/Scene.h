@@ -11,6 +11,12 @@
 // volume's index-to-world transform (world = origin + D * diag(spacing) * (p - 0.5)) and the BLAS
 // number as instance custom index. The AABB buffer is freed right after the build.
 //
+// The block stream is held in chunks of 2^blockChunkShift words, each its own allocation (a
+// driver caps one allocation: lavapipe at 2 GiB), reached through a table of their addresses.
+// Chunk k holds words [k << shift, (k + 1) << shift) and the next 4 words, so that a block record
+// (at most 120 bits, 5 words) starting in chunk k is read from it whole; bit offsets inside a
+// chunk stay below 2^32 for the shaders' 32-bit arithmetic (shift <= 26: 256 MiB chunks).
+//
 // Precision: the GPU works in float. World coordinates are shifted by a reference point (the
 // center of the volume's world bounds) in double precision on the host, both in the instance
 // transform and in the camera position the renderer uploads, so a volume far from the world
@@ -38,9 +44,14 @@ namespace render
 class Scene
 {
 public:
+  // Largest (and default) chunk of the block stream, as log2 of its words.
+  static constexpr uint32_t MaxBlockChunkShift = 26;
   // Uploads the streams and builds the BVH with every label visible. Throws std::runtime_error
-  // when Vulkan fails or the volume's streams exceed what the shaders address (2^32 bits each).
-  Scene(Context& context, std::shared_ptr<const Volume> volume);
+  // when Vulkan fails or a node stream exceeds what the shaders address (2^32 bits). The block
+  // stream is cut into chunks of 2^blockChunkShift words (clamped to 4..MaxBlockChunkShift;
+  // smaller chunks exist to test the chunked path on small volumes).
+  Scene(Context& context, std::shared_ptr<const Volume> volume,
+    uint32_t blockChunkShift = MaxBlockChunkShift);
   ~Scene();
   Scene(const Scene&) = delete;
   Scene& operator=(const Scene&) = delete;
@@ -60,7 +71,10 @@ public:
   // False after a failed (re)build (out of memory, say) until a later one succeeds.
   bool ready() const { return this->Built; }
   VkAccelerationStructureKHR tlas() const { return this->Tlas.handle(); }
-  VkDeviceAddress blocksAddress() const { return this->Blocks.address(); }
+  // The table of the block stream chunks' addresses (uint64 each) and log2 of words per chunk.
+  VkDeviceAddress blocksAddress() const { return this->BlockChunkTable.address(); }
+  uint32_t blockChunkShift() const { return this->BlockChunkShift; }
+  size_t blockChunkCount() const { return this->BlockChunks.size(); }
   VkDeviceAddress rootsAddress() const { return this->Roots.address(); }
   VkDeviceAddress midsAddress() const { return this->Mids.address(); }
   VkDeviceAddress leavesAddress() const { return this->Leaves.address(); }
@@ -85,7 +99,10 @@ private:
   std::shared_ptr<const Volume> Source;
   std::vector<uint32_t> Hidden;
   std::array<double, 3> Reference{ { 0, 0, 0 } };
-  Buffer Blocks, Roots, Mids, Leaves;
+  std::vector<Buffer> BlockChunks;
+  Buffer BlockChunkTable;
+  uint32_t BlockChunkShift = MaxBlockChunkShift;
+  Buffer Roots, Mids, Leaves;
   Buffer PrimitiveBlocks;
   Buffer Instances;
   std::vector<AccelerationStructure> Blas;
