@@ -212,6 +212,16 @@ vtkTypeInt64 vtkSegmentationSVDAGRenderSettings::GetMaximumBlocksPerBLAS() const
   return this->Settings->maximumBlocksPerBlas;
 }
 
+void vtkSegmentationSVDAGRenderSettings::SetDeviceMemoryLimit(vtkTypeInt64 bytes)
+{
+  assign(this, this->Settings->deviceMemoryLimit, uint64_t(std::max<vtkTypeInt64>(bytes, 0)));
+}
+
+vtkTypeInt64 vtkSegmentationSVDAGRenderSettings::GetDeviceMemoryLimit() const
+{
+  return vtkTypeInt64(this->Settings->deviceMemoryLimit);
+}
+
 int vtkSegmentationSVDAGRenderSettings::GetMaximumNumberOfClippingPlanes()
 {
   return int(core::MaximumClipPlanes);
@@ -358,6 +368,7 @@ void vtkSegmentationSVDAGRenderSettings::PrintSelf(ostream& os, vtkIndent indent
   triple(s.sun.irradiance);
   os << "\n" << indent << "SunAngularRadius: " << s.sun.angularRadiusDegrees << "\n";
   os << indent << "MaximumBlocksPerBLAS: " << s.maximumBlocksPerBlas << "\n";
+  os << indent << "DeviceMemoryLimit: " << s.deviceMemoryLimit << "\n";
   os << indent << "Shading: " << core::shadingName(s.shading) << "\n";
   os << indent << "ClippingPlanes: " << s.clipPlanes.size() << "\n";
   for (const auto& p : s.clipPlanes)

@@ -11,8 +11,8 @@
  * 4, Seed 0, NextEventEstimation on, Exposure 1, Background (0.1, 0.1, 0.12, 1) linear RGBA
  * (the volume mapper draws misses transparent instead), EnvironmentColor (1, 1, 1), no
  * EnvironmentMap, Sun off with direction (0.3, 0.4, 0.866), irradiance (3, 3, 3) and angular
- * radius 0.27 degrees, MaximumBlocksPerBLAS 0 (the device's limit), no clipping planes, Cropping
- * off, Shading voxel.
+ * radius 0.27 degrees, MaximumBlocksPerBLAS 0 (the device's limit), DeviceMemoryLimit 0 (the
+ * device's memory), no clipping planes, Cropping off, Shading voxel.
  */
 #ifndef vtkSegmentationSVDAGRenderSettings_h
 #define vtkSegmentationSVDAGRenderSettings_h
@@ -121,6 +121,14 @@ public:
    * values trace slower: they exist to exercise the split (tests). */
   void SetMaximumBlocksPerBLAS(vtkTypeInt64 blocks);
   vtkTypeInt64 GetMaximumBlocksPerBLAS() const;
+  ///@}
+
+  ///@{
+  /** Most bytes of device memory the renderer may hold; 0 (the default) uses the device's memory
+   * heaps. For a GPU shared with other programs: a volume that does not fit is refused with an
+   * error naming the bytes it needs and the bytes available. Negative values are taken as 0. */
+  void SetDeviceMemoryLimit(vtkTypeInt64 bytes);
+  vtkTypeInt64 GetDeviceMemoryLimit() const;
   ///@}
 
   ///@{

@@ -12,6 +12,8 @@ Pixels whose ray passes within float rounding of a voxel edge or corner may legi
 another label, so labels must agree on >= 99.9% of the pixels, and depths to 1e-4 (relative)
 where both hit the same label.
 """
+import re
+
 import nrrd
 import numpy as np
 import pytest
@@ -364,6 +366,23 @@ def test_forced_missing_device_is_a_clear_error(real_volume, monkeypatch):
     assert "SVDAG_VK_DEVICE='nonexistent'" in messages[0]
     # It names every device found, so also the one a normal run picks.
     assert "devices found" in messages[0] and device in messages[0]
+
+
+def test_a_volume_over_the_device_memory_limit_is_a_clear_error(real_volume):
+    svdag = real_volume[1]
+    renderer = make_renderer(svdag)
+    renderer.GetSettings().SetDeviceMemoryLimit(4096)
+    messages = capture_errors(renderer)
+    assert renderer.Render() == 0
+    assert len(messages) == 1, messages
+    match = re.search(r"needs (\d+) bytes of device memory, but (\d+) bytes are available", messages[0])
+    assert match, messages[0]
+    assert int(match.group(1)) > 4096 >= int(match.group(2))
+    assert "a limit of 4096 bytes" in messages[0]
+    # Lifting the limit renders.
+    renderer.GetSettings().SetDeviceMemoryLimit(0)
+    assert renderer.Render() == 1
+    assert renderer.GetSettings().GetDeviceMemoryLimit() == 0
 
 
 def test_render_without_input_is_an_error():
