@@ -43,9 +43,9 @@ def z_ranges(nz, slab=DEFAULT_SLAB, partitions=None):
     return ranges
 
 
-def _open(source, dataset, scale, axis_order):
+def _open(source, dataset, scale, axis_order, cache_bytes=None):
     from . import stores
-    from .fileio import _chunked_store
+    from .fileio import _chunked_store, check_cache_bytes
 
     found = _chunked_store(source, dataset)
     if found is None:
@@ -55,7 +55,8 @@ def _open(source, dataset, scale, axis_order):
             "is read by one process: use vtksvdag.read"
         )
     location, kind = found
-    return stores.open_store(location, kind, scale=scale, axis_order=axis_order)
+    return stores.open_store(location, kind, scale=scale, axis_order=axis_order,
+                             cache_bytes=check_cache_bytes(cache_bytes))
 
 
 def _builder(array, depth, background, exclude):
@@ -67,12 +68,12 @@ def _builder(array, depth, background, exclude):
                    axis_order=array.slab_order)
 
 
-def _build_part(source, dataset, scale, axis_order, z0, z1, background, exclude):
+def _build_part(source, dataset, scale, axis_order, cache_bytes, z0, z1, background, exclude):
     """Task: compress slices z0..z1-1 of the store; returns (volume, seconds)."""
     from .stores import slab_slices_for
 
     start = time.perf_counter()
-    array = _open(source, dataset, scale, axis_order)
+    array = _open(source, dataset, scale, axis_order, cache_bytes)
     thickness = min(slab_slices_for(array), 16 * -(-(z1 - z0) // 16))
     chunk = array.chunk_z()
     with _builder(array, z1 - z0, background, exclude) as builder:
@@ -130,7 +131,7 @@ def _parse_client(client):
 
 def build_distributed(source, client=None, slab=DEFAULT_SLAB, *, partitions=None, background=0,
                       exclude=(), scale=None, axis_order=None, dataset=None, progress=None,
-                      retries=2):
+                      retries=2, cache_bytes=None):
     """Compress a chunked store on a Dask cluster, byte-identical to :func:`vtksvdag.read`.
 
     The store is cut into z-ranges of ``slab`` slices; each task reads its own range from the
@@ -154,8 +155,8 @@ def build_distributed(source, client=None, slab=DEFAULT_SLAB, *, partitions=None
     partitions : int, optional
         Instead of ``slab``: the number of tasks that read the store, each given a share of the
         16-slice slabs as even as possible (at most one task per slab).
-    background, exclude, scale, axis_order, dataset
-        As for :func:`vtksvdag.read`.
+    background, exclude, scale, axis_order, dataset, cache_bytes
+        As for :func:`vtksvdag.read` (``cache_bytes`` bounds each task's chunk cache).
     progress : callable, optional
         Called with the fraction of tasks done, in [0, 1].
     retries : int, default: 2
@@ -196,7 +197,7 @@ def build_distributed(source, client=None, slab=DEFAULT_SLAB, *, partitions=None
         raise ValueError(f"retries must be an integer >= 0, not {retries!r}")
     exclude = label_list(exclude)
     # Metadata only (dims, dtype, geometry): the labels are read by the tasks.
-    array = _open(source, dataset, scale, axis_order)
+    array = _open(source, dataset, scale, axis_order, cache_bytes)
     nz = array.dims[2]
     if min(array.dims) < 1:
         raise ValueError(f"{array.where}: the array is empty (dimensions {array.dims})")
@@ -210,8 +211,8 @@ def build_distributed(source, client=None, slab=DEFAULT_SLAB, *, partitions=None
         def submit(fn, *args):
             return client.submit(fn, *args, pure=False, retries=int(retries))
 
-        parts = [submit(_build_part, source, dataset, scale, axis_order, z0, z1, background,
-                        exclude)
+        parts = [submit(_build_part, source, dataset, scale, axis_order, cache_bytes, z0, z1,
+                        background, exclude)
                  for z0, z1 in z_ranges(nz, slab, partitions)]
         timings = {"partial": [submit(operator.itemgetter(1), p) for p in parts], "merge": []}
         level = parts

@@ -48,8 +48,19 @@ def _chunked_store(path, dataset):
     return location, kind
 
 
+def check_cache_bytes(cache_bytes):
+    """The chunk cache bound for tensorstore: DEFAULT_CACHE_BYTES for None, else an int >= 0."""
+    from .stores import DEFAULT_CACHE_BYTES
+
+    if cache_bytes is None:
+        return DEFAULT_CACHE_BYTES
+    if isinstance(cache_bytes, bool) or not isinstance(cache_bytes, (int, np.integer)) or cache_bytes < 0:
+        raise ValueError(f"cache_bytes must be an integer >= 0 (bytes), not {cache_bytes!r}")
+    return int(cache_bytes)
+
+
 def read(path, background=0, exclude=(), dataset=None, progress=None, *, scale=None,
-         axis_order=None):
+         axis_order=None, cache_bytes=None):
     """Read a label volume file, a chunked store, or a compressed ``.svdag`` file, as a
     SegmentationVolume.
 
@@ -91,6 +102,8 @@ def read(path, background=0, exclude=(), dataset=None, progress=None, *, scale=N
     axis_order : {"zyx", "xyz"}, optional
         Chunked stores only: the order of the store's spatial dimensions, overriding the
         conventions above.
+    cache_bytes : int, optional
+        Chunked stores only: the bound of tensorstore's chunk cache in bytes (default 256 MiB).
 
     Returns
     -------
@@ -131,10 +144,11 @@ def read(path, background=0, exclude=(), dataset=None, progress=None, *, scale=N
 
         exclude = label_list(exclude)
         return read_store(*store, background=background, exclude=exclude, scale=scale,
-                          axis_order=axis_order, progress=progress)
+                          axis_order=axis_order, progress=progress,
+                          cache_bytes=check_cache_bytes(cache_bytes))
     path = _check_input_file(path)
     exclude = label_list(exclude)  # a generator is read once
-    for name, value in (("scale", scale), ("axis_order", axis_order)):
+    for name, value in (("scale", scale), ("axis_order", axis_order), ("cache_bytes", cache_bytes)):
         if value is not None:
             raise ValueError(f"{path}: {name}={value!r} is only for chunked stores (Zarr, N5, "
                              f"neuroglancer precomputed)")

@@ -188,6 +188,17 @@ def test_slabs_of_16_slices_and_bounded_cache(tmp_path, monkeypatch):
     with pytest.raises(ValueError, match="multiple of 16"):
         stores.read_store(location, kind, slab_slices=20)
 
+    # read() takes the bound too; it is for chunked stores only.
+    opened.clear()
+    assert_volume(vtksvdag.read(tmp_path / "a.zarr", cache_bytes=1 << 21), zyx)
+    assert opened[0].store.spec(retain_context=True).to_json()["context"]["cache_pool"] == {
+        "total_bytes_limit": 1 << 21}
+    with pytest.raises(ValueError, match="cache_bytes"):
+        vtksvdag.read(tmp_path / "a.zarr", cache_bytes=-1)
+    np.save(tmp_path / "a.npy", zyx)
+    with pytest.raises(ValueError, match="only for chunked stores"):
+        vtksvdag.read(tmp_path / "a.npy", cache_bytes=1 << 21)
+
 
 def test_slabs_cover_whole_chunks_along_z(tmp_path):
     zyx = labels_zyx(np.uint8, shape=(90, 5, 6))

@@ -108,6 +108,10 @@ def add_input_options(parser):
         "(default: 0, full resolution)",
     )
     parser.add_argument(
+        "--cache-mib", type=int_in(0, 2**31 - 1), metavar="MIB",
+        help="chunked stores: bound of tensorstore's chunk cache in MiB (default: 256)",
+    )
+    parser.add_argument(
         "--axis-order", choices=("zyx", "xyz"),
         help="chunked stores: order of the spatial dimensions (default: zyx for Zarr unless "
         "OME-Zarr axes say otherwise, xyz for N5 and precomputed)",
@@ -152,6 +156,7 @@ def load(args, path, reader=read):
                 progress=progress,
                 scale=getattr(args, "scale", None),
                 axis_order=getattr(args, "axis_order", None),
+                cache_bytes=None if getattr(args, "cache_mib", None) is None else args.cache_mib << 20,
             ),
         )
     except LabelRangeError as e:
