@@ -68,10 +68,19 @@ def _builder(array, depth, background, exclude):
                    axis_order=array.slab_order)
 
 
+def _one_thread_per_task():
+    """Dask runs one task per worker thread: the builder's own threads (vtkSMPTools) would
+    oversubscribe the cores, so a task builds on its thread alone."""
+    from vtkmodules.vtkCommonCore import vtkSMPTools
+
+    vtkSMPTools.Initialize(1)
+
+
 def _build_part(source, dataset, scale, axis_order, cache_bytes, z0, z1, background, exclude):
     """Task: compress slices z0..z1-1 of the store; returns (volume, seconds)."""
     from .stores import slab_slices_for
 
+    _one_thread_per_task()
     start = time.perf_counter()
     array = _open(source, dataset, scale, axis_order, cache_bytes)
     thickness = min(slab_slices_for(array), 16 * -(-(z1 - z0) // 16))
@@ -94,6 +103,7 @@ def _merge(lower, upper, background, exclude):
     """Task: the volume of two consecutive z-ranges; returns (volume, seconds)."""
     from .streaming import Builder
 
+    _one_thread_per_task()
     start = time.perf_counter()
     a, b = lower[0], upper[0]
     nx, ny, nz = a.dims
@@ -152,6 +162,8 @@ def build_distributed(source, client=None, slab=DEFAULT_SLAB, *, partitions=None
     slab : int, default: 256
         z-slices per task, a positive multiple of 16. A worker holds the slices it reads at a
         time (about 64 MiB) and its partial volume; a merge holds two partials and their merge.
+        Each task runs on one thread (Dask's parallelism is the tasks): give a machine's
+        cores to its workers' threads.
     partitions : int, optional
         Instead of ``slab``: the number of tasks that read the store, each given a share of the
         16-slice slabs as even as possible (at most one task per slab).
