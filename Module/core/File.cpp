@@ -8,8 +8,10 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <functional>
 #include <memory>
 
 namespace svdag
@@ -67,6 +69,26 @@ uint32_t crc32Of(const uint8_t* data, size_t size)
   return uint32_t(crc);
 }
 
+// Little-endian fields of a byte buffer, whatever the host's byte order (compilers turn these
+// into plain loads and stores on little-endian hosts).
+void storeLE(uint8_t* at, uint64_t v, int n)
+{
+  for (int i = 0; i < n; ++i)
+    at[i] = uint8_t(v >> (8 * i));
+}
+template <typename T>
+T loadLE(const uint8_t* at)
+{
+  uint64_t v = 0;
+  for (size_t i = 0; i < sizeof(T); ++i)
+    v |= uint64_t(at[i]) << (8 * i);
+  return T(v);
+}
+
+// Files are read and written at most this many bytes per stdio call: a single read or write of
+// more than 2 GiB fails on some systems (macOS's write, for one).
+constexpr size_t IoChunk = size_t(1) << 30;
+
 // Appends fields in little-endian order, byte by byte, whatever the host's byte order.
 class ByteWriter
 {
@@ -83,7 +105,6 @@ public:
     std::memcpy(&bits, &v, sizeof bits);
     put(bits, 8);
   }
-  void append(const std::vector<uint8_t>& more) { bytes.insert(bytes.end(), more.begin(), more.end()); }
 
 private:
   void put(uint64_t v, int n)
@@ -164,47 +185,253 @@ bool packedWordBytes(uint64_t count, uint64_t bits, uint64_t& bytes)
 
 // ---- writing ----
 
-std::vector<uint8_t> wordBytes(const std::vector<uint32_t>& stream)
+// A section's raw bytes are produced in pieces of at most RawChunk bytes, converted from the
+// volume on the fly: checksumming, compressing or writing a section of any size costs no copy of
+// it.
+constexpr size_t RawChunk = size_t(1) << 20;
+using ChunkSink = std::function<void(const uint8_t* data, size_t size)>;
+
+// The elements of an array as little-endian bytes of `size` each, one chunk at a time.
+template <typename T, typename Store>
+void elementChunks(
+  const T* items, size_t count, size_t size, const Store& store, const ChunkSink& sink)
 {
-  // The trailing padding word is an in-memory convenience (Layout.h), not part of the file.
-  ByteWriter w;
-  w.bytes.reserve(stream.empty() ? 0 : (stream.size() - 1) * 4);
-  for (size_t i = 0; i + 1 < stream.size(); ++i)
-    w.u32(stream[i]);
-  return std::move(w.bytes);
+  const size_t perChunk = RawChunk / size;
+  std::vector<uint8_t> chunk(std::min(count, perChunk) * size);
+  for (size_t first = 0; first < count; first += perChunk)
+  {
+    const size_t n = std::min(count - first, perChunk);
+    for (size_t i = 0; i < n; ++i)
+      store(&chunk[i * size], items[first + i]);
+    sink(chunk.data(), n * size);
+  }
 }
 
-std::vector<uint8_t> rawSection(const Volume& v, uint32_t id)
+// Raw bytes of a section (File.h); word streams without their trailing padding word (an
+// in-memory convenience, Layout.h, not part of the file).
+uint64_t rawSectionSize(const Volume& v, uint32_t id)
 {
-  ByteWriter w;
+  auto words = [](const std::vector<uint32_t>& stream) {
+    return stream.empty() ? 0 : 4 * uint64_t(stream.size() - 1);
+  };
+  switch (id)
+  {
+    case LabelsSection: return LabelRecordSize * v.labels.size();
+    case BlocksSection: return words(v.blocks);
+    case RootsSection: return words(v.roots);
+    case MidsSection: return words(v.mids);
+    default: return 8 * uint64_t(v.leaves.size());
+  }
+}
+
+void rawSectionChunks(const Volume& v, uint32_t id, const ChunkSink& sink)
+{
+  auto word = [](uint8_t* at, uint32_t w) { storeLE(at, w, 4); };
+  auto words = [&](const std::vector<uint32_t>& stream) {
+    elementChunks(stream.data(), stream.empty() ? 0 : stream.size() - 1, 4, word, sink);
+  };
   switch (id)
   {
     case LabelsSection:
-      w.bytes.reserve(v.labels.size() * LabelRecordSize);
-      for (const LabelInfo& l : v.labels)
-      {
-        w.u64(l.value);
-        w.u64(l.voxels);
-        for (int32_t b : l.bounds)
-          w.i32(b);
-      }
-      return std::move(w.bytes);
-    case BlocksSection: return wordBytes(v.blocks);
-    case RootsSection: return wordBytes(v.roots);
-    case MidsSection: return wordBytes(v.mids);
+      elementChunks(v.labels.data(), v.labels.size(), size_t(LabelRecordSize),
+        [](uint8_t* at, const LabelInfo& l) {
+          storeLE(at, l.value, 8);
+          storeLE(at + 8, l.voxels, 8);
+          for (int b = 0; b < 6; ++b)
+            storeLE(at + 16 + 4 * b, uint32_t(l.bounds[b]), 4);
+        },
+        sink);
+      break;
+    case BlocksSection: words(v.blocks); break;
+    case RootsSection: words(v.roots); break;
+    case MidsSection: words(v.mids); break;
     default:
-      w.bytes.reserve(v.leaves.size() * 8);
-      for (uint64_t leaf : v.leaves)
-        w.u64(leaf);
-      return std::move(w.bytes);
+      elementChunks(v.leaves.data(), v.leaves.size(), 8,
+        [](uint8_t* at, uint64_t leaf) { storeLE(at, leaf, 8); }, sink);
   }
+}
+
+// One section as the file stores it: its table entry, and the zstd frame when that is smaller
+// than the raw bytes (which are produced again when the file is written). The frame is written
+// into a buffer of raw - 1 bytes that is never initialised, so only the bytes zstd writes are
+// touched: a large section costs its compressed size.
+struct StoredSection
+{
+  SectionEntry entry;
+  std::unique_ptr<uint8_t[]> packed;
+};
+
+// A file as its header (magic, fields, section table and their crc) and its sections, in file
+// order; writeFile writes the parts one after the other, without assembling the whole file.
+struct EncodedFile
+{
+  std::vector<uint8_t> header;
+  std::vector<StoredSection> sections;
+};
+
+// The crc32 of a section's raw bytes and, at a level above 0, its zstd frame (one streaming pass
+// over the raw bytes; the frame header holds the raw size, as the reader requires), kept when it
+// is smaller than the raw bytes: incompressible sections are stored as they are.
+StoredSection storeSection(const Volume& v, uint32_t id, int level)
+{
+  StoredSection s;
+  SectionEntry& e = s.entry;
+  e.id = id;
+  e.raw = rawSectionSize(v, id);
+  e.stored = e.raw;
+  uLong crc = crc32(0L, Z_NULL, 0);
+  std::unique_ptr<ZSTD_CCtx, size_t (*)(ZSTD_CCtx*)> ctx(nullptr, ZSTD_freeCCtx);
+  ZSTD_outBuffer out = { nullptr, 0, 0 };
+  bool fits = level > 0 && e.raw > 0;
+  auto check = [](size_t r) {
+    if (ZSTD_isError(r))
+      throw FileError(std::string("zstd compression failed: ") + ZSTD_getErrorName(r));
+    return r;
+  };
+  if (fits)
+  {
+    ctx.reset(ZSTD_createCCtx());
+    if (!ctx)
+      throw FileError("cannot create a zstd compression context");
+    check(ZSTD_CCtx_setParameter(ctx.get(), ZSTD_c_compressionLevel, level));
+    check(ZSTD_CCtx_setPledgedSrcSize(ctx.get(), e.raw));
+    s.packed.reset(new uint8_t[size_t(e.raw - 1)]);
+    out = { s.packed.get(), size_t(e.raw - 1), 0 };
+  }
+  rawSectionChunks(v, id, [&](const uint8_t* data, size_t size) {
+    crc = crc32(crc, data, uInt(size)); // chunks are at most RawChunk bytes
+    ZSTD_inBuffer in = { data, size, 0 };
+    while (fits && in.pos < in.size)
+    {
+      check(ZSTD_compressStream2(ctx.get(), &out, &in, ZSTD_e_continue));
+      fits = out.pos < out.size || in.pos == in.size; // a full buffer: not smaller than raw
+    }
+  });
+  e.crc = uint32_t(crc);
+  while (fits)
+  {
+    ZSTD_inBuffer none = { nullptr, 0, 0 };
+    if (check(ZSTD_compressStream2(ctx.get(), &out, &none, ZSTD_e_end)) == 0)
+    {
+      e.codec = CodecZstd;
+      e.stored = out.pos;
+      break;
+    }
+    fits = out.pos < out.size;
+  }
+  if (e.codec != CodecZstd)
+    s.packed.reset();
+  return s;
+}
+
+// Writes a section's stored bytes to a sink: its frame, or its raw bytes produced again.
+void storedChunks(const Volume& v, const StoredSection& s, const ChunkSink& sink)
+{
+  if (s.packed)
+    sink(s.packed.get(), size_t(s.entry.stored));
+  else
+    rawSectionChunks(v, s.entry.id, sink);
+}
+
+EncodedFile encode(const Volume& v, const WriteOptions& options)
+{
+  if (options.zstdLevel < 0 || options.zstdLevel > MaxZstdLevel)
+    throw FileError("zstd level must be in 0..22 (got " + std::to_string(options.zstdLevel) + ")");
+  try
+  {
+    v.validate();
+  }
+  catch (const std::exception& e)
+  {
+    throw FileError(std::string("cannot write an inconsistent volume: ") + e.what());
+  }
+
+  ByteWriter w;
+  w.bytes.insert(w.bytes.end(), FileMagic, FileMagic + FileMagicSize);
+  w.u16(FileMajorVersion);
+  w.u16(FileMinorVersion);
+  const Geometry& g = v.geometry;
+  for (int32_t d : g.dims)
+    w.i32(d);
+  for (double s : g.spacing)
+    w.f64(s);
+  for (double o : g.origin)
+    w.f64(o);
+  for (double d : g.direction)
+    w.f64(d);
+  w.u32(uint32_t(v.scalarType));
+  w.u64(v.background);
+  for (uint32_t width : { v.widths.cellBits, v.widths.labelBits, v.widths.rootRefBits,
+         v.widths.midRefBits, v.widths.leafRefBits })
+    w.u32(width);
+  for (uint64_t count : { uint64_t(v.labels.size()), v.blockCount, v.rootCount, v.midCount,
+         uint64_t(v.leaves.size()) })
+    w.u64(count);
+  const uint32_t sectionCount = LastSection - FirstSection + 1;
+  w.u32(sectionCount);
+
+  // Sections are compressed first, so that the table can be written before them.
+  EncodedFile file;
+  uint64_t offset = FixedHeaderSize + SectionEntrySize * sectionCount + 4;
+  for (uint32_t id = FirstSection; id <= LastSection; ++id)
+  {
+    file.sections.push_back(storeSection(v, id, options.zstdLevel));
+    file.sections.back().entry.offset = offset;
+    offset += file.sections.back().entry.stored;
+  }
+  for (const StoredSection& s : file.sections)
+  {
+    const SectionEntry& e = s.entry;
+    w.u32(e.id);
+    w.u32(e.codec);
+    w.u64(e.offset);
+    w.u64(e.stored);
+    w.u64(e.raw);
+    w.u32(e.crc);
+  }
+  w.u32(crc32Of(w.bytes.data(), w.bytes.size()));
+  file.header = std::move(w.bytes);
+  return file;
+}
+
+// Writes every byte, IoChunk at a time; false on a short write (errno says why).
+bool writeAll(std::FILE* f, const uint8_t* data, size_t size)
+{
+  while (size > 0)
+  {
+    const size_t chunk = std::min(size, IoChunk);
+    if (std::fwrite(data, 1, chunk, f) != chunk)
+      return false;
+    data += chunk;
+    size -= chunk;
+  }
+  return true;
+}
+
+// Reads exactly `size` bytes, IoChunk at a time; false on a short read.
+bool readAll(std::FILE* f, uint8_t* data, size_t size)
+{
+  while (size > 0)
+  {
+    const size_t chunk = std::min(size, IoChunk);
+    if (std::fread(data, 1, chunk, f) != chunk)
+      return false;
+    data += chunk;
+    size -= chunk;
+  }
+  return true;
 }
 
 // ---- reading ----
 
-// Decompresses one zstd frame that must yield exactly `raw` bytes. The output grows with what the
-// frame actually produces, so a false raw size cannot make us reserve memory up front.
-std::vector<uint8_t> inflate(const uint8_t* src, size_t stored, uint64_t raw, const std::string& part)
+// Decompresses one zstd frame that must yield exactly `raw` bytes into `out`, as the raw
+// little-endian bytes of its elements (raw is a multiple of their size), followed by `padding`
+// zero elements. The output grows with what the frame actually produces, so a false raw size
+// cannot make us reserve memory up front; decompressing into the elements themselves costs a
+// section its size once, not twice.
+template <typename T>
+void inflate(const uint8_t* src, size_t stored, uint64_t raw, const std::string& part,
+  std::vector<T>& out, size_t padding)
 {
   const unsigned long long declared = ZSTD_getFrameContentSize(src, stored);
   if (declared == ZSTD_CONTENTSIZE_ERROR)
@@ -215,17 +442,26 @@ std::vector<uint8_t> inflate(const uint8_t* src, size_t stored, uint64_t raw, co
   if (!ctx)
     throw FileError("cannot create a zstd decompression context");
 
-  std::vector<uint8_t> out(size_t(std::min<uint64_t>(raw, std::max<uint64_t>(4 * uint64_t(stored), 1 << 16))));
-  size_t produced = 0;
+  const uint64_t rawElements = raw / sizeof(T);
+  // Reserving the padding with each step makes the last step's allocation the final one.
+  auto grow = [&](uint64_t elements) {
+    out.reserve(size_t(elements) + padding);
+    out.resize(size_t(elements));
+  };
+  grow(std::min<uint64_t>(
+    rawElements, std::max<uint64_t>(4 * uint64_t(stored), 1 << 16) / sizeof(T)));
+  size_t produced = 0; // bytes
   uint8_t scratch = 0; // catches a frame that goes on past the declared size
   ZSTD_inBuffer in = { src, stored, 0 };
   for (;;)
   {
-    if (produced == out.size() && out.size() < raw)
-      out.resize(size_t(std::min<uint64_t>(raw, 2 * uint64_t(out.size()))));
-    const bool full = produced == out.size();
-    ZSTD_outBuffer o = full ? ZSTD_outBuffer{ &scratch, 1, 0 }
-                            : ZSTD_outBuffer{ out.data(), out.size(), produced };
+    if (produced == out.size() * sizeof(T) && out.size() < rawElements)
+      grow(std::min<uint64_t>(rawElements, 2 * uint64_t(out.size())));
+    const size_t capacity = out.size() * sizeof(T);
+    const bool full = produced == capacity;
+    ZSTD_outBuffer o = full
+      ? ZSTD_outBuffer{ &scratch, 1, 0 }
+      : ZSTD_outBuffer{ reinterpret_cast<uint8_t*>(out.data()), capacity, produced };
     const size_t inBefore = in.pos, outBefore = o.pos;
     const size_t r = ZSTD_decompressStream(ctx.get(), &o, &in);
     if (ZSTD_isError(r))
@@ -243,16 +479,32 @@ std::vector<uint8_t> inflate(const uint8_t* src, size_t stored, uint64_t raw, co
     fail(part + ": data after the end of the zstd frame");
   if (produced != raw)
     fail(part + " decompresses to fewer bytes than declared");
-  return out;
+  out.resize(out.size() + padding); // inside the capacity reserved with the last step
 }
 
-std::vector<uint32_t> paddedWords(const std::vector<uint8_t>& bytes)
+// The elements of a known section (raw little-endian values of type T) in host order, followed
+// by `padding` zero elements: decompressed in place, or decoded straight from the file's bytes;
+// checked against the section's crc32 either way.
+template <typename T>
+std::vector<T> sectionElements(
+  const SectionEntry& e, const uint8_t* stored, const std::string& name, size_t padding)
 {
-  ByteReader r(bytes.data(), bytes.size(), "word stream");
-  std::vector<uint32_t> words(bytes.size() / 4 + 1, 0u); // + the zero padding word
-  for (size_t i = 0; i + 1 < words.size(); ++i)
-    words[i] = r.u32();
-  return words;
+  const size_t count = size_t(e.raw / sizeof(T));
+  std::vector<T> out;
+  const uint8_t* raw = stored;
+  if (e.codec == CodecZstd)
+  {
+    inflate(stored, size_t(e.stored), e.raw, name, out, padding);
+    raw = reinterpret_cast<const uint8_t*>(out.data());
+  }
+  if (crc32Of(raw, size_t(e.raw)) != e.crc)
+    fail(name + " checksum mismatch (the data is corrupt)");
+  if (e.codec != CodecZstd)
+    out.assign(count + padding, T(0));
+  // In place for a decompressed section (each element is read whole before it is written).
+  for (size_t i = 0; i < count; ++i)
+    out[i] = loadLE<T>(raw + sizeof(T) * i);
+  return out;
 }
 
 bool validPattern(ScalarType t, uint64_t v)
@@ -293,86 +545,19 @@ void readLabels(const std::vector<uint8_t>& bytes, uint64_t count, Volume& v)
 
 std::vector<uint8_t> serialize(const Volume& v, const WriteOptions& options)
 {
-  if (options.zstdLevel < 0 || options.zstdLevel > MaxZstdLevel)
-    throw FileError("zstd level must be in 0..22 (got " + std::to_string(options.zstdLevel) + ")");
-  try
+  EncodedFile file = encode(v, options);
+  std::vector<uint8_t> bytes = std::move(file.header);
+  size_t total = bytes.size();
+  for (const StoredSection& s : file.sections)
+    total += size_t(s.entry.stored);
+  bytes.reserve(total);
+  for (StoredSection& s : file.sections)
   {
-    v.validate();
+    storedChunks(v, s,
+      [&](const uint8_t* data, size_t size) { bytes.insert(bytes.end(), data, data + size); });
+    s.packed.reset(); // each frame goes as soon as it is copied
   }
-  catch (const std::exception& e)
-  {
-    throw FileError(std::string("cannot write an inconsistent volume: ") + e.what());
-  }
-
-  ByteWriter w;
-  w.bytes.insert(w.bytes.end(), FileMagic, FileMagic + FileMagicSize);
-  w.u16(FileMajorVersion);
-  w.u16(FileMinorVersion);
-  const Geometry& g = v.geometry;
-  for (int32_t d : g.dims)
-    w.i32(d);
-  for (double s : g.spacing)
-    w.f64(s);
-  for (double o : g.origin)
-    w.f64(o);
-  for (double d : g.direction)
-    w.f64(d);
-  w.u32(uint32_t(v.scalarType));
-  w.u64(v.background);
-  for (uint32_t width : { v.widths.cellBits, v.widths.labelBits, v.widths.rootRefBits,
-         v.widths.midRefBits, v.widths.leafRefBits })
-    w.u32(width);
-  for (uint64_t count : { uint64_t(v.labels.size()), v.blockCount, v.rootCount, v.midCount,
-         uint64_t(v.leaves.size()) })
-    w.u64(count);
-  const uint32_t sectionCount = LastSection - FirstSection + 1;
-  w.u32(sectionCount);
-
-  // Sections are compressed first, so that the table can be written before them.
-  std::vector<SectionEntry> table;
-  std::vector<std::vector<uint8_t>> payloads;
-  uint64_t offset = FixedHeaderSize + SectionEntrySize * sectionCount + 4;
-  for (uint32_t id = FirstSection; id <= LastSection; ++id)
-  {
-    std::vector<uint8_t> raw = rawSection(v, id);
-    SectionEntry e;
-    e.id = id;
-    e.raw = raw.size();
-    e.crc = crc32Of(raw.data(), raw.size());
-    if (options.zstdLevel > 0 && !raw.empty())
-    {
-      std::vector<uint8_t> packed(ZSTD_compressBound(raw.size()));
-      const size_t n =
-        ZSTD_compress(packed.data(), packed.size(), raw.data(), raw.size(), options.zstdLevel);
-      if (ZSTD_isError(n))
-        throw FileError(std::string("zstd compression failed: ") + ZSTD_getErrorName(n));
-      if (n < raw.size()) // incompressible sections are stored as they are
-      {
-        packed.resize(n);
-        raw.swap(packed);
-        e.codec = CodecZstd;
-      }
-    }
-    e.offset = offset;
-    e.stored = raw.size();
-    offset += e.stored;
-    table.push_back(e);
-    payloads.push_back(std::move(raw));
-  }
-  for (const SectionEntry& e : table)
-  {
-    w.u32(e.id);
-    w.u32(e.codec);
-    w.u64(e.offset);
-    w.u64(e.stored);
-    w.u64(e.raw);
-    w.u32(e.crc);
-  }
-  w.u32(crc32Of(w.bytes.data(), w.bytes.size()));
-  w.bytes.reserve(size_t(offset));
-  for (const auto& p : payloads)
-    w.append(p);
-  return std::move(w.bytes);
+  return bytes;
 }
 
 Volume deserialize(const uint8_t* data, size_t size)
@@ -512,30 +697,22 @@ Volume deserialize(const uint8_t* data, size_t size)
       fail("sections overlap");
   }
 
-  // Sections, one pass: decompress, checksum, decode.
+  // Sections, one pass: decompress, checksum, decode (the padding words re-added). The sizes
+  // were checked against the counts above, so each is a whole number of its elements.
   for (uint32_t id = FirstSection; id <= LastSection; ++id)
   {
     const SectionEntry& e = *known[id];
     const std::string name = std::string(sectionName(id)) + " section";
     const uint8_t* stored = data + e.offset;
-    std::vector<uint8_t> raw = e.codec == CodecZstd
-      ? inflate(stored, size_t(e.stored), e.raw, name)
-      : std::vector<uint8_t>(stored, stored + e.stored);
-    if (crc32Of(raw.data(), raw.size()) != e.crc)
-      fail(name + " checksum mismatch (the data is corrupt)");
     switch (id)
     {
-      case LabelsSection: readLabels(raw, labelCount, v); break;
-      case BlocksSection: v.blocks = paddedWords(raw); break;
-      case RootsSection: v.roots = paddedWords(raw); break;
-      case MidsSection: v.mids = paddedWords(raw); break;
-      default:
-      {
-        ByteReader r(raw.data(), raw.size(), name);
-        v.leaves.resize(size_t(leafCount));
-        for (uint64_t& leaf : v.leaves)
-          leaf = r.u64();
-      }
+      case LabelsSection:
+        readLabels(sectionElements<uint8_t>(e, stored, name, 0), labelCount, v);
+        break;
+      case BlocksSection: v.blocks = sectionElements<uint32_t>(e, stored, name, 1); break;
+      case RootsSection: v.roots = sectionElements<uint32_t>(e, stored, name, 1); break;
+      case MidsSection: v.mids = sectionElements<uint32_t>(e, stored, name, 1); break;
+      default: v.leaves = sectionElements<uint64_t>(e, stored, name, 0);
     }
   }
 
@@ -552,21 +729,27 @@ Volume deserialize(const uint8_t* data, size_t size)
 
 void writeFile(const Volume& volume, const std::string& path, const WriteOptions& options)
 {
-  const std::vector<uint8_t> bytes = serialize(volume, options);
+  const EncodedFile file = encode(volume, options);
   // A temporary name next to the target: a failed write leaves the old file (if any) intact.
   const std::string temporary = path + ".partial";
   std::FILE* f = std::fopen(temporary.c_str(), "wb");
   if (!f)
     throw FileOpenError("cannot create '" + path + "': " + std::strerror(errno));
-  const size_t written = std::fwrite(bytes.data(), 1, bytes.size(), f);
+  bool written = writeAll(f, file.header.data(), file.header.size());
+  for (const StoredSection& s : file.sections)
+  {
+    storedChunks(volume, s, [&](const uint8_t* data, size_t size) {
+      written = written && writeAll(f, data, size); // nothing more once a write failed
+    });
+  }
   const int writeErrno = errno;
   const bool flushed = std::fflush(f) == 0;
   const bool closed = std::fclose(f) == 0;
-  if (written != bytes.size() || !flushed || !closed)
+  if (!written || !flushed || !closed)
   {
     std::remove(temporary.c_str());
-    throw FileWriteError("cannot write '" + path + "': " +
-      std::strerror(written != bytes.size() ? writeErrno : errno));
+    throw FileWriteError(
+      "cannot write '" + path + "': " + std::strerror(!written ? writeErrno : errno));
   }
   if (std::rename(temporary.c_str(), path.c_str()) != 0)
   {
@@ -586,16 +769,17 @@ Volume readFile(const std::string& path)
   std::unique_ptr<std::FILE, int (*)(std::FILE*)> f(std::fopen(path.c_str(), "rb"), std::fclose);
   if (!f)
     throw FileError("cannot open '" + path + "': " + std::strerror(errno));
-  // Read the size the file has once opened, then one read; a file that changes meanwhile shows
-  // up as a short read or is caught by the checksums.
-  if (std::fseek(f.get(), 0, SEEK_END) != 0)
+  // The size the file has once opened (fstat's off_t: ftell's long is 32-bit on some systems),
+  // then one read; a file that changes meanwhile shows up as a short read or is caught by the
+  // checksums.
+  if (::fstat(fileno(f.get()), &info) != 0)
     throw FileError("cannot read '" + path + "': " + std::strerror(errno));
-  const long size = std::ftell(f.get());
-  if (size < 0 || std::fseek(f.get(), 0, SEEK_SET) != 0)
-    throw FileError("cannot read '" + path + "': " + std::strerror(errno));
-  std::vector<uint8_t> bytes(static_cast<size_t>(size));
-  if (std::fread(bytes.data(), 1, bytes.size(), f.get()) != bytes.size())
+  if (info.st_size < 0 || uint64_t(info.st_size) > uint64_t(SIZE_MAX))
+    throw FileError("cannot read '" + path + "': larger than this system can address");
+  std::vector<uint8_t> bytes(static_cast<size_t>(info.st_size));
+  if (!readAll(f.get(), bytes.data(), bytes.size()))
     throw FileError("cannot read '" + path + "': short read");
+  f.reset();
   try
   {
     return deserialize(bytes.data(), bytes.size());

@@ -458,7 +458,9 @@ void Volume::validate() const
     fail("cell field too narrow for the grid");
   if (!labels.empty() && (uint64_t(labels.size() - 1) >> w.labelBits))
     fail("label field too narrow for the label table");
-  if (blocks.size() != (blockCount * w.blockBits() + 31) / 32 + 1)
+  uint64_t blockBitsTotal = 0; // a huge count must not wrap around to a small stream
+  if (__builtin_mul_overflow(blockCount, uint64_t(w.blockBits()), &blockBitsTotal) ||
+    blocks.size() != blockBitsTotal / 32 + (blockBitsTotal % 32 ? 1 : 0) + 1)
     fail("block stream size does not match the block count");
   if (roots.empty() || mids.empty())
     fail("missing stream padding");
@@ -628,9 +630,12 @@ void Volume::validate() const
   std::vector<MidEntry> octantEntries[8];
   std::vector<uint32_t> cellLabels; // the labels of the current cell's blocks
   auto checkCellLabels = [&](uint32_t cell) {
-    std::sort(cellLabels.begin(), cellLabels.end());
-    if (std::adjacent_find(cellLabels.begin(), cellLabels.end()) != cellLabels.end())
-      fail("cell " + str(cell) + " holds two blocks of one label");
+    if (cellLabels.size() > 1) // a cell of one block has nothing to sort
+    {
+      std::sort(cellLabels.begin(), cellLabels.end());
+      if (std::adjacent_find(cellLabels.begin(), cellLabels.end()) != cellLabels.end())
+        fail("cell " + str(cell) + " holds two blocks of one label");
+    }
     cellLabels.clear();
   };
   auto checkCellDisjoint = [&](uint32_t cell) {
