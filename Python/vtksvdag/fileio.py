@@ -49,11 +49,10 @@ def _chunked_store(path, dataset):
 
 
 def check_cache_bytes(cache_bytes):
-    """The chunk cache bound for tensorstore: DEFAULT_CACHE_BYTES for None, else an int >= 0."""
-    from .stores import DEFAULT_CACHE_BYTES
-
+    """The chunk cache bound for tensorstore: None (chosen per store, see
+    stores.open_for_reading), else an int >= 0."""
     if cache_bytes is None:
-        return DEFAULT_CACHE_BYTES
+        return None
     if isinstance(cache_bytes, bool) or not isinstance(cache_bytes, (int, np.integer)) or cache_bytes < 0:
         raise ValueError(f"cache_bytes must be an integer >= 0 (bytes), not {cache_bytes!r}")
     return int(cache_bytes)
@@ -103,7 +102,9 @@ def read(path, background=0, exclude=(), dataset=None, progress=None, *, scale=N
         Chunked stores only: the order of the store's spatial dimensions, overriding the
         conventions above.
     cache_bytes : int, optional
-        Chunked stores only: the bound of tensorstore's chunk cache in bytes (default 256 MiB).
+        Chunked stores only: the bound of tensorstore's chunk cache in bytes. By default there
+        is none where the slabs read keep to the store's chunks along z (each chunk is then
+        read once), and 256 MiB where they do not.
 
     Returns
     -------

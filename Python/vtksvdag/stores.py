@@ -27,7 +27,7 @@ import numpy as np
 
 #: URL schemes handed to tensorstore's kvstores (only file:// is tested here).
 URL_SCHEMES = ("file://", "gs://", "s3://", "http://", "https://")
-#: Default bound of tensorstore's chunk cache (bytes) for one opened store.
+#: Bound of tensorstore's chunk cache (bytes) where slabs do not keep to the chunks along z.
 DEFAULT_CACHE_BYTES = 256 * 2**20
 #: Slabs are sized to about this many bytes (then rounded to 16·k slices).
 SLAB_BYTES = 64 * 2**20
@@ -367,9 +367,24 @@ def open_store(location, kind, scale=None, axis_order=None, cache_bytes=DEFAULT_
 
 
 # -- reading: slab by slab into the Builder -------------------------------------------------
+def z_unit(array):
+    """(unit, aligned): the z step that slab and task boundaries keep to. The least multiple
+    of 16 slices that is also one of the chunks' z extent, when such a step stays within
+    4 * SLAB_BYTES (then every chunk is fetched by exactly one slab: ``aligned``); else 16."""
+    nx, ny, _ = array.dims
+    slice_bytes = nx * ny * array.dtype.itemsize
+    chunk = array.chunk_z()
+    if chunk:
+        unit = math.lcm(16, chunk)
+        if unit == 16 or unit * slice_bytes <= 4 * SLAB_BYTES:
+            return unit, True
+    return 16, False
+
+
 def slab_slices_for(array, slab_slices=None):
-    """The z thickness of the slabs read from ``array``: a multiple of 16 covering at least one
-    chunk along z (a chunk is then fetched by at most two slabs) and about SLAB_BYTES bytes."""
+    """The z thickness of the slabs read from ``array``: a multiple of :func:`z_unit` of about
+    SLAB_BYTES bytes, covering at least one chunk along z (so that a chunk is fetched by at most
+    two slabs, and by one when the unit is aligned to the chunks)."""
     if slab_slices is not None:
         if isinstance(slab_slices, bool) or not isinstance(slab_slices, (int, np.integer)) or (
             slab_slices <= 0 or slab_slices % 16
@@ -377,18 +392,55 @@ def slab_slices_for(array, slab_slices=None):
             raise ValueError(f"slab_slices must be a positive multiple of 16, not {slab_slices!r}")
         return int(slab_slices)
     nx, ny, _ = array.dims
-    k = max(1, SLAB_BYTES // (16 * nx * ny * array.dtype.itemsize), -(-(array.chunk_z() or 16) // 16))
-    return 16 * k
+    unit, _ = z_unit(array)
+    k = max(1, SLAB_BYTES // (unit * nx * ny * array.dtype.itemsize),
+            -(-(array.chunk_z() or 16) // unit))
+    return unit * k
+
+
+def open_for_reading(location, kind, scale=None, axis_order=None, cache_bytes=None,
+                     slab_slices=None, z0=0):
+    """(array, slab thickness) for one streaming pass over the store from slice ``z0``.
+    Without an explicit ``cache_bytes``, the chunk cache is off when the slabs keep to the
+    chunks along z (each chunk is read once: a cache would only hold memory) and
+    DEFAULT_CACHE_BYTES otherwise."""
+    array = open_store(location, kind, scale=scale, axis_order=axis_order,
+                       cache_bytes=0 if cache_bytes is None else cache_bytes)
+    thickness = slab_slices_for(array, slab_slices)
+    unit, aligned = z_unit(array)
+    if cache_bytes is None and not (aligned and thickness % unit == 0 and z0 % unit == 0):
+        array = open_store(location, kind, scale=scale, axis_order=axis_order,
+                           cache_bytes=DEFAULT_CACHE_BYTES)
+    return array, thickness
+
+
+def release_freed_memory():
+    """Hand memory freed by the last slab back to the system (glibc keeps freed large blocks
+    once its dynamic mmap threshold has grown past them, so peak memory would creep up by a
+    slab or two); a no-op elsewhere."""
+    global _malloc_trim
+    if _malloc_trim is None:
+        try:
+            import ctypes
+
+            _malloc_trim = ctypes.CDLL("libc.so.6").malloc_trim
+        except (OSError, AttributeError):
+            _malloc_trim = False
+    if _malloc_trim:
+        _malloc_trim(0)
+
+
+_malloc_trim = None
 
 
 def read_store(location, kind, background=0, exclude=(), scale=None, axis_order=None,
-               progress=None, cache_bytes=DEFAULT_CACHE_BYTES, slab_slices=None):
+               progress=None, cache_bytes=None, slab_slices=None):
     """Compress the store ``kind`` at ``location`` (see :func:`find_store`) slab by slab."""
     from .streaming import Builder
     from .volume import SegmentationVolume
 
-    array = open_store(location, kind, scale=scale, axis_order=axis_order, cache_bytes=cache_bytes)
-    thickness = slab_slices_for(array, slab_slices)
+    array, thickness = open_for_reading(location, kind, scale, axis_order, cache_bytes,
+                                        slab_slices)
     nz = array.dims[2]
     start = time.perf_counter()
     if min(array.dims) < 1:
@@ -399,6 +451,7 @@ def read_store(location, kind, background=0, exclude=(), scale=None, axis_order=
         for z0 in range(0, nz, thickness):
             z1 = min(nz, z0 + thickness)
             builder.add_slab(array.read_slab(z0, z1))
+            release_freed_memory()
             if progress is not None:
                 progress(z1 / nz)
         volume = builder.finish()

@@ -38,7 +38,7 @@ def merged(xyz, ranges, **options):
 def test_merged_parts_have_the_bytes_of_the_whole_build(dtype, parts):
     xyz = labels_zyx(dtype, shape=(119, 29, 23), seed=parts).transpose(2, 1, 0)
     whole = vtksvdag.from_numpy(xyz).to_bytes()
-    assert merged(xyz, z_ranges(xyz.shape[2], partitions=parts)).to_bytes() == whole
+    assert merged(xyz, z_ranges(xyz.shape[2], parts)).to_bytes() == whole
 
 
 def test_merge_with_background_exclusions_and_geometry():
@@ -85,10 +85,10 @@ def test_add_volume_errors_leave_the_builder_usable():
 
 
 def test_z_ranges():
-    assert z_ranges(100, slab=32) == [(0, 32), (32, 64), (64, 96), (96, 100)]
-    assert z_ranges(112, partitions=7) == [(16 * i, 16 * i + 16) for i in range(7)]
-    assert z_ranges(120, partitions=3) == [(0, 48), (48, 96), (96, 120)]
-    assert z_ranges(20, partitions=7) == [(0, 16), (16, 20)]  # at most one range per slab
+    assert z_ranges(112, 7) == [(16 * i, 16 * i + 16) for i in range(7)]
+    assert z_ranges(120, 3) == [(0, 48), (48, 96), (96, 120)]
+    assert z_ranges(20, 7) == [(0, 16), (16, 20)]  # at most one range per step
+    assert z_ranges(200, 3, unit=64) == [(0, 128), (128, 192), (192, 200)]
 
 
 # -- bytes and pickling ----------------------------------------------------------------------
@@ -156,9 +156,10 @@ def test_dask_build_is_the_single_machine_build(tmp_path, client, dtype):
         assert volume.build_report["partitions"] == parts
         assert len(volume.build_report["merge_seconds"]) == parts - 1
         assert volume.to_bytes() == reference, f"{parts} partitions"
+    # By default one task per worker thread (2 here); slab sets the slices read at a time.
     seen = []
     volume = vtksvdag.build_distributed(path, client, slab=32, progress=seen.append)
-    assert volume.build_report["partitions"] == 4 and volume.to_bytes() == reference
+    assert volume.build_report["partitions"] == 2 and volume.to_bytes() == reference
     assert seen[-1] == 1.0 and seen == sorted(seen)
 
 
@@ -203,7 +204,7 @@ def test_a_corrupt_chunk_is_named(tmp_path, client):
     with open(os.path.join(path, "2.0.0"), "wb") as f:  # chunk z 20..29: garbage, not blosc
         f.write(b"\x00not a chunk" * 7)
     with pytest.raises(OSError, match=r"z-slices 16\.\.31 \(chunks 1\.\.3 along z\)"):
-        vtksvdag.build_distributed(path, client, slab=16)
+        vtksvdag.build_distributed(path, client, slab=16, partitions=2)
 
 
 class _KillOnce(distributed.WorkerPlugin):
@@ -244,6 +245,8 @@ def test_bad_arguments(tmp_path):
         vtksvdag.build_distributed(path, "local:1", slab=16.0)
     with pytest.raises(ValueError, match="partitions"):
         vtksvdag.build_distributed(path, "local:1", partitions=0)
+    with pytest.raises(TypeError, match="partitions"):
+        vtksvdag.build_distributed(path, "local:1", partitions=2.5)
     with pytest.raises(ValueError, match="local:N"):
         vtksvdag.build_distributed(path, "local:zero")
     with pytest.raises(TypeError, match="client"):
@@ -262,10 +265,12 @@ def test_cli_compress_on_dask(tmp_path):
     path = zarr_store(tmp_path / "seg.zarr", zyx)
     one, two = tmp_path / "one.svdag", tmp_path / "two.svdag"
     assert run_cli("compress", path, "-o", one).returncode == 0
-    result = run_cli("compress", path, "-o", two, "--dask", "local:2", "--slab", "16")
+    result = run_cli("compress", path, "-o", two, "--dask", "local:2", "--slab", "16",
+                     "--partitions", "3")
     assert result.returncode == 0, result.stderr
     assert one.read_bytes() == two.read_bytes()
     for args, message in ((["--slab", "16"], "only with --dask"),
+                          (["--partitions", "2"], "only with --dask"),
                           (["--dask", "local:2", "--slab", "24"], "multiple of 16")):
         result = run_cli("compress", path, "-o", tmp_path / "x.svdag", *args)
         assert result.returncode != 0 and message in result.stderr

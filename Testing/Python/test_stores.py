@@ -156,15 +156,23 @@ def test_dataset_inside_a_group(tmp_path):
     assert_volume(vtksvdag.read(tmp_path / "group", dataset="labels/seg"), zyx)
 
 
+def cache_limit(array):
+    """The chunk cache bound a StoreArray was opened with (0 when there is none)."""
+    pool = array.store.spec(retain_context=True).to_json()["context"]["cache_pool"]
+    return pool.get("total_bytes_limit", 0)
+
+
 def test_slabs_of_16_slices_and_bounded_cache(tmp_path, monkeypatch):
-    """The reader hands the Builder z-slabs of 16·k slices, and opens the store with the
-    chunk-cache bound in its context."""
+    """The reader hands the Builder z-slabs of 16·k slices that keep to the chunks along z, and
+    opens the store without a chunk cache when they do (each chunk is read once), with a
+    bounded one when they do not."""
     zyx = labels_zyx(np.uint32, shape=(53, 17, 19))
-    write_store(zarr2_spec(tmp_path / "a.zarr", zyx, chunks=(5, 8, 8)), zyx)
+    write_store(zarr2_spec(tmp_path / "a.zarr", zyx, chunks=(16, 8, 8)), zyx)
+    write_store(zarr2_spec(tmp_path / "b.zarr", zyx, chunks=(5, 8, 8)), zyx)
     shapes = []
     add_slab = Builder.add_slab
     monkeypatch.setattr(Builder, "add_slab", lambda self, a: (shapes.append(a.shape), add_slab(self, a))[1])
-    monkeypatch.setattr(stores, "SLAB_BYTES", 1)  # the thinnest slabs: 16 slices
+    monkeypatch.setattr(stores, "SLAB_BYTES", 1)  # the thinnest slabs the chunks allow
     opened = []
     open_store = stores.open_store
     monkeypatch.setattr(stores, "open_store", lambda *a, **k: opened.append(open_store(*a, **k)) or opened[-1])
@@ -172,27 +180,32 @@ def test_slabs_of_16_slices_and_bounded_cache(tmp_path, monkeypatch):
     assert_volume(volume, zyx)
     assert [s[0] for s in shapes] == [16, 16, 16, 5]
     assert all(s[1:] == (17, 19) for s in shapes)
-    context = opened[0].store.spec(retain_context=True).to_json()["context"]
-    assert context["cache_pool"]["total_bytes_limit"] == stores.DEFAULT_CACHE_BYTES
+    assert cache_limit(opened[-1]) == 0
+    # Chunks of 5 slices: slabs of lcm(16, 5) = 80 slices keep to them (where 80 slices stay
+    # near the slab size).
+    monkeypatch.setattr(stores, "SLAB_BYTES", 2**20)
+    shapes.clear()
+    assert_volume(vtksvdag.read(tmp_path / "b.zarr"), zyx)
+    assert [s[0] for s in shapes] == [53] and cache_limit(opened[-1]) == 0
     assert stores.context_spec(12345) == {"cache_pool": {"total_bytes_limit": 12345}}
 
-    # An explicit slab thickness and cache bound give the same volume.
-    location, kind = stores.find_store(str(tmp_path / "a.zarr"))
-    array = stores.open_store(location, kind, cache_bytes=1 << 20)
-    assert array.store.spec(retain_context=True).to_json()["context"]["cache_pool"] == {
-        "total_bytes_limit": 1 << 20}
+    # Slabs that cut through chunks read with the bounded cache; an explicit bound is kept.
+    location, kind = stores.find_store(str(tmp_path / "b.zarr"))
     shapes.clear()
-    other = stores.read_store(location, kind, slab_slices=32, cache_bytes=1 << 20)
+    other = stores.read_store(location, kind, slab_slices=32)
     assert [s[0] for s in shapes] == [32, 21]
+    assert cache_limit(opened[-1]) == stores.DEFAULT_CACHE_BYTES
     assert_volume(other, zyx)
+    array = stores.open_store(location, kind, cache_bytes=1 << 20)
+    assert cache_limit(array) == 1 << 20
+    assert_volume(stores.read_store(location, kind, slab_slices=32, cache_bytes=1 << 20), zyx)
+    assert cache_limit(opened[-1]) == 1 << 20
     with pytest.raises(ValueError, match="multiple of 16"):
         stores.read_store(location, kind, slab_slices=20)
 
     # read() takes the bound too; it is for chunked stores only.
-    opened.clear()
     assert_volume(vtksvdag.read(tmp_path / "a.zarr", cache_bytes=1 << 21), zyx)
-    assert opened[0].store.spec(retain_context=True).to_json()["context"]["cache_pool"] == {
-        "total_bytes_limit": 1 << 21}
+    assert cache_limit(opened[-1]) == 1 << 21
     with pytest.raises(ValueError, match="cache_bytes"):
         vtksvdag.read(tmp_path / "a.zarr", cache_bytes=-1)
     np.save(tmp_path / "a.npy", zyx)

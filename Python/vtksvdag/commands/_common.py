@@ -109,7 +109,8 @@ def add_input_options(parser):
     )
     parser.add_argument(
         "--cache-mib", type=int_in(0, 2**31 - 1), metavar="MIB",
-        help="chunked stores: bound of tensorstore's chunk cache in MiB (default: 256)",
+        help="chunked stores: bound of tensorstore's chunk cache in MiB (default: none where "
+        "the slabs read keep to the store's chunks, else 256)",
     )
     parser.add_argument(
         "--axis-order", choices=("zyx", "xyz"),

@@ -3,7 +3,7 @@ import argparse
 import functools
 
 from .._svdagfile import COMPRESSION_LEVELS
-from ..distributed import DEFAULT_SLAB, build_distributed
+from ..distributed import build_distributed
 from ..fileio import read
 from ._common import (
     UsageError, add_input_options, add_output_options, file_bytes, int_in, load, output_path, print_json,
@@ -35,7 +35,12 @@ def add_arguments(parser):
     )
     parser.add_argument(
         "--slab", type=slab_slices, default=None, metavar="N",
-        help=f"with --dask: z-slices per task, a multiple of 16 (default: {DEFAULT_SLAB})",
+        help="with --dask: z-slices a task reads at a time, a multiple of 16 (default: about "
+        "64 MiB, kept to the store's chunks)",
+    )
+    parser.add_argument(
+        "--partitions", type=int_in(1, 2**31 - 1), default=None, metavar="N",
+        help="with --dask: tasks that read the store (default: one per worker thread)",
     )
     add_output_options(parser)
 
@@ -48,12 +53,13 @@ def slab_slices(text):
 
 
 def run(args):
-    if args.slab is not None and not args.dask:
-        raise UsageError("argument --slab: only with --dask")
+    for option, value in (("--slab", args.slab), ("--partitions", args.partitions)):
+        if value is not None and not args.dask:
+            raise UsageError(f"argument {option}: only with --dask")
     reader = read
     if args.dask:
-        reader = functools.partial(build_distributed, client=args.dask,
-                                   slab=args.slab or DEFAULT_SLAB)
+        reader = functools.partial(build_distributed, client=args.dask, slab=args.slab,
+                                   partitions=args.partitions)
     volume = load(args, args.input, reader=reader)
     run_with_progress(
         args, "write", lambda progress: volume.save(args.output, compression_level=args.level, progress=progress)
