@@ -369,14 +369,15 @@ def open_store(location, kind, scale=None, axis_order=None, cache_bytes=DEFAULT_
 # -- reading: slab by slab into the Builder -------------------------------------------------
 def z_unit(array):
     """(unit, aligned): the z step that slab and task boundaries keep to. The least multiple
-    of 16 slices that is also one of the chunks' z extent, when such a step stays within
-    4 * SLAB_BYTES (then every chunk is fetched by exactly one slab: ``aligned``); else 16."""
+    of 16 slices that is also one of the chunks' z extent, when such a step is at most 4 chunks
+    deep or 4 * SLAB_BYTES (then every chunk is fetched by exactly one slab: ``aligned``); else
+    16 slices."""
     nx, ny, _ = array.dims
     slice_bytes = nx * ny * array.dtype.itemsize
     chunk = array.chunk_z()
     if chunk:
         unit = math.lcm(16, chunk)
-        if unit == 16 or unit * slice_bytes <= 4 * SLAB_BYTES:
+        if unit <= 4 * max(16, chunk) or unit * slice_bytes <= 4 * SLAB_BYTES:
             return unit, True
     return 16, False
 
