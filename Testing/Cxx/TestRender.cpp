@@ -517,7 +517,7 @@ TEST(RenderDevice, AVolumeThatDoesNotFitNamesTheBytes)
   settings.deviceMemoryLimit = held - 1;
   renderer.setSettings(settings);
   EXPECT_THROW(renderer.setVolume(volume), svdag::render::DeviceMemoryError);
-  EXPECT_EQ(renderer.deviceBytes() <= held - 1, true);
+  EXPECT_LE(renderer.deviceBytes(), held - 1);
   settings.deviceMemoryLimit = 0;
   renderer.setSettings(settings);
   renderer.setVolume(volume);

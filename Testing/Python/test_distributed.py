@@ -163,6 +163,17 @@ def test_dask_build_is_the_single_machine_build(tmp_path, client, dtype):
     assert seen[-1] == 1.0 and seen == sorted(seen)
 
 
+def test_dask_build_through_a_scheduler_address(tmp_path, client):
+    # A "tcp://host:port" string connects a client of its own (closed after the build).
+    zyx = labels_zyx(np.int8, shape=(40, 11, 9), seed=9)
+    path = zarr_store(tmp_path / "seg.zarr", zyx)
+    address = client.scheduler.address
+    assert address.startswith("tcp://")
+    volume = vtksvdag.build_distributed(path, address, partitions=2)
+    assert volume.to_bytes() == vtksvdag.read(path).to_bytes()
+    assert volume.build_report["partitions"] == 2
+
+
 def test_dask_build_of_n5_with_options(tmp_path, client):
     zyx = labels_zyx(np.int16, shape=(50, 21, 19), seed=2)
     xyz = np.ascontiguousarray(zyx.transpose(2, 1, 0))
