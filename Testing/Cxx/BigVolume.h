@@ -16,9 +16,11 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <chrono>
 #include <climits>
 #include <cmath>
 #include <cstdint>
+#include <fstream>
 #include <stdexcept>
 #include <string>
 #include <thread>
@@ -54,6 +56,29 @@ struct ShapeInfo
   std::array<int32_t, 3> lo{ {} };
   std::array<int32_t, 3> hi{ {} };
 };
+
+using Clock = std::chrono::steady_clock;
+
+inline double secondsSince(Clock::time_point start)
+{
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+// MemAvailable from /proc/meminfo, in bytes; 0 when it cannot be read (the limit tests skip
+// below what they need).
+inline uint64_t availableMemory()
+{
+  std::ifstream in("/proc/meminfo");
+  std::string key, rest;
+  uint64_t kib = 0;
+  while (in >> key >> kib)
+  {
+    if (key == "MemAvailable:")
+      return kib * 1024;
+    std::getline(in, rest);
+  }
+  return 0;
+}
 
 inline uint32_t bitWidth(uint64_t v)
 {

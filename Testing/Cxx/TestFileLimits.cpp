@@ -31,27 +31,9 @@
 
 namespace
 {
-using Clock = std::chrono::steady_clock;
-
-double secondsSince(Clock::time_point start)
-{
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
-
-// MemAvailable from /proc/meminfo, in bytes; 0 when it cannot be read.
-uint64_t availableMemory()
-{
-  std::ifstream in("/proc/meminfo");
-  std::string key, rest;
-  uint64_t kib = 0;
-  while (in >> key >> kib)
-  {
-    if (key == "MemAvailable:")
-      return kib * 1024;
-    std::getline(in, rest);
-  }
-  return 0;
-}
+using bigvolume::availableMemory;
+using bigvolume::Clock;
+using bigvolume::secondsSince;
 
 uint64_t freeDiskSpace(const std::string& dir)
 {

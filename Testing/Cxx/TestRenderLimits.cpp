@@ -35,26 +35,9 @@
 namespace
 {
 using Vec = std::array<double, 3>;
-using Clock = std::chrono::steady_clock;
-
-double secondsSince(Clock::time_point start)
-{
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
-
-uint64_t availableMemory()
-{
-  std::ifstream in("/proc/meminfo");
-  std::string key, rest;
-  uint64_t kib = 0;
-  while (in >> key >> kib)
-  {
-    if (key == "MemAvailable:")
-      return kib * 1024;
-    std::getline(in, rest);
-  }
-  return 0;
-}
+using bigvolume::availableMemory;
+using bigvolume::Clock;
+using bigvolume::secondsSince;
 
 // Cells: region A is x < ASide, every y and z below ASide (the first cells in cell order left
 // empty beyond the A count); region B is x in [BFirst, BFirst + BSide), y and z in
