@@ -84,5 +84,36 @@ render::Renderer& RenderSession::prepare(const std::shared_ptr<const Volume>& vo
   return r;
 }
 
+const char* RenderSession::backendInUse() const
+{
+  if (!this->Core)
+    return "";
+  try
+  {
+    return render::backendName(this->Core->backendFor(this->Settings->GetCoreSettings().backend));
+  }
+  catch (const std::exception&)
+  {
+    return "";
+  }
+}
+
+vtkTypeInt64 RenderSession::deviceBytes(const char* part) const
+{
+  if (!this->Core || !part)
+    return 0;
+  const render::DeviceBytes b = this->Core->deviceBytesByPart();
+  const std::string name = part;
+  const uint64_t bytes = name == "encoding" ? b.encoding
+    : name == "acceleration"                ? b.acceleration
+    : name == "materials"                   ? b.materials
+    : name == "neighbours"                  ? b.neighbours
+    : name == "images"                      ? b.images
+    : name == "other"                       ? b.other
+    : name == "total"                       ? b.total
+                                            : 0;
+  return vtkTypeInt64(bytes);
+}
+
 } // namespace vtkglue
 } // namespace svdag

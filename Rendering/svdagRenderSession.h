@@ -48,6 +48,11 @@ public:
   render::Renderer& prepare(const std::shared_ptr<const Volume>& volume);
   // The volume held (null before prepare).
   const std::shared_ptr<const Volume>& volume() const { return this->Uploaded; }
+  // The backend in use ("rt", "compute"; "" before initialize() or where the settings ask for
+  // one the device cannot run).
+  const char* backendInUse() const;
+  // Bytes of device memory by part (all 0 before initialize()).
+  vtkTypeInt64 deviceBytes(const char* part) const;
 
 private:
   vtkSmartPointer<vtkSegmentationSVDAGRenderSettings> Settings;

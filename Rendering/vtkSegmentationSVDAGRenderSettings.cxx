@@ -334,6 +334,34 @@ const char* vtkSegmentationSVDAGRenderSettings::GetShadingAsString() const
   return core::shadingName(this->Settings->shading);
 }
 
+void vtkSegmentationSVDAGRenderSettings::SetBackend(int backend)
+{
+  assign(this, this->Settings->backend,
+    static_cast<core::Backend>(std::min(std::max(backend, int(BACKEND_AUTO)), int(BACKEND_COMPUTE))));
+}
+
+void vtkSegmentationSVDAGRenderSettings::SetBackend(const char* name)
+{
+  try
+  {
+    assign(this, this->Settings->backend, core::parseBackend(name ? name : ""));
+  }
+  catch (const std::invalid_argument& e)
+  {
+    vtkErrorMacro("SetBackend: " << e.what());
+  }
+}
+
+int vtkSegmentationSVDAGRenderSettings::GetBackend() const
+{
+  return int(this->Settings->backend);
+}
+
+const char* vtkSegmentationSVDAGRenderSettings::GetBackendAsString() const
+{
+  return core::backendName(this->Settings->backend);
+}
+
 void vtkSegmentationSVDAGRenderSettings::DeepCopy(vtkSegmentationSVDAGRenderSettings* other)
 {
   if (other && other != this)
@@ -370,6 +398,7 @@ void vtkSegmentationSVDAGRenderSettings::PrintSelf(ostream& os, vtkIndent indent
   os << indent << "MaximumBlocksPerBLAS: " << s.maximumBlocksPerBlas << "\n";
   os << indent << "DeviceMemoryLimit: " << s.deviceMemoryLimit << "\n";
   os << indent << "Shading: " << core::shadingName(s.shading) << "\n";
+  os << indent << "Backend: " << core::backendName(s.backend) << "\n";
   os << indent << "ClippingPlanes: " << s.clipPlanes.size() << "\n";
   for (const auto& p : s.clipPlanes)
   {

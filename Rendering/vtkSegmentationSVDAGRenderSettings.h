@@ -12,7 +12,7 @@
  * (the volume mapper draws misses transparent instead), EnvironmentColor (1, 1, 1), no
  * EnvironmentMap, Sun off with direction (0.3, 0.4, 0.866), irradiance (3, 3, 3) and angular
  * radius 0.27 degrees, MaximumBlocksPerBLAS 0 (the device's limit), DeviceMemoryLimit 0 (the
- * device's memory), no clipping planes, Cropping off, Shading voxel.
+ * device's memory), no clipping planes, Cropping off, Shading voxel, Backend auto.
  */
 #ifndef vtkSegmentationSVDAGRenderSettings_h
 #define vtkSegmentationSVDAGRenderSettings_h
@@ -193,6 +193,31 @@ public:
   const char* GetShadingAsString() const;
   void SetShadingToVoxel() { this->SetShading(SHADING_VOXEL); }
   void SetShadingToSmooth() { this->SetShading(SHADING_SMOOTH); }
+  ///@}
+
+  /** How rays find the blocks: BACKEND_AUTO (default: per device, compute on lavapipe and on
+   * devices without ray tracing, the ray tracing pipeline on GPUs with it), BACKEND_RT (the ray
+   * tracing pipeline over a BVH of block boxes) or BACKEND_COMPUTE (a compute shader walking the
+   * volume's 16^3 cell grid; no BVH, hiding a label rebuilds nothing). The same images either
+   * way. A renderer reports what it uses (GetBackendInUse). */
+  enum
+  {
+    BACKEND_AUTO = 0,
+    BACKEND_RT = 1,
+    BACKEND_COMPUTE = 2
+  };
+
+  ///@{
+  /** Backend, BACKEND_AUTO (default), BACKEND_RT or BACKEND_COMPUTE; by name "auto", "rt" or
+   * "compute" (another name is reported as an error and changes nothing). An int outside the
+   * range is clamped. */
+  void SetBackend(int backend);
+  void SetBackend(const char* name);
+  int GetBackend() const;
+  const char* GetBackendAsString() const;
+  void SetBackendToAuto() { this->SetBackend(BACKEND_AUTO); }
+  void SetBackendToRT() { this->SetBackend(BACKEND_RT); }
+  void SetBackendToCompute() { this->SetBackend(BACKEND_COMPUTE); }
   ///@}
 
   /** Copies every setting of another object. */

@@ -342,6 +342,36 @@ SVDAG_RENDERER_STATISTIC(vtkTypeInt64, NeighbourTableBytes, r->neighbourTableByt
 SVDAG_RENDERER_STATISTIC(int, NumberOfBLAS, r->blasCount())
 #undef SVDAG_RENDERER_STATISTIC
 
+const char* vtkSegmentationSVDAGRenderer::GetBackendInUse() const
+{
+  return this->Internal->Session.backendInUse();
+}
+
+vtkTypeInt64 vtkSegmentationSVDAGRenderer::GetDeviceBytes() const
+{
+  return this->Internal->Session.deviceBytes("total");
+}
+
+vtkTypeInt64 vtkSegmentationSVDAGRenderer::GetEncodingBytes() const
+{
+  return this->Internal->Session.deviceBytes("encoding");
+}
+
+vtkTypeInt64 vtkSegmentationSVDAGRenderer::GetAccelerationBytes() const
+{
+  return this->Internal->Session.deviceBytes("acceleration");
+}
+
+vtkTypeInt64 vtkSegmentationSVDAGRenderer::GetMaterialBytes() const
+{
+  return this->Internal->Session.deviceBytes("materials");
+}
+
+vtkTypeInt64 vtkSegmentationSVDAGRenderer::GetImageBytes() const
+{
+  return this->Internal->Session.deviceBytes("images");
+}
+
 const char* vtkSegmentationSVDAGRenderer::GetDeviceName() const
 {
   const svdag::render::Renderer* r = this->Internal->Session.renderer();
@@ -368,6 +398,10 @@ void vtkSegmentationSVDAGRenderer::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "DeviceName: " << this->GetDeviceName() << "\n";
   os << indent << "SetupSeconds: " << this->GetSetupSeconds() << "\n";
   os << indent << "LastFrameMilliseconds: " << this->GetLastFrameMilliseconds() << "\n";
+  os << indent << "BackendInUse: " << this->GetBackendInUse() << "\n";
+  os << indent << "DeviceBytes: " << this->GetDeviceBytes() << " (encoding " << this->GetEncodingBytes()
+     << ", acceleration " << this->GetAccelerationBytes() << ", materials " << this->GetMaterialBytes()
+     << ", images " << this->GetImageBytes() << ")\n";
   os << indent << "BLASBytes: " << this->GetBLASBytes() << "\n";
   os << indent << "TLASBytes: " << this->GetTLASBytes() << "\n";
   os << indent << "NeighbourTableBytes: " << this->GetNeighbourTableBytes() << "\n";

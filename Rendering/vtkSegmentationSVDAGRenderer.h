@@ -159,6 +159,21 @@ public:
   ///@}
 
   ///@{
+  /** The backend in use, "rt" or "compute" ("" before the first pass, or where Settings asks for
+   * one the device cannot run), and the bytes of device memory held, in all (GetDeviceBytes) and
+   * by part: the volume's encoding (block and DAG streams), what the backend finds blocks with
+   * (BLAS, TLAS and the primitive map; or the compute backend's cell grid and hidden-label bits),
+   * per-label materials and environment tables, and the images (outputs, accumulation, ray
+   * limits); 0 before the first pass. */
+  const char* GetBackendInUse() const;
+  vtkTypeInt64 GetDeviceBytes() const;
+  vtkTypeInt64 GetEncodingBytes() const;
+  vtkTypeInt64 GetAccelerationBytes() const;
+  vtkTypeInt64 GetMaterialBytes() const;
+  vtkTypeInt64 GetImageBytes() const;
+  ///@}
+
+  ///@{
   /** Samples per pixel in the current image, the seconds of tracing that produced it, and an
    * estimate of its error: the root mean square over pixels of the standard error of each
    * pixel's mean luminance (linear units; 0 before two samples). */

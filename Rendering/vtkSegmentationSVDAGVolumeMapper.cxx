@@ -658,6 +658,36 @@ const char* vtkSegmentationSVDAGVolumeMapper::GetDeviceName()
   return r ? r->deviceName().c_str() : "";
 }
 
+const char* vtkSegmentationSVDAGVolumeMapper::GetBackendInUse()
+{
+  return this->Internal->Session.backendInUse();
+}
+
+vtkTypeInt64 vtkSegmentationSVDAGVolumeMapper::GetDeviceBytes()
+{
+  return this->Internal->Session.deviceBytes("total");
+}
+
+vtkTypeInt64 vtkSegmentationSVDAGVolumeMapper::GetEncodingBytes()
+{
+  return this->Internal->Session.deviceBytes("encoding");
+}
+
+vtkTypeInt64 vtkSegmentationSVDAGVolumeMapper::GetAccelerationBytes()
+{
+  return this->Internal->Session.deviceBytes("acceleration");
+}
+
+vtkTypeInt64 vtkSegmentationSVDAGVolumeMapper::GetMaterialBytes()
+{
+  return this->Internal->Session.deviceBytes("materials");
+}
+
+vtkTypeInt64 vtkSegmentationSVDAGVolumeMapper::GetImageBytes()
+{
+  return this->Internal->Session.deviceBytes("images");
+}
+
 vtkTypeInt64 vtkSegmentationSVDAGVolumeMapper::GetNumberOfBVHBuilds()
 {
   const core::Renderer* r = this->Internal->Session.renderer();
@@ -759,6 +789,10 @@ void vtkSegmentationSVDAGVolumeMapper::PrintSelf(ostream& os, vtkIndent indent)
      << this->CroppingRegionPlanes[3] << " " << this->CroppingRegionPlanes[4] << " "
      << this->CroppingRegionPlanes[5] << "\n";
   os << indent << "DeviceName: " << this->GetDeviceName() << "\n";
+  os << indent << "BackendInUse: " << this->GetBackendInUse() << "\n";
+  os << indent << "DeviceBytes: " << this->GetDeviceBytes() << " (encoding " << this->GetEncodingBytes()
+     << ", acceleration " << this->GetAccelerationBytes() << ", materials " << this->GetMaterialBytes()
+     << ", images " << this->GetImageBytes() << ")\n";
   os << indent << "AccumulatedSamples: " << this->GetAccumulatedSamples() << "\n";
   os << indent << "ErrorEstimate: " << this->GetErrorEstimate() << "\n";
   os << indent << "LastLOD: " << this->GetLastLOD() << "\n";

@@ -148,6 +148,21 @@ public:
   ///@}
 
   ///@{
+  /** The backend in use, "rt" or "compute" ("" before the first pass, or where Settings asks for
+   * one the device cannot run), and the bytes of device memory held, in all (GetDeviceBytes) and
+   * by part: the volume's encoding (block and DAG streams), what the backend finds blocks with
+   * (BLAS, TLAS and the primitive map; or the compute backend's cell grid and hidden-label bits),
+   * per-label materials and environment tables, and the images (outputs, accumulation, ray
+   * limits); 0 before the first pass. */
+  const char* GetBackendInUse();
+  vtkTypeInt64 GetDeviceBytes();
+  vtkTypeInt64 GetEncodingBytes();
+  vtkTypeInt64 GetAccelerationBytes();
+  vtkTypeInt64 GetMaterialBytes();
+  vtkTypeInt64 GetImageBytes();
+  ///@}
+
+  ///@{
   /**
    * The label under display pixel (x, y) (pixels, origin at the bottom left, as VTK's display
    * coordinates) in the last frame traced for `renderer`. Returns true on a hit; then

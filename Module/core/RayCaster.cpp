@@ -3,6 +3,24 @@
 #include "svdag/Clipping.h"
 #include "svdag/Traversal.h"
 #include "svdag/SmoothNormal.h"
+// The whole-volume walk (GridTraversal.h) reads the Volume's cell ranges and block records.
+#define SVDAG_GRID_PARAM const ::svdag::Volume &svdagVolume,
+#define SVDAG_GRID_ARG volume,
+#define SVDAG_GRID_CELL_BLOCKS(cell, first, end)                                                   \
+  {                                                                                                \
+    const auto range_ = svdagVolume.cellBlocks(cell);                                              \
+    first = range_.first;                                                                          \
+    end = range_.second;                                                                           \
+  }
+#define SVDAG_GRID_BLOCK(b, lo, hi, rootRef, label)                                                \
+  {                                                                                                \
+    const ::svdag::Block block_ = svdagVolume.block(b);                                            \
+    lo = glm::uvec3(block_.lo[0], block_.lo[1], block_.lo[2]);                                     \
+    hi = glm::uvec3(block_.hi[0], block_.hi[1], block_.hi[2]);                                     \
+    rootRef = block_.root;                                                                         \
+    label = block_.label;                                                                          \
+  }
+#include "svdag/GridTraversal.h"
 
 #include <algorithm>
 #include <cmath>
@@ -13,21 +31,6 @@ namespace svdag
 {
 namespace
 {
-// Same threshold as the float traversal, so that both agree on which axes are parallel.
-constexpr double ParallelEps = 1e-30;
-// Local float intervals are clamped to this (finite) magnitude.
-constexpr double LocalFar = 1e30;
-
-float toLocalFloat(double v)
-{
-  return float(std::max(-LocalFar, std::min(LocalFar, v)));
-}
-
-int stepOf(double d)
-{
-  return d > ParallelEps ? 1 : (d < -ParallelEps ? -1 : 0);
-}
-
 // Throws std::invalid_argument for a ray or level of detail the caster cannot trace.
 void checkRay(const Ray& r, Lod lod)
 {
@@ -46,69 +49,21 @@ void checkRay(const Ray& r, Lod lod)
 } // namespace
 
 // The ray with a unit direction; s is the distance along it (t = s / length).
-struct RayCaster::UnitRay
+namespace
+{
+struct UnitRay
 {
   std::array<double, 3> origin;
   std::array<double, 3> dir;
-  std::array<int, 3> step;
   double length;
   double smin, smax;
   bool entryOnly;
 };
+} // namespace
 
 RayCaster::RayCaster(const Volume& v)
   : volume(v)
 {
-}
-
-RayHit RayCaster::castCell(
-  const UnitRay& ray, const std::array<int32_t, 3>& cell, double s, Lod lod) const
-{
-  RayHit best;
-  const auto n = volume.geometry.cellCounts();
-  const uint32_t cellIndex =
-    uint32_t(cell[0] + uint64_t(n[0]) * (cell[1] + uint64_t(n[1]) * uint64_t(cell[2])));
-  const auto range = volume.cellBlocks(cellIndex);
-  if (range.first == range.second)
-    return best;
-
-  // Re-anchor: origin at the point where the ray enters the cell, relative to the cell's corner.
-  glm::vec3 origin, dir;
-  for (int a = 0; a < 3; ++a)
-  {
-    const double corner = double(layout::CELL_SIZE) * cell[a];
-    origin[a] = float((ray.origin[a] - corner) + s * ray.dir[a]);
-    dir[a] = float(ray.dir[a]);
-  }
-  const float tmin = toLocalFloat(ray.smin - s);
-  const float tmax = toLocalFloat(ray.smax - s);
-  const traversal::Streams streams{ volume.roots.data(), volume.mids.data(),
-    volume.leaves.data() };
-
-  float bestT = 0;
-  for (uint64_t b = range.first; b < range.second; ++b)
-  {
-    const Block block = volume.block(b);
-    const traversal::SvdagBlockHit h = traversal::svdagIntersectBlock(streams,
-      glm::uvec3(block.lo[0], block.lo[1], block.lo[2]),
-      glm::uvec3(block.hi[0], block.hi[1], block.hi[2]), block.root, volume.widths.midRefBits,
-      volume.widths.leafRefBits, origin, dir, tmin, tmax, uint32_t(lod), ray.entryOnly);
-    if (h.hit && (!best.hit || h.t < bestT))
-    {
-      bestT = h.t;
-      best.hit = true;
-      best.label = block.label;
-      best.block = b;
-      for (int a = 0; a < 3; ++a)
-      {
-        best.voxel[a] = int32_t(layout::CELL_SIZE) * cell[a] + h.voxel[a];
-        best.normal[a] = h.normal[a];
-      }
-    }
-  }
-  if (best.hit)
-    best.t = (s + double(bestT)) / ray.length;
-  return best;
 }
 
 RayHit RayCaster::cast(const Ray& input, Lod lod) const
@@ -127,7 +82,6 @@ RayHit RayCaster::cast(const Ray& input, Lod lod) const
   {
     ray.origin[a] = input.origin[a];
     ray.dir[a] = d[a] / length;
-    ray.step[a] = stepOf(ray.dir[a]);
   }
   // s = t * length; infinite bounds stay infinite (and are clamped per cell).
   ray.smin = input.tmin * length;
@@ -161,72 +115,29 @@ RayHit RayCaster::cast(const Ray& input, Lod lod) const
     return hit;
   };
   const auto& dims = volume.geometry.dims;
-  if (volume.blockCount == 0 || dims[0] <= 0 || dims[1] <= 0 || dims[2] <= 0 ||
-    !(ray.smin <= ray.smax))
+  if (volume.blockCount == 0 || !(ray.smin <= ray.smax))
     return miss;
-
-  // Slab test against the volume box [0, dims] (half-open along parallel axes).
-  double sEnter = -std::numeric_limits<double>::infinity();
-  double sExit = std::numeric_limits<double>::infinity();
-  for (int a = 0; a < 3; ++a)
-  {
-    if (ray.step[a] == 0)
-    {
-      if (ray.origin[a] < 0 || ray.origin[a] >= dims[a])
-        return miss;
-      continue;
-    }
-    const double s0 = (0 - ray.origin[a]) / ray.dir[a];
-    const double s1 = (dims[a] - ray.origin[a]) / ray.dir[a];
-    sEnter = std::max(sEnter, std::min(s0, s1));
-    sExit = std::min(sExit, std::max(s0, s1));
-  }
-  const double sFirst = std::max(sEnter, ray.smin);
-  const double sLast = std::min(sExit, ray.smax);
-  if (!(sFirst <= sLast))
-    return miss;
-
-  // 3D DDA over the cells, starting in the cell the ray is in (or moves into) at sFirst.
   const auto n = volume.geometry.cellCounts();
-  const double size = layout::CELL_SIZE;
-  std::array<int32_t, 3> cell;
+  const traversal::Streams streams{ volume.roots.data(), volume.mids.data(),
+    volume.leaves.data() };
+  const traversal::SvdagGridHit h = traversal::svdagCastGrid(streams, volume,
+    glm::dvec3(ray.origin[0], ray.origin[1], ray.origin[2]),
+    glm::dvec3(ray.dir[0], ray.dir[1], ray.dir[2]), ray.smin, ray.smax,
+    glm::ivec3(dims[0], dims[1], dims[2]), glm::ivec3(n[0], n[1], n[2]), volume.widths.midRefBits,
+    volume.widths.leafRefBits, uint32_t(lod), ray.entryOnly, false);
+  if (!h.hit)
+    return miss;
+  RayHit hit;
+  hit.hit = true;
+  hit.t = h.s / ray.length;
+  hit.label = h.label;
+  hit.block = h.block;
   for (int a = 0; a < 3; ++a)
   {
-    const double p = (ray.origin[a] + sFirst * ray.dir[a]) / size;
-    const double c = ray.step[a] < 0 ? std::ceil(p) - 1 : std::floor(p);
-    cell[a] = int32_t(std::max(0.0, std::min(double(n[a] - 1), c)));
+    hit.voxel[a] = int32_t(layout::CELL_SIZE) * h.cell[a] + h.voxel[a];
+    hit.normal[a] = h.normal[a];
   }
-  double s = sFirst;
-  // Every step moves one cell coordinate monotonically towards the exit: n[0] + n[1] + n[2]
-  // steps leave the grid.
-  const uint64_t maxSteps = uint64_t(n[0]) + uint64_t(n[1]) + uint64_t(n[2]) + 1;
-  for (uint64_t i = 0; i < maxSteps; ++i)
-  {
-    const RayHit hit = castCell(ray, cell, s, lod);
-    if (hit.hit)
-      return onCut(hit);
-    int axis = -1;
-    double sNext = std::numeric_limits<double>::infinity();
-    for (int a = 0; a < 3; ++a)
-    {
-      if (ray.step[a] == 0)
-        continue;
-      const double face = size * (cell[a] + (ray.step[a] > 0 ? 1 : 0));
-      const double sFace = (face - ray.origin[a]) / ray.dir[a];
-      if (sFace < sNext)
-      {
-        sNext = sFace;
-        axis = a;
-      }
-    }
-    if (axis < 0 || sNext > sLast)
-      return miss;
-    cell[axis] += ray.step[axis];
-    if (cell[axis] < 0 || cell[axis] >= n[axis])
-      return miss;
-    s = std::max(s, sNext);
-  }
-  return miss;
+  return onCut(hit);
 }
 
 void RayCaster::setClipPlanes(const std::vector<std::array<double, 4>>& planes)

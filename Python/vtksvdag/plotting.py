@@ -20,6 +20,7 @@ from .volume import SegmentationVolume
 
 _LODS = {"block": 0, "leaf": 1, "voxel": 2, "auto": 3}
 _SHADINGS = {"voxel": 0, "smooth": 1}  # vtkSegmentationSVDAGRenderSettings.SHADING_*
+_BACKENDS = {"auto": 0, "rt": 1, "compute": 2}  # vtkSegmentationSVDAGRenderSettings.BACKEND_*
 
 # Keyword arguments of add_segmentation beyond the named ones (documented there).
 _EXTRA_OPTIONS = ("exposure", "seed", "next_event_estimation", "write_depth", "error_target",
@@ -206,6 +207,7 @@ def add_segmentation(
     dim=None,
     lod="auto",
     shading="voxel",
+    backend="auto",
     spp=64,
     bounces=4,
     sun=None,
@@ -218,7 +220,7 @@ def add_segmentation(
 ):
     """Add a path-traced segmentation volume to a ``pyvista.Plotter``.
 
-    The volume is traced with Vulkan ray tracing (a GPU, or Mesa's lavapipe on the CPU) and
+    The volume is path-traced with Vulkan (a GPU, or Mesa's lavapipe on the CPU) and
     composited with the plotter's meshes by depth. While the view is still, each render adds
     samples until ``spp`` samples per pixel (see :func:`refine`); while the user interacts,
     frames keep to the plotter's update rate with a coarser LOD and resolution.
@@ -274,6 +276,13 @@ def add_segmentation(
         The normal surfaces are lit with: the voxel faces' (blocky), or ``"smooth"``, estimated
         from each label's occupancy around the hit point (no mesh; the hit stays the lossless
         voxel surface). Smooth uploads a neighbour table of 108 bytes per block.
+    backend : {"auto", "rt", "compute"}, default: "auto"
+        How rays find the label blocks: ``"rt"``, the ray tracing pipeline over a BVH of block
+        boxes (needs a device with ray tracing); ``"compute"``, a compute shader walking the
+        volume's grid of 16^3 cells (any Vulkan 1.2 device; no BVH, hiding labels rebuilds
+        nothing); ``"auto"`` picks per device (compute on lavapipe, where it is several times
+        faster, and on devices without ray tracing). The images are the same.
+        ``actor.GetMapper().GetBackendInUse()`` tells which one runs.
     spp : int, default: 64
         Samples per pixel a still view refines to.
     bounces : int, default: 4
@@ -316,7 +325,8 @@ def add_segmentation(
     Raises
     ------
     RuntimeError
-        No Vulkan device with ray tracing (the message lists the devices found).
+        No usable Vulkan device (the message lists the devices found), or ``backend="rt"`` on
+        a device without ray tracing.
     ValueError, TypeError
         An option is out of range or of the wrong type.
 
@@ -340,6 +350,8 @@ def add_segmentation(
         raise ValueError(f"lod must be one of {sorted(_LODS)}, got {lod!r}")
     if shading not in _SHADINGS:
         raise ValueError(f"shading must be one of {sorted(_SHADINGS)}, got {shading!r}")
+    if backend not in _BACKENDS:
+        raise ValueError(f"backend must be one of {sorted(_BACKENDS)}, got {backend!r}")
     for value, what, lo, hi in ((spp, "spp", 1, 1 << 24), (bounces, "bounces", 0, 64),
                                 (kwargs.get("samples_per_pass", 1), "samples_per_pass", 1, 65536)):
         if isinstance(value, bool) or not isinstance(value, numbers.Integral) or not lo <= value <= hi:
@@ -351,6 +363,7 @@ def add_segmentation(
     settings = mapper.GetSettings()
     settings.SetLOD(_LODS[lod])
     settings.SetShading(_SHADINGS[shading])
+    settings.SetBackend(_BACKENDS[backend])
     settings.SetMaximumBounces(int(bounces))
     settings.SetSamplesPerPixel(int(kwargs.get("samples_per_pass", 1)))
     mapper.SetTargetSamplesPerPixel(int(spp))

@@ -13,12 +13,19 @@ namespace render
 {
 namespace
 {
+// What every backend needs (the compute backend needs nothing else) ...
 const char* const RequiredExtensions[] = {
+  VK_KHR_BUFFER_DEVICE_ADDRESS_EXTENSION_NAME,
+};
+// ... and what the ray tracing backend adds, enabled where the device has it.
+const char* const RayTracingExtensions[] = {
   VK_KHR_ACCELERATION_STRUCTURE_EXTENSION_NAME,
   VK_KHR_RAY_TRACING_PIPELINE_EXTENSION_NAME,
-  VK_KHR_BUFFER_DEVICE_ADDRESS_EXTENSION_NAME,
   VK_KHR_DEFERRED_HOST_OPERATIONS_EXTENSION_NAME,
 };
+// Set (not "0"): every device counts as one without ray tracing (what a GPU without the
+// extensions does: the renderer uses its compute backend).
+const char* const NoRayTracingVariable = "SVDAG_VK_NO_RAY_TRACING";
 const char* const ValidationLayer = "VK_LAYER_KHRONOS_validation";
 
 std::string lower(std::string s)
@@ -67,15 +74,23 @@ struct FeatureChain
   FeatureChain(const FeatureChain&) = delete;
 };
 
-// What one physical device lacks (empty: it qualifies) and its compute queue family.
+// What one physical device lacks (empty: it qualifies), what it lacks for ray tracing (empty:
+// the ray tracing backend can run) and its compute queue family.
 struct Candidate
 {
   VkPhysicalDevice device = VK_NULL_HANDLE;
   std::string name;
   VkPhysicalDeviceType type = VK_PHYSICAL_DEVICE_TYPE_OTHER;
   std::vector<std::string> missing;
+  std::vector<std::string> rayTracingMissing;
   uint32_t queueFamily = 0;
 };
+
+bool hasExtension(const std::vector<VkExtensionProperties>& extensions, const char* name)
+{
+  return std::any_of(extensions.begin(), extensions.end(),
+    [name](const VkExtensionProperties& e) { return std::strcmp(e.extensionName, name) == 0; });
+}
 
 Candidate inspect(VkPhysicalDevice device)
 {
@@ -96,21 +111,31 @@ Candidate inspect(VkPhysicalDevice device)
   vkEnumerateDeviceExtensionProperties(device, nullptr, &count, extensions.data());
   for (const char* required : RequiredExtensions)
   {
-    const bool found = std::any_of(extensions.begin(), extensions.end(),
-      [required](const VkExtensionProperties& e) { return std::strcmp(e.extensionName, required) == 0; });
-    if (!found)
+    if (!hasExtension(extensions, required))
       c.missing.push_back(required);
   }
   if (!c.missing.empty())
     return c;
+  for (const char* extension : RayTracingExtensions)
+  {
+    if (!hasExtension(extensions, extension))
+      c.rayTracingMissing.push_back(extension);
+  }
   FeatureChain features;
+  if (!c.rayTracingMissing.empty())
+    features.v12.pNext = nullptr; // the ray tracing feature structs are not known to the device
   vkGetPhysicalDeviceFeatures2(device, &features.base);
   if (!features.v12.bufferDeviceAddress)
     c.missing.push_back("bufferDeviceAddress feature");
-  if (!features.as.accelerationStructure)
-    c.missing.push_back("accelerationStructure feature");
-  if (!features.rt.rayTracingPipeline)
-    c.missing.push_back("rayTracingPipeline feature");
+  if (c.rayTracingMissing.empty())
+  {
+    if (!features.as.accelerationStructure)
+      c.rayTracingMissing.push_back("accelerationStructure feature");
+    if (!features.rt.rayTracingPipeline)
+      c.rayTracingMissing.push_back("rayTracingPipeline feature");
+  }
+  if (envFlag(NoRayTracingVariable))
+    c.rayTracingMissing.push_back(std::string("ray tracing (") + NoRayTracingVariable + " is set)");
   vkGetPhysicalDeviceQueueFamilyProperties(device, &count, nullptr);
   std::vector<VkQueueFamilyProperties> families(count);
   vkGetPhysicalDeviceQueueFamilyProperties(device, &count, families.data());
@@ -148,7 +173,7 @@ std::string describe(const std::vector<Candidate>& candidates)
     s += "\n  '" + c.name + "': ";
     if (c.missing.empty())
     {
-      s += "has ray tracing";
+      s += c.rayTracingMissing.empty() ? "usable, with ray tracing" : "usable, compute only";
       continue;
     }
     s += "lacks ";
@@ -325,12 +350,19 @@ void Context::pickPhysicalDevice()
     if (!wanted.empty() && lower(c.name).find(wanted) == std::string::npos)
       continue;
     nameMatched = true;
-    if (c.missing.empty() && (!best || typeRank(c.type) < typeRank(best->type)))
+    if (!c.missing.empty())
+      continue;
+    // The kind of device first (a discrete GPU over lavapipe), then ray tracing.
+    const bool better = !best || typeRank(c.type) < typeRank(best->type) ||
+      (typeRank(c.type) == typeRank(best->type) && c.rayTracingMissing.empty() &&
+        !best->rayTracingMissing.empty());
+    if (better)
       best = &c;
   }
   if (!best)
   {
-    std::string message = "no Vulkan device with ray tracing";
+    std::string message = "no usable Vulkan device (Vulkan 1.2 with buffer device addresses and "
+                          "a compute queue)";
     if (!wanted.empty())
     {
       message += nameMatched ? " matches" : " and no device at all matches";
@@ -342,6 +374,9 @@ void Context::pickPhysicalDevice()
   this->DeviceName = best->name;
   this->CpuDevice = best->type == VK_PHYSICAL_DEVICE_TYPE_CPU;
   this->QueueFamily = best->queueFamily;
+  this->RayTracing = best->rayTracingMissing.empty();
+  for (size_t i = 0; i < best->rayTracingMissing.size(); ++i)
+    this->RayTracingMissing += (i ? ", " : "") + best->rayTracingMissing[i];
 }
 
 void Context::createDevice()
@@ -358,8 +393,11 @@ void Context::createDevice()
   };
   asProps.pNext = &m3Props;
   VkPhysicalDeviceProperties2 props{ VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2 };
-  props.pNext = &rtProps;
+  // The ray tracing property structs only where the device has the extensions.
+  props.pNext = this->RayTracing ? static_cast<void*>(&rtProps) : static_cast<void*>(&m3Props);
   vkGetPhysicalDeviceProperties2(this->PhysicalDevice, &props);
+  for (int a = 0; a < 2; ++a)
+    this->Limits.maxComputeWorkGroupCount[a] = props.properties.limits.maxComputeWorkGroupCount[a];
   this->Limits.maxMemoryAllocationSize = m3Props.maxMemoryAllocationSize;
   this->Limits.shaderGroupHandleSize = rtProps.shaderGroupHandleSize;
   this->Limits.shaderGroupHandleAlignment = rtProps.shaderGroupHandleAlignment;
@@ -385,6 +423,11 @@ void Context::createDevice()
   enabled.v12.bufferDeviceAddress = VK_TRUE;
   enabled.as.accelerationStructure = VK_TRUE;
   enabled.rt.rayTracingPipeline = VK_TRUE;
+  std::vector<const char*> extensions(std::begin(RequiredExtensions), std::end(RequiredExtensions));
+  if (this->RayTracing)
+    extensions.insert(extensions.end(), std::begin(RayTracingExtensions), std::end(RayTracingExtensions));
+  else
+    enabled.v12.pNext = nullptr;
   const float priority = 1.0f;
   VkDeviceQueueCreateInfo queueInfo{ VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO };
   queueInfo.queueFamilyIndex = this->QueueFamily;
@@ -394,8 +437,8 @@ void Context::createDevice()
   info.pNext = &enabled.base;
   info.queueCreateInfoCount = 1;
   info.pQueueCreateInfos = &queueInfo;
-  info.enabledExtensionCount = uint32_t(std::size(RequiredExtensions));
-  info.ppEnabledExtensionNames = RequiredExtensions;
+  info.enabledExtensionCount = uint32_t(extensions.size());
+  info.ppEnabledExtensionNames = extensions.data();
   check(vkCreateDevice(this->PhysicalDevice, &info, nullptr, &this->Device), "vkCreateDevice");
   vkGetDeviceQueue(this->Device, this->QueueFamily, 0, &this->Queue);
 
@@ -406,6 +449,8 @@ void Context::createDevice()
       throw std::runtime_error(std::string("Vulkan entry point missing: ") + name);
   };
   DeviceFunctions& f = this->Functions;
+  if (this->RayTracing)
+  {
   load(f.createAccelerationStructure, "vkCreateAccelerationStructureKHR");
   load(f.destroyAccelerationStructure, "vkDestroyAccelerationStructureKHR");
   load(f.getAccelerationStructureBuildSizes, "vkGetAccelerationStructureBuildSizesKHR");
@@ -416,6 +461,7 @@ void Context::createDevice()
   load(f.createRayTracingPipelines, "vkCreateRayTracingPipelinesKHR");
   load(f.getRayTracingShaderGroupHandles, "vkGetRayTracingShaderGroupHandlesKHR");
   load(f.cmdTraceRays, "vkCmdTraceRaysKHR");
+  }
 
   VkCommandPoolCreateInfo poolInfo{ VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO };
   poolInfo.flags = VK_COMMAND_POOL_CREATE_TRANSIENT_BIT;

@@ -12,6 +12,7 @@
 #include "block.rchit.h"
 #include "block.rint.h"
 #include "block_entry.rint.h"
+#include "camera.comp.h"
 #include "camera.rgen.h"
 #include "closest.rmiss.h"
 #include "shadow.rmiss.h"
@@ -47,12 +48,43 @@ VkShaderModule createModule(VkDevice device, const uint32_t* code, size_t bytes)
   check(vkCreateShaderModule(device, &info, nullptr, &module), "vkCreateShaderModule");
   return module;
 }
+
+// The bindings of descriptor set 0 a backend uses: the compute backend has no TLAS.
+std::vector<DescriptorBinding> bindingsOf(Backend backend)
+{
+  std::vector<DescriptorBinding> bindings;
+  for (const DescriptorBinding& b : DescriptorBindings)
+  {
+    if (backend == Backend::RayTracing || b.binding != SVDAG_BINDING_TLAS)
+      bindings.push_back(b);
+  }
+  return bindings;
+}
+
+// Shader modules are only needed until the pipeline exists; destroyed on every path.
+struct Modules
+{
+  VkDevice device;
+  std::vector<VkShaderModule> list;
+  ~Modules()
+  {
+    for (VkShaderModule m : list)
+      vkDestroyShaderModule(device, m, nullptr);
+  }
+};
 } // namespace
 
-Pipeline::Pipeline(Context& context, const ShaderFeatures& features)
+Pipeline::Pipeline(Context& context, Backend backend, const ShaderFeatures& features)
   : Ctx(context)
+  , Kind(backend)
   , Features(features)
 {
+  if (backend != Backend::RayTracing && backend != Backend::Compute)
+    throw std::invalid_argument("a pipeline is built for the rt or the compute backend");
+  if (backend == Backend::RayTracing && !context.hasRayTracing())
+    throw std::runtime_error("the ray tracing backend needs a device with ray tracing; " +
+      context.deviceName() + " lacks " + context.rayTracingMissing() +
+      " (the compute backend runs there)");
   try
   {
     this->createLayouts();
@@ -136,6 +168,10 @@ void Pipeline::destroy()
 {
   VkDevice device = this->Ctx.device();
   this->destroyPipeline();
+  if (this->Pool)
+    vkDestroyDescriptorPool(device, this->Pool, nullptr);
+  this->Pool = VK_NULL_HANDLE;
+  this->Set = VK_NULL_HANDLE;
   if (this->Layout)
     vkDestroyPipelineLayout(device, this->Layout, nullptr);
   if (this->SetLayout)
@@ -146,15 +182,20 @@ void Pipeline::destroy()
 
 void Pipeline::createLayouts()
 {
-  const VkShaderStageFlags stages = VK_SHADER_STAGE_RAYGEN_BIT_KHR | VK_SHADER_STAGE_MISS_BIT_KHR |
-    VK_SHADER_STAGE_INTERSECTION_BIT_KHR | VK_SHADER_STAGE_CLOSEST_HIT_BIT_KHR;
-  std::array<VkDescriptorSetLayoutBinding, DescriptorBindings.size()> bindings{};
-  for (size_t i = 0; i < bindings.size(); ++i)
+  const VkShaderStageFlags stages = this->Kind == Backend::Compute
+    ? VkShaderStageFlags(VK_SHADER_STAGE_COMPUTE_BIT)
+    : VkShaderStageFlags(VK_SHADER_STAGE_RAYGEN_BIT_KHR | VK_SHADER_STAGE_MISS_BIT_KHR |
+        VK_SHADER_STAGE_INTERSECTION_BIT_KHR | VK_SHADER_STAGE_CLOSEST_HIT_BIT_KHR);
+  const std::vector<DescriptorBinding> used = bindingsOf(this->Kind);
+  std::vector<VkDescriptorSetLayoutBinding> bindings(used.size());
+  std::vector<VkDescriptorPoolSize> sizes(used.size());
+  for (size_t i = 0; i < used.size(); ++i)
   {
-    bindings[i].binding = DescriptorBindings[i].binding;
-    bindings[i].descriptorType = DescriptorBindings[i].type;
+    bindings[i].binding = used[i].binding;
+    bindings[i].descriptorType = used[i].type;
     bindings[i].descriptorCount = 1;
     bindings[i].stageFlags = stages;
+    sizes[i] = { used[i].type, 1 };
   }
   VkDescriptorSetLayoutCreateInfo setInfo{ VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO };
   setInfo.bindingCount = uint32_t(bindings.size());
@@ -166,9 +207,110 @@ void Pipeline::createLayouts()
   layoutInfo.pSetLayouts = &this->SetLayout;
   check(vkCreatePipelineLayout(this->Ctx.device(), &layoutInfo, nullptr, &this->Layout),
     "vkCreatePipelineLayout");
+  VkDescriptorPoolCreateInfo poolInfo{ VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO };
+  poolInfo.maxSets = 1;
+  poolInfo.poolSizeCount = uint32_t(sizes.size());
+  poolInfo.pPoolSizes = sizes.data();
+  check(vkCreateDescriptorPool(this->Ctx.device(), &poolInfo, nullptr, &this->Pool),
+    "vkCreateDescriptorPool");
+  VkDescriptorSetAllocateInfo alloc{ VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO };
+  alloc.descriptorPool = this->Pool;
+  alloc.descriptorSetCount = 1;
+  alloc.pSetLayouts = &this->SetLayout;
+  check(vkAllocateDescriptorSets(this->Ctx.device(), &alloc, &this->Set),
+    "vkAllocateDescriptorSets");
+}
+
+void Pipeline::updateDescriptors(VkBuffer uniforms, VkAccelerationStructureKHR tlas)
+{
+  VkWriteDescriptorSetAccelerationStructureKHR asInfo{
+    VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET_ACCELERATION_STRUCTURE_KHR
+  };
+  asInfo.accelerationStructureCount = 1;
+  asInfo.pAccelerationStructures = &tlas;
+  VkDescriptorBufferInfo uniformInfo{ uniforms, 0, sizeof(gpu::FrameUniforms) };
+  std::vector<VkWriteDescriptorSet> writes;
+  for (const DescriptorBinding& b : bindingsOf(this->Kind))
+  {
+    VkWriteDescriptorSet w{ VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET };
+    w.dstSet = this->Set;
+    w.dstBinding = b.binding;
+    w.descriptorCount = 1;
+    w.descriptorType = b.type;
+    if (b.binding == SVDAG_BINDING_TLAS)
+      w.pNext = &asInfo;
+    else
+      w.pBufferInfo = &uniformInfo;
+    writes.push_back(w);
+  }
+  vkUpdateDescriptorSets(this->Ctx.device(), uint32_t(writes.size()), writes.data(), 0, nullptr);
+}
+
+void Pipeline::record(VkCommandBuffer cmd, uint32_t width, uint32_t height) const
+{
+  const bool compute = this->Kind == Backend::Compute;
+  const VkPipelineBindPoint bind =
+    compute ? VK_PIPELINE_BIND_POINT_COMPUTE : VK_PIPELINE_BIND_POINT_RAY_TRACING_KHR;
+  vkCmdBindPipeline(cmd, bind, this->Handle);
+  vkCmdBindDescriptorSets(cmd, bind, this->Layout, 0, 1, &this->Set, 0, nullptr);
+  if (compute)
+  {
+    const uint32_t group = SVDAG_COMPUTE_GROUP_SIZE;
+    vkCmdDispatch(cmd, (width + group - 1) / group, (height + group - 1) / group, 1);
+  }
+  else
+  {
+    this->Ctx.fn().cmdTraceRays(
+      cmd, &this->Raygen, &this->Miss, &this->Hit, &this->Callable, width, height, 1);
+  }
+  // Makes the shader writes visible to the host reads after the pass.
+  VkMemoryBarrier barrier{ VK_STRUCTURE_TYPE_MEMORY_BARRIER };
+  barrier.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT;
+  barrier.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
+  vkCmdPipelineBarrier(cmd,
+    compute ? VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT : VK_PIPELINE_STAGE_RAY_TRACING_SHADER_BIT_KHR,
+    VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &barrier, 0, nullptr, 0, nullptr);
 }
 
 void Pipeline::createPipeline()
+{
+  // The camera shader's feature switches (GpuLayout.h's SVDAG_CONSTANT_* ids).
+  VkBool32 constants[SVDAG_CONSTANT_COUNT] = {};
+  constants[SVDAG_CONSTANT_NEE] = this->Features.nextEventEstimation;
+  constants[SVDAG_CONSTANT_ENV_MAP] = this->Features.environmentMap;
+  constants[SVDAG_CONSTANT_SUN] = this->Features.sun;
+  constants[SVDAG_CONSTANT_EMISSION] = this->Features.emission;
+  constants[SVDAG_CONSTANT_TRANSMISSION] = this->Features.transmission;
+  VkSpecializationMapEntry entries[SVDAG_CONSTANT_COUNT];
+  for (uint32_t i = 0; i < SVDAG_CONSTANT_COUNT; ++i)
+    entries[i] = { i, uint32_t(i * sizeof(VkBool32)), sizeof(VkBool32) };
+  VkSpecializationInfo specialization{ SVDAG_CONSTANT_COUNT, entries, sizeof(constants),
+    constants };
+  if (this->Kind == Backend::Compute)
+    this->createComputePipeline(specialization);
+  else
+    this->createRayTracingPipeline(specialization);
+  ++this->Builds;
+}
+
+void Pipeline::createComputePipeline(const VkSpecializationInfo& specialization)
+{
+  VkDevice device = this->Ctx.device();
+  Modules modules{ device, {} };
+  modules.list.push_back(
+    createModule(device, svdagShader_camera_comp, sizeof(svdagShader_camera_comp)));
+  VkComputePipelineCreateInfo info{ VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO };
+  info.stage = VkPipelineShaderStageCreateInfo{ VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO };
+  info.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
+  info.stage.module = modules.list.back();
+  info.stage.pName = "main";
+  info.stage.pSpecializationInfo = &specialization;
+  info.layout = this->Layout;
+  check(vkCreateComputePipelines(device, VK_NULL_HANDLE, 1, &info, nullptr, &this->Handle),
+    "vkCreateComputePipelines");
+}
+
+void Pipeline::createRayTracingPipeline(const VkSpecializationInfo& specialization)
 {
   VkDevice device = this->Ctx.device();
   struct StageCode
@@ -190,30 +332,8 @@ void Pipeline::createPipeline()
     { VK_SHADER_STAGE_INTERSECTION_BIT_KHR, svdagShader_block_entry_rint,
       sizeof(svdagShader_block_entry_rint) },
   };
-  // The raygen shader's feature switches (GpuLayout.h's SVDAG_CONSTANT_* ids).
-  VkBool32 constants[SVDAG_CONSTANT_COUNT] = {};
-  constants[SVDAG_CONSTANT_NEE] = this->Features.nextEventEstimation;
-  constants[SVDAG_CONSTANT_ENV_MAP] = this->Features.environmentMap;
-  constants[SVDAG_CONSTANT_SUN] = this->Features.sun;
-  constants[SVDAG_CONSTANT_EMISSION] = this->Features.emission;
-  constants[SVDAG_CONSTANT_TRANSMISSION] = this->Features.transmission;
-  VkSpecializationMapEntry entries[SVDAG_CONSTANT_COUNT];
-  for (uint32_t i = 0; i < SVDAG_CONSTANT_COUNT; ++i)
-    entries[i] = { i, uint32_t(i * sizeof(VkBool32)), sizeof(VkBool32) };
-  VkSpecializationInfo specialization{ SVDAG_CONSTANT_COUNT, entries, sizeof(constants),
-    constants };
   std::vector<VkPipelineShaderStageCreateInfo> stages;
-  // Shader modules are only needed until the pipeline exists; destroyed on every path.
-  struct Modules
-  {
-    VkDevice device;
-    std::vector<VkShaderModule> list;
-    ~Modules()
-    {
-      for (VkShaderModule m : list)
-        vkDestroyShaderModule(device, m, nullptr);
-    }
-  } modules{ device, {} };
+  Modules modules{ device, {} };
   for (const StageCode& c : codes)
   {
     modules.list.push_back(createModule(device, c.code, c.bytes));
@@ -259,11 +379,12 @@ void Pipeline::createPipeline()
   check(this->Ctx.fn().createRayTracingPipelines(
           device, VK_NULL_HANDLE, VK_NULL_HANDLE, 1, &info, nullptr, &this->Handle),
     "vkCreateRayTracingPipelinesKHR");
-  ++this->Builds;
 }
 
 void Pipeline::createShaderBindingTable()
 {
+  if (this->Kind != Backend::RayTracing)
+    return;
   const RayTracingLimits& limits = this->Ctx.limits();
   const VkDeviceSize handleSize = limits.shaderGroupHandleSize;
   const VkDeviceSize stride = alignUp(handleSize, limits.shaderGroupHandleAlignment);

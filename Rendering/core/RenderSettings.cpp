@@ -31,6 +31,27 @@ Lod parseLod(const std::string& name)
   throw std::invalid_argument("unknown LOD '" + name + "' (block, leaf, voxel or auto)");
 }
 
+const char* backendName(Backend backend)
+{
+  switch (backend)
+  {
+    case Backend::Auto: return "auto";
+    case Backend::RayTracing: return "rt";
+    case Backend::Compute: return "compute";
+  }
+  return "?";
+}
+
+Backend parseBackend(const std::string& name)
+{
+  for (Backend backend : { Backend::Auto, Backend::RayTracing, Backend::Compute })
+  {
+    if (name == backendName(backend))
+      return backend;
+  }
+  throw std::invalid_argument("unknown backend '" + name + "' (auto, rt or compute)");
+}
+
 const char* shadingName(Shading shading)
 {
   switch (shading)
@@ -81,13 +102,14 @@ bool tracesSameImage(const RenderSettings& a, const RenderSettings& b)
     a.sun.angularRadiusDegrees == b.sun.angularRadiusDegrees &&
     a.maximumBlocksPerBlas == b.maximumBlocksPerBlas &&
     a.deviceMemoryLimit == b.deviceMemoryLimit && a.shading == b.shading &&
-    a.clipPlanes == b.clipPlanes && a.crop == b.crop;
+    a.clipPlanes == b.clipPlanes && a.crop == b.crop && a.backend == b.backend;
 }
 
 void validate(const RenderSettings& s)
 {
   require(uint32_t(s.lod) <= uint32_t(Lod::Auto), "LOD must be block, leaf, voxel or auto");
   require(uint32_t(s.shading) <= uint32_t(Shading::Smooth), "shading must be voxel or smooth");
+  require(uint32_t(s.backend) <= uint32_t(Backend::Compute), "backend must be auto, rt or compute");
   require(s.autoLodPixels > 0 && std::isfinite(s.autoLodPixels),
     "auto LOD pixels must be a finite value > 0");
   require(s.samplesPerPixel >= 1 && s.samplesPerPixel <= MaximumSamplesPerPixel,

@@ -107,6 +107,16 @@ uint32_t gpuClipPlanes(const RenderSettings& settings, const std::array<double, 
   }
   return count;
 }
+// Applies one edit to a copy of the settings and validates it: the setters share validate()'s
+// checks and messages.
+template <typename Edit>
+RenderSettings edited(const RenderSettings& current, Edit edit)
+{
+  RenderSettings s = current;
+  edit(s);
+  validate(s);
+  return s;
+}
 } // namespace
 
 // Everything that lives on the device. Declaration order is destruction order in reverse:
@@ -114,14 +124,13 @@ uint32_t gpuClipPlanes(const RenderSettings& settings, const std::array<double, 
 struct Renderer::Gpu
 {
   Context context;
-  Pipeline pipeline{ context };
+  // The pipeline of each backend, made when first used (indexed by Backend).
+  std::unique_ptr<Pipeline> pipelines[3];
   std::unique_ptr<Scene> scene;
   // Smooth shading's neighbour table of the scene's volume (svdag::neighbourTable), built on the
   // first smooth frame; empty (no buffer) otherwise.
   Buffer neighbours;
   bool hasNeighbours = false;
-  VkDescriptorPool pool = VK_NULL_HANDLE;
-  VkDescriptorSet set = VK_NULL_HANDLE;
   Buffer uniforms{ context, sizeof(gpu::FrameUniforms), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT,
     MemoryUse::Upload };
   // Outputs, sized for the current image: label, depth, normal, hdr, color; and the per-pixel
@@ -135,33 +144,21 @@ struct Renderer::Gpu
   Buffer envMarginal, envConditional, envTexels;
   glm::uvec2 envSize{ 1, 1 };
 
-  Gpu()
+  ~Gpu() { vkDeviceWaitIdle(context.device()); }
+
+  Pipeline& pipeline(Backend backend, const ShaderFeatures& features)
   {
-    std::array<VkDescriptorPoolSize, DescriptorBindings.size()> sizes{};
-    for (size_t i = 0; i < sizes.size(); ++i)
-      sizes[i] = { DescriptorBindings[i].type, 1 };
-    VkDescriptorPoolCreateInfo poolInfo{ VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO };
-    poolInfo.maxSets = 1;
-    poolInfo.poolSizeCount = uint32_t(sizes.size());
-    poolInfo.pPoolSizes = sizes.data();
-    check(vkCreateDescriptorPool(context.device(), &poolInfo, nullptr, &pool),
-      "vkCreateDescriptorPool");
-    VkDescriptorSetLayout layout = pipeline.setLayout();
-    VkDescriptorSetAllocateInfo alloc{ VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO };
-    alloc.descriptorPool = pool;
-    alloc.descriptorSetCount = 1;
-    alloc.pSetLayouts = &layout;
-    const VkResult result = vkAllocateDescriptorSets(context.device(), &alloc, &set);
-    if (result != VK_SUCCESS)
-    {
-      vkDestroyDescriptorPool(context.device(), pool, nullptr);
-      check(result, "vkAllocateDescriptorSets");
-    }
+    std::unique_ptr<Pipeline>& p = pipelines[size_t(backend)];
+    if (!p)
+      p = std::make_unique<Pipeline>(context, backend, features);
+    p->setFeatures(features);
+    return *p;
   }
-  ~Gpu()
+
+  uint64_t imageBytes() const
   {
-    vkDeviceWaitIdle(context.device());
-    vkDestroyDescriptorPool(context.device(), pool, nullptr);
+    return label.size() + depth.size() + normal.size() + hdr.size() + color.size() +
+      variance.size() + accumulation.size() + squares.size() + rayLimits.size();
   }
 
   void resizeOutputs(uint32_t pixels)
@@ -182,33 +179,6 @@ struct Renderer::Gpu
     rayLimits = Buffer(context, pixels * sizeof(float), usage, MemoryUse::Upload);
     outputPixels = pixels;
   }
-
-  void updateDescriptors()
-  {
-    VkAccelerationStructureKHR tlas = scene->tlas();
-    VkWriteDescriptorSetAccelerationStructureKHR asInfo{
-      VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET_ACCELERATION_STRUCTURE_KHR
-    };
-    asInfo.accelerationStructureCount = 1;
-    asInfo.pAccelerationStructures = &tlas;
-    VkDescriptorBufferInfo uniformInfo{ uniforms.handle(), 0, sizeof(gpu::FrameUniforms) };
-    // One write per entry of DescriptorBindings, in its order.
-    std::array<VkWriteDescriptorSet, DescriptorBindings.size()> writes{};
-    for (size_t i = 0; i < writes.size(); ++i)
-    {
-      writes[i].sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET;
-      writes[i].dstSet = set;
-      writes[i].dstBinding = DescriptorBindings[i].binding;
-      writes[i].descriptorCount = 1;
-      writes[i].descriptorType = DescriptorBindings[i].type;
-    }
-    static_assert(DescriptorBindings[0].binding == SVDAG_BINDING_TLAS &&
-        DescriptorBindings[1].binding == SVDAG_BINDING_FRAME,
-      "the writes below follow DescriptorBindings' order");
-    writes[0].pNext = &asInfo;
-    writes[1].pBufferInfo = &uniformInfo;
-    vkUpdateDescriptorSets(context.device(), uint32_t(writes.size()), writes.data(), 0, nullptr);
-  }
 };
 
 Renderer::Renderer()
@@ -216,12 +186,15 @@ Renderer::Renderer()
 {
 }
 
+// After the scene's structure changed (a BVH build, or the compute backend's grid or hidden
+// bits): the next frame restarts the accumulation.
 void Renderer::timeSetup(bool rebuilt, double seconds)
 {
   if (!rebuilt)
     return;
   this->SetupSeconds = seconds;
-  ++this->BvhBuilds;
+  if (this->Device->scene && this->Device->scene->backend() == Backend::RayTracing)
+    ++this->BvhBuilds;
   ++this->SceneGeneration;
 }
 
@@ -230,6 +203,47 @@ Renderer::~Renderer() = default;
 const std::string& Renderer::deviceName() const
 {
   return this->Device->context.deviceName();
+}
+
+bool Renderer::hasRayTracing() const
+{
+  return this->Device->context.hasRayTracing();
+}
+
+Backend Renderer::backendFor(Backend requested) const
+{
+  const Context& c = this->Device->context;
+  switch (requested)
+  {
+    case Backend::RayTracing:
+      if (!c.hasRayTracing())
+        throw std::runtime_error("the rt backend needs a Vulkan device with ray tracing; " +
+          c.deviceName() + " lacks " + c.rayTracingMissing() + " (use the compute backend)");
+      return Backend::RayTracing;
+    case Backend::Compute: return Backend::Compute;
+    case Backend::Auto: break;
+  }
+  // Measured (bench/render.py): on lavapipe the compute backend wins at every LOD.
+  return c.hasRayTracing() && !c.isCpuDevice() ? Backend::RayTracing : Backend::Compute;
+}
+
+void Renderer::setBackend(Backend backend)
+{
+  RenderSettings next = edited(this->Settings, [backend](RenderSettings& s) { s.backend = backend; });
+  this->backendFor(backend); // throws where it cannot run
+  this->Settings = next;
+  this->applyBackend();
+}
+
+void Renderer::applyBackend()
+{
+  Scene* scene = this->Device->scene.get();
+  const Backend wanted = this->backend();
+  if (!scene || (scene->backend() == wanted && scene->ready()))
+    return;
+  const auto start = Clock::now();
+  scene->setBackend(wanted);
+  this->timeSetup(true, std::chrono::duration<double>(Clock::now() - start).count());
 }
 
 void Renderer::setVolume(std::shared_ptr<const Volume> volume)
@@ -241,8 +255,8 @@ void Renderer::setVolume(std::shared_ptr<const Volume> volume)
   this->Device->hasNeighbours = false;
   this->Materials.clear();
   const auto start = Clock::now();
-  this->Device->scene =
-    std::make_unique<Scene>(this->Device->context, std::move(volume), this->BlockChunkShift);
+  this->Device->scene = std::make_unique<Scene>(
+    this->Device->context, std::move(volume), this->backend(), this->BlockChunkShift);
   // Rebuilds the BVH only if it differs from the default (no cap).
   this->Device->scene->setPrimitivesPerBlasLimit(this->Settings.maximumBlocksPerBlas);
   // Every label starts with its default material; the explicitly hidden labels stay hidden.
@@ -302,6 +316,25 @@ uint64_t Renderer::deviceBytes() const
   return this->Device->context.allocatedBytes();
 }
 
+DeviceBytes Renderer::deviceBytesByPart() const
+{
+  const Gpu& g = *this->Device;
+  DeviceBytes b;
+  if (g.scene)
+  {
+    b.encoding = g.scene->streamBytes();
+    b.acceleration = g.scene->accelerationBytes();
+  }
+  b.materials =
+    g.materials.size() + g.envMarginal.size() + g.envConditional.size() + g.envTexels.size();
+  b.neighbours = g.hasNeighbours ? g.neighbours.size() : 0;
+  b.images = g.imageBytes();
+  b.total = g.context.allocatedBytes();
+  const uint64_t parts = b.encoding + b.acceleration + b.materials + b.neighbours + b.images;
+  b.other = b.total > parts ? b.total - parts : 0;
+  return b;
+}
+
 size_t Renderer::blockChunkCount() const
 {
   return this->Device->scene ? this->Device->scene->blockChunkCount() : 0;
@@ -314,9 +347,17 @@ size_t Renderer::blasCount() const
 
 void Renderer::setImageSize(uint32_t width, uint32_t height)
 {
+  // What both backends can dispatch on this device (the ray tracing one's invocation count where
+  // it has ray tracing, the compute one's workgroup counts) and at most 2^28 pixels.
+  const RayTracingLimits& limits = this->Device->context.limits();
   const uint64_t pixels = uint64_t(width) * height;
-  const uint64_t limit = std::min<uint64_t>(
-    this->Device->context.limits().maxRayDispatchInvocationCount, uint64_t(1) << 28);
+  uint64_t limit = uint64_t(1) << 28;
+  if (this->Device->context.hasRayTracing())
+    limit = std::min<uint64_t>(limit, limits.maxRayDispatchInvocationCount);
+  const uint64_t group = SVDAG_COMPUTE_GROUP_SIZE;
+  if (width > group * limits.maxComputeWorkGroupCount[0] ||
+    height > group * limits.maxComputeWorkGroupCount[1])
+    limit = 0;
   if (pixels == 0 || pixels > limit)
   {
     throw std::invalid_argument("image size " + std::to_string(width) + " x " +
@@ -351,6 +392,7 @@ void Renderer::setRayLimits(std::vector<float> limits)
 void Renderer::setSettings(const RenderSettings& settings)
 {
   validate(settings);
+  this->backendFor(settings.backend); // throws where it cannot run
   const bool environmentChanged = settings.environmentMap != this->Settings.environmentMap;
   const uint32_t blasLimit = settings.maximumBlocksPerBlas;
   const std::string environment = settings.environmentMap;
@@ -361,24 +403,12 @@ void Renderer::setSettings(const RenderSettings& settings)
   next.environmentMap = this->Settings.environmentMap;
   this->Settings = next;
   this->Device->context.setMemoryLimit(settings.deviceMemoryLimit);
+  this->applyBackend();
   this->setMaximumBlocksPerBlas(blasLimit);
   if (environmentChanged)
     this->setEnvironmentMap(environment);
 }
 
-namespace
-{
-// Applies one edit to a copy of the settings and validates it: the setters share validate()'s
-// checks and messages.
-template <typename Edit>
-RenderSettings edited(const RenderSettings& current, Edit edit)
-{
-  RenderSettings s = current;
-  edit(s);
-  validate(s);
-  return s;
-}
-} // namespace
 
 void Renderer::setLod(Lod lod)
 {
@@ -553,7 +583,10 @@ ShaderFeatures Renderer::shaderFeatures() const
 
 uint64_t Renderer::pipelineBuilds() const
 {
-  return this->Device->pipeline.builds();
+  uint64_t builds = 0;
+  for (const auto& p : this->Device->pipelines)
+    builds += p ? p->builds() : 0;
+  return builds;
 }
 
 uint64_t Renderer::blasBytes() const
@@ -576,6 +609,7 @@ const Image& Renderer::render()
   Gpu& g = *this->Device;
   if (!g.scene)
     throw std::runtime_error("render needs a volume first (setVolume)");
+  this->applyBackend();
   if (!g.scene->ready())
     throw std::runtime_error("the scene's BVH is not built: its last build failed");
   const RenderSettings& settings = this->Settings;
@@ -649,6 +683,16 @@ const Image& Renderer::render()
   u.outputs2 = addresses(g.hdr.address(), g.color.address());
   u.rayLimits = addresses(this->RayLimits.empty() ? 0 : g.rayLimits.address(), 0);
   u.statistics = addresses(g.squares.address(), g.variance.address());
+  const auto toIndex = g.scene->worldToIndex();
+  u.worldToIndexX = glm::vec4(float(toIndex[0]), float(toIndex[1]), float(toIndex[2]), float(toIndex[3]));
+  u.worldToIndexY = glm::vec4(float(toIndex[4]), float(toIndex[5]), float(toIndex[6]), float(toIndex[7]));
+  u.worldToIndexZ =
+    glm::vec4(float(toIndex[8]), float(toIndex[9]), float(toIndex[10]), float(toIndex[11]));
+  const Backend backend = g.scene->backend();
+  if (backend == Backend::Compute)
+    u.cellGrid = addresses(g.scene->cellStartsAddress(), g.scene->hiddenBitsAddress());
+  const auto& dims = volume.geometry.dims;
+  u.volumeDims = glm::uvec4(uint32_t(dims[0]), uint32_t(dims[1]), uint32_t(dims[2]), uint32_t(cells[2]));
 
   // Lighting (PathTracerParams). The sun direction is normalised in double.
   if (this->EnvironmentDirty)
@@ -705,7 +749,7 @@ const Image& Renderer::render()
       }
     }
   }
-  g.pipeline.setFeatures(features);
+  Pipeline& pipeline = g.pipeline(backend, features);
 
   // Everything that changes the image, besides the per-pass fields (samples, exposure): a
   // difference from the last pass starts a new accumulation.
@@ -727,22 +771,11 @@ const Image& Renderer::render()
   this->AccumulationValid = false; // valid again only once this pass succeeded
   u.sampling.x = this->Accumulated;
   std::memcpy(g.uniforms.mapped(), &u, sizeof(u));
-  g.updateDescriptors();
+  pipeline.updateDescriptors(g.uniforms.handle(), g.scene->tlas());
 
   const auto start = Clock::now();
-  g.context.submitAndWait([&](VkCommandBuffer cmd) {
-    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_RAY_TRACING_KHR, g.pipeline.handle());
-    vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_RAY_TRACING_KHR, g.pipeline.layout(), 0,
-      1, &g.set, 0, nullptr);
-    g.context.fn().cmdTraceRays(cmd, &g.pipeline.raygenRegion(), &g.pipeline.missRegion(),
-      &g.pipeline.hitRegion(), &g.pipeline.callableRegion(), this->Width, this->Height, 1);
-    // Makes the shader writes visible to the host reads below.
-    VkMemoryBarrier barrier{ VK_STRUCTURE_TYPE_MEMORY_BARRIER };
-    barrier.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT;
-    barrier.dstAccessMask = VK_ACCESS_HOST_READ_BIT;
-    vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_RAY_TRACING_SHADER_BIT_KHR,
-      VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &barrier, 0, nullptr, 0, nullptr);
-  });
+  g.context.submitAndWait(
+    [&](VkCommandBuffer cmd) { pipeline.record(cmd, this->Width, this->Height); });
   this->FrameMilliseconds =
     std::chrono::duration<double, std::milli>(Clock::now() - start).count();
   this->RenderSeconds += this->FrameMilliseconds / 1000;

@@ -2,6 +2,8 @@
 
 #include "svdag_render/WorldFrame.h"
 
+#include <glm/glm.hpp>
+
 #include <algorithm>
 #include <chrono>
 #include <cstring>
@@ -82,13 +84,17 @@ void checkAddressable(uint64_t words, const char* what)
 }
 } // namespace
 
-Scene::Scene(Context& context, std::shared_ptr<const Volume> volume, uint32_t blockChunkShift)
+Scene::Scene(Context& context, std::shared_ptr<const Volume> volume, Backend backend,
+  uint32_t blockChunkShift)
   : Ctx(context)
+  , Kind(backend)
   , Source(std::move(volume))
   , BlockChunkShift(std::min(std::max(blockChunkShift, 4u), MaxBlockChunkShift))
 {
   if (!this->Source)
     throw std::invalid_argument("Scene needs a volume");
+  if (backend != Backend::RayTracing && backend != Backend::Compute)
+    throw std::invalid_argument("a Scene is built for the rt or the compute backend");
   const Volume& v = *this->Source;
   const auto bounds = worldBounds(v.geometry);
   for (int a = 0; a < 3; ++a)
@@ -128,6 +134,29 @@ Scene::Scene(Context& context, std::shared_ptr<const Volume> volume, uint32_t bl
   this->build();
 }
 
+void Scene::setBackend(Backend backend)
+{
+  if (backend != Backend::RayTracing && backend != Backend::Compute)
+    throw std::invalid_argument("a Scene is built for the rt or the compute backend");
+  if (backend == this->Kind && this->Built)
+    return;
+  this->release();
+  this->Kind = backend;
+  this->build();
+}
+
+void Scene::release()
+{
+  this->Built = false;
+  this->Tlas.reset();
+  this->Blas.clear();
+  this->Instances.reset();
+  this->PrimitiveBlocks.reset();
+  this->CellStarts.reset();
+  this->HiddenBits.reset();
+  this->VisibleBlocks = 0;
+}
+
 Scene::~Scene() = default;
 
 bool Scene::setHiddenLabels(const std::vector<uint32_t>& labelIndices)
@@ -143,7 +172,10 @@ bool Scene::setHiddenLabels(const std::vector<uint32_t>& labelIndices)
   if (hidden == this->Hidden && this->Built)
     return false;
   this->Hidden = std::move(hidden);
-  this->build();
+  if (this->Kind == Backend::Compute && this->Built)
+    this->writeHiddenBits();
+  else
+    this->build();
   return true;
 }
 
@@ -152,6 +184,8 @@ bool Scene::setPrimitivesPerBlasLimit(uint32_t limit)
   if (limit == this->PrimitivesPerBlasLimit && this->Built)
     return false;
   this->PrimitivesPerBlasLimit = limit;
+  if (this->Kind != Backend::RayTracing && this->Built)
+    return false;
   this->build();
   return true;
 }
@@ -164,6 +198,35 @@ uint64_t Scene::blasBytes() const
   return total;
 }
 
+std::array<double, 12> Scene::worldToIndex() const
+{
+  const auto m = indexToWorld(this->Source->geometry);
+  glm::dmat3 a; // column-major: a[c][r]
+  glm::dvec3 b;
+  for (int r = 0; r < 3; ++r)
+  {
+    for (int c = 0; c < 3; ++c)
+      a[c][r] = m[4 * r + c];
+    b[r] = m[4 * r + 3] - this->Reference[r];
+  }
+  const glm::dmat3 inverse = glm::inverse(a);
+  const glm::dvec3 t = -(inverse * b);
+  std::array<double, 12> out;
+  for (int r = 0; r < 3; ++r)
+  {
+    for (int c = 0; c < 3; ++c)
+      out[4 * r + c] = inverse[c][r];
+    out[4 * r + 3] = t[r];
+  }
+  return out;
+}
+
+uint64_t Scene::accelerationBytes() const
+{
+  return this->blasBytes() + this->Tlas.bytes() + this->Instances.size() +
+    this->PrimitiveBlocks.size() + this->CellStarts.size() + this->HiddenBits.size();
+}
+
 uint64_t Scene::streamBytes() const
 {
   uint64_t blocks = this->BlockChunkTable.size();
@@ -172,8 +235,64 @@ uint64_t Scene::streamBytes() const
   return blocks + this->Roots.size() + this->Mids.size() + this->Leaves.size();
 }
 
+void Scene::buildCellGrid()
+{
+  const auto start = Clock::now();
+  const Volume& v = *this->Source;
+  const auto n = v.geometry.cellCounts();
+  const uint64_t cells = uint64_t(n[0]) * uint64_t(n[1]) * uint64_t(n[2]);
+  if (v.blockCount > std::numeric_limits<uint32_t>::max())
+    throw std::runtime_error("the compute backend indexes at most 2^32 - 1 blocks");
+  const uint64_t words = (v.labels.size() + 31) / 32;
+  this->Ctx.checkFits((cells + 1) * 4 + std::max<uint64_t>(words, 1) * 4,
+    "The compute backend's cell grid", (cells + 1) * 4);
+  this->release();
+  // starts[c] = the first block whose cell is >= c (blocks are sorted by cell).
+  std::vector<uint32_t> starts(size_t(cells + 1), 0);
+  uint64_t c = 0;
+  for (uint64_t b = 0; b < v.blockCount; ++b)
+  {
+    const uint64_t cell = v.block(b).cell;
+    while (c <= cell)
+      starts[size_t(c++)] = uint32_t(b);
+  }
+  while (c <= cells)
+    starts[size_t(c++)] = uint32_t(v.blockCount);
+  this->CellStarts = uploadBuffer(this->Ctx, starts.data(), starts.size() * sizeof(uint32_t),
+    VK_BUFFER_USAGE_STORAGE_BUFFER_BIT);
+  this->HiddenBits = Buffer(this->Ctx, std::max<uint64_t>(words, 1) * 4,
+    VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUse::Upload);
+  this->writeHiddenBits();
+  this->BuildSeconds = secondsSince(start);
+  this->Built = true;
+}
+
+void Scene::writeHiddenBits()
+{
+  // The GPU is idle between frames (the renderer waits for every frame): written in place.
+  uint32_t* bits = static_cast<uint32_t*>(this->HiddenBits.mapped());
+  std::memset(bits, 0, size_t(this->HiddenBits.size()));
+  for (uint32_t l : this->Hidden)
+    bits[l / 32] |= 1u << (l % 32);
+  uint64_t hiddenBlocks = 0;
+  if (!this->Hidden.empty())
+  {
+    for (uint64_t b = 0; b < this->Source->blockCount; ++b)
+    {
+      const uint32_t label = this->Source->block(b).label;
+      hiddenBlocks += (bits[label / 32] >> (label % 32)) & 1u;
+    }
+  }
+  this->VisibleBlocks = this->Source->blockCount - hiddenBlocks;
+}
+
 void Scene::build()
 {
+  if (this->Kind == Backend::Compute)
+  {
+    this->buildCellGrid();
+    return;
+  }
   const auto start = Clock::now();
   const Volume& v = *this->Source;
   std::vector<char> visibleLabel(v.labels.size(), 1);
@@ -203,11 +322,7 @@ void Scene::build()
 
   // Release the old BVH before building the new one (peak memory). Until the end of this
   // function the scene is not ready: a failure leaves it so, and the next call rebuilds.
-  this->Built = false;
-  this->Tlas.reset();
-  this->Blas.clear();
-  this->Instances.reset();
-  this->PrimitiveBlocks.reset();
+  this->release();
 
   const uint64_t count = boxes.size();
   this->VisibleBlocks = count;

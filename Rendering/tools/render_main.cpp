@@ -5,8 +5,10 @@
 //   vtksvdag-render INPUT.svdag OUTPUT.png|OUTPUT.exr [--width 512] [--height 512]
 //     [--lod block|leaf|voxel|auto] [--azimuth 30] [--elevation 20] [--zoom 1]
 //     [--view-angle 30] [--hide 0,5,7] [--frames 1] [--spp 1] [--bounces 4] [--seed 0]
-//     [--no-nee] [--environment MAP.exr] [--sun AZ,EL]
+//     [--no-nee] [--environment MAP.exr] [--sun AZ,EL] [--backend auto|rt|compute] [--restart]
 //
+// --backend picks how rays find the blocks (RenderSettings.h; auto: per device). --restart makes
+// every frame start a new accumulation (what a frame costs while the camera moves).
 // Every frame adds --spp path-traced samples per pixel to the accumulated image. --sun places a
 // disk sun (the renderer's default size and irradiance) at azimuth AZ (degrees from +x towards
 // +y) and elevation EL (degrees above the xy plane).
@@ -21,6 +23,7 @@
 #include <svdag/File.h>
 #include <svdag_render/Renderer.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -46,6 +49,8 @@ struct Options
   std::string environment;
   bool sun = false;
   double sunAzimuth = 0, sunElevation = 0;
+  svdag::render::Backend backend = svdag::render::Backend::Auto;
+  bool restart = false;
 };
 
 struct UsageError : std::invalid_argument
@@ -96,6 +101,11 @@ Options parse(int argc, char** argv)
       o.nee = false;
       continue;
     }
+    if (arg == "--restart")
+    {
+      o.restart = true;
+      continue;
+    }
     if (i + 1 >= argc)
       throw UsageError(arg + " needs a value");
     const std::string value = argv[++i];
@@ -105,6 +115,8 @@ Options parse(int argc, char** argv)
       o.height = count(arg, value, 1, 16384);
     else if (arg == "--lod")
       o.lod = svdag::render::parseLod(value);
+    else if (arg == "--backend")
+      o.backend = svdag::render::parseBackend(value);
     else if (arg == "--azimuth")
       o.azimuth = number(arg, value);
     else if (arg == "--elevation")
@@ -184,13 +196,14 @@ int main(int argc, char** argv)
               << "OUTPUT.png|OUTPUT.exr [--width N] [--height N] [--lod block|leaf|voxel|auto] "
               << "[--azimuth DEG] [--elevation DEG] [--zoom F] [--view-angle DEG] "
               << "[--hide I,J,...] [--frames N] [--spp N] [--bounces N] [--seed N] [--no-nee] "
-              << "[--environment MAP.exr] [--sun AZ,EL]\n";
+              << "[--environment MAP.exr] [--sun AZ,EL] [--backend auto|rt|compute] [--restart]\n";
     return 1;
   }
   try
   {
     auto volume = std::make_shared<const svdag::Volume>(svdag::readFile(o.input));
     svdag::render::Renderer renderer;
+    renderer.setBackend(o.backend);
     renderer.setVolume(volume);
     if (!o.hidden.empty())
       renderer.setHiddenLabels(o.hidden);
@@ -214,26 +227,42 @@ int main(int argc, char** argv)
         std::sin(o.sunElevation * degree) } };
       renderer.setSun(sun);
     }
-    double total = 0;
+    std::vector<double> timed;
     for (int f = 0; f < o.frames; ++f)
     {
+      if (o.restart)
+        renderer.resetAccumulation();
       renderer.render();
       if (f > 0 || o.frames == 1)
-        total += renderer.lastFrameMilliseconds();
+        timed.push_back(renderer.lastFrameMilliseconds());
     }
-    const double msPerFrame = total / (o.frames > 1 ? o.frames - 1 : 1);
+    double total = 0;
+    for (double ms : timed)
+      total += ms;
+    const double msPerFrame = total / double(timed.size());
+    std::sort(timed.begin(), timed.end());
+    const double msMedian = timed.size() % 2 ? timed[timed.size() / 2]
+                                             : (timed[timed.size() / 2 - 1] + timed[timed.size() / 2]) / 2;
+    const svdag::render::DeviceBytes bytes = renderer.deviceBytesByPart();
     if (endsWith(o.output, ".png"))
       svdag::render::writePng(renderer.image(), o.output);
     else
       svdag::render::writeExr(renderer.image(), o.output);
-    std::printf("{\"device\": %s, \"width\": %u, \"height\": %u, \"lod\": \"%s\", "
-                "\"spp\": %u, \"bounces\": %u, \"nee\": %s, \"setup_seconds\": %.6f, "
-                "\"render_seconds\": %.6f, \"ms_per_frame\": %.3f, \"bytes_blas\": %llu, "
-                "\"bytes_tlas\": %llu, \"visible_blocks\": %llu}\n",
-      jsonString(renderer.deviceName()).c_str(), o.width, o.height, svdag::render::lodName(o.lod),
-      renderer.accumulatedSamples(), o.bounces, o.nee ? "true" : "false", renderer.setupSeconds(),
-      renderer.renderSeconds(), msPerFrame, (unsigned long long)renderer.blasBytes(),
-      (unsigned long long)renderer.tlasBytes(), (unsigned long long)renderer.visibleBlocks());
+    auto u = [](uint64_t v) { return (unsigned long long)v; };
+    std::printf("{\"device\": %s, \"backend\": \"%s\", \"width\": %u, \"height\": %u, "
+                "\"lod\": \"%s\", \"spp\": %u, \"bounces\": %u, \"nee\": %s, \"restart\": %s, "
+                "\"setup_seconds\": %.6f, \"render_seconds\": %.6f, \"ms_per_frame\": %.3f, "
+                "\"ms_median\": %.3f, \"bytes_blas\": %llu, \"bytes_tlas\": %llu, "
+                "\"visible_blocks\": %llu, \"bytes_device\": {\"encoding\": %llu, "
+                "\"acceleration\": %llu, \"materials\": %llu, \"neighbours\": %llu, "
+                "\"images\": %llu, \"other\": %llu, \"total\": %llu}}\n",
+      jsonString(renderer.deviceName()).c_str(), svdag::render::backendName(renderer.backend()),
+      o.width, o.height, svdag::render::lodName(o.lod), renderer.accumulatedSamples(), o.bounces,
+      o.nee ? "true" : "false", o.restart ? "true" : "false", renderer.setupSeconds(),
+      renderer.renderSeconds(), msPerFrame, msMedian, u(renderer.blasBytes()),
+      u(renderer.tlasBytes()), u(renderer.visibleBlocks()), u(bytes.encoding),
+      u(bytes.acceleration), u(bytes.materials), u(bytes.neighbours), u(bytes.images),
+      u(bytes.other), u(bytes.total));
     return 0;
   }
   catch (const std::exception& e)

@@ -243,11 +243,11 @@ def test_hidden_labels_vanish(labels, volume):
     assert np.array_equal(remap[expected["Label"]], out["Label"])
     assert np.array_equal(expected["Depth"], out["Depth"])
     assert np.allclose(expected["HDR"], out["HDR"], atol=1e-4)
-    # Shown again: the label returns (and the BVH was rebuilt for both changes).
+    # Shown again: the label returns (the rt backend rebuilds its BVH, compute flips a bit).
     builds = r.GetNumberOfBVHBuilds()
     r.GetLabelProperties().SetVisibility(hidden_value, True)
     assert np.any(render(r)["Label"] == 2)
-    assert r.GetNumberOfBVHBuilds() == builds + 1
+    assert r.GetNumberOfBVHBuilds() == builds + (r.GetBackendInUse() == "rt")
 
 
 def test_nee_and_plain_estimator_agree(volume):
@@ -274,14 +274,17 @@ def test_nee_and_plain_estimator_agree(volume):
     assert np.allclose(means[True], means[False], rtol=0.03), means
 
 
-def test_material_edit_does_not_rebuild(volume):
+@pytest.mark.parametrize("backend", ["rt", "compute"])
+def test_material_edit_does_not_rebuild(volume, backend):
     r = make_renderer(volume)
+    r.GetSettings().SetBackend(backend)
     r.GetSettings().SetSamplesPerPixel(2)
     first = render(r)
+    assert r.GetBackendInUse() == backend
     builds = r.GetNumberOfBVHBuilds()
     setup = r.GetSetupSeconds()
     pipelines = r.GetNumberOfPipelineBuilds()
-    assert builds >= 1 and pipelines >= 1
+    assert builds == (1 if backend == "rt" else 0) and pipelines >= 1
     render(r)
     assert r.GetAccumulatedSamples() == 4
     r.GetLabelProperties().SetColor(VALUES[0], srgb(0.9), srgb(0.1), srgb(0.1))
@@ -297,10 +300,11 @@ def test_material_edit_does_not_rebuild(volume):
     render(r)
     assert r.GetNumberOfPipelineBuilds() == pipelines + 1
     assert r.GetNumberOfBVHBuilds() == builds
-    # Visibility is a BVH change.
+    # Visibility is a BVH change on the rt backend, a bit on compute: either way a restart.
     r.GetLabelProperties().SetVisibility(VALUES[2], False)
     render(r)
-    assert r.GetNumberOfBVHBuilds() == builds + 1
+    assert r.GetNumberOfBVHBuilds() == builds + (backend == "rt")
+    assert r.GetAccumulatedSamples() == 2
     # Emission off and on again (a highlighted label hidden and shown): the pipelines of both
     # feature sets are kept, nothing more is compiled, and each traces as it did.
     r.GetLabelProperties().SetVisibility(VALUES[2], True)

@@ -290,7 +290,16 @@ def test_outputs_are_consistent(real_volume):
     data = renderer.GetOutput().GetPointData()
     for name, values in first.items():
         assert np.array_equal(vtk_to_numpy(data.GetArray(name)), values), name
-    assert renderer.GetBLASBytes() > 0 and renderer.GetTLASBytes() > 0
+    # The backend's structure: a BVH (rt), or the cell grid and no BVH (compute).
+    assert renderer.GetBackendInUse() in ("rt", "compute")
+    if renderer.GetBackendInUse() == "rt":
+        assert renderer.GetBLASBytes() > 0 and renderer.GetTLASBytes() > 0
+    else:
+        assert renderer.GetBLASBytes() == 0 and renderer.GetTLASBytes() == 0
+    assert renderer.GetAccelerationBytes() > 0 and renderer.GetEncodingBytes() > 0
+    assert renderer.GetDeviceBytes() >= (renderer.GetEncodingBytes() + renderer.GetAccelerationBytes()
+                                         + renderer.GetMaterialBytes() + renderer.GetImageBytes())
+    assert renderer.GetImageBytes() == WIDTH * HEIGHT * 80  # 20 floats or words a pixel
     assert renderer.GetSetupSeconds() > 0 and renderer.GetLastFrameMilliseconds() > 0
     assert renderer.GetDeviceName() != ""
 
@@ -396,6 +405,7 @@ def test_split_into_several_blas_gives_the_same_image(real_volume):
     """Volumes beyond the device's BLAS primitive limit are split into several BLAS (one TLAS
     instance each); capping the blocks per BLAS forces that path on a small volume."""
     renderer = make_renderer(real_volume[1])
+    renderer.GetSettings().SetBackend("rt")
     renderer.ResetCamera(70, -20, 1.4)
     assert renderer.Render() == 1
     assert renderer.GetNumberOfBLAS() == 1
@@ -449,7 +459,11 @@ def test_command_line_renders_a_file(real_volume, tmp_path):
     assert run.returncode == 0, run.stderr
     report = json.loads(run.stdout)
     assert report["width"] == 40 and report["height"] == 30 and report["lod"] == "leaf"
-    assert report["bytes_blas"] > 0 and report["bytes_tlas"] > 0 and report["device"]
+    assert report["backend"] in ("rt", "compute") and report["device"]
+    assert (report["bytes_blas"] > 0) == (report["backend"] == "rt")
+    parts = report["bytes_device"]
+    assert parts["encoding"] > 0 and parts["acceleration"] > 0 and parts["images"] == 40 * 30 * 80
+    assert parts["total"] == sum(v for k, v in parts.items() if k != "total")
     assert report["setup_seconds"] > 0 and report["ms_per_frame"] > 0
     image = np.asarray(Image.open(png))
     assert image.shape == (30, 40, 4)

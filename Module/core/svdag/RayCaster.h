@@ -2,11 +2,11 @@
 // and the engine behind picking.
 //
 // Rays are given in index space (see Traversal.h: voxel (i, j, k) occupies [i, i+1) x [j, j+1) x
-// [k, k+1)) in double precision. A 3D DDA walks the grid of 16^3 cells; in each cell the ray is
-// re-anchored at the cell's integer corner (and at its entry point) and converted to float, so the
-// float traversal of the cell's blocks (Traversal.h) is equally precise anywhere in a huge
-// volume. The blocks of one cell are disjoint in voxels, so the nearest of their hits is the hit
-// in that cell, and the first cell with a hit ends the walk.
+// [k, k+1)) in double precision and walked by GridTraversal.h (the code the renderer's compute
+// backend runs, there in float): a 3D DDA over the grid of 16^3 cells, in each cell the ray
+// re-anchored at the cell's integer corner (and at its entry point) and converted to float for
+// the traversal of the cell's blocks (Traversal.h), so it is equally precise anywhere in a huge
+// volume.
 #pragma once
 
 #include "svdag/Parallel.h"
@@ -86,10 +86,6 @@ public:
   const std::vector<std::array<double, 4>>& clipPlanes() const { return this->ClipPlanes; }
 
 private:
-  struct UnitRay;
-  // Nearest hit among the blocks of one cell, the ray anchored at the cell's corner and at
-  // parameter s (distance along the unit direction) where it enters the cell.
-  RayHit castCell(const UnitRay& ray, const std::array<int32_t, 3>& cell, double s, Lod lod) const;
   const Volume& volume;
   std::vector<std::array<double, 4>> ClipPlanes;
 };

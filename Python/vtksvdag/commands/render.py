@@ -22,9 +22,10 @@ from ._common import (
 )
 
 NAME = "render"
-HELP = "path-trace a label volume or .svdag file to a PNG or EXR image (Vulkan ray tracing)"
+HELP = "path-trace a label volume or .svdag file to a PNG or EXR image (Vulkan)"
 
 LODS = ("block", "leaf", "voxel", "auto")
+BACKENDS = ("auto", "rt", "compute")  # vtkSegmentationSVDAGRenderSettings.BACKEND_* in order
 SHADINGS = ("voxel", "smooth")  # vtkSegmentationSVDAGRenderSettings.SHADING_* in order
 
 
@@ -48,6 +49,9 @@ def add_arguments(parser):
     parser.add_argument("--bounces", type=int_in(0, MAX_BOUNCES), default=4,
                         help=f"maximum bounces, 0-{MAX_BOUNCES} (default: 4)")
     parser.add_argument("--lod", choices=LODS, default="voxel", help="level of detail (default: voxel)")
+    parser.add_argument("--backend", choices=BACKENDS, default="auto",
+                        help="how rays find the blocks: the ray tracing pipeline (rt), a compute "
+                             "shader walking the cell grid (compute), or per device (auto, default)")
     parser.add_argument("--shading", choices=SHADINGS, default="voxel",
                         help="normals for lighting: voxel faces, or smooth ones estimated from the "
                              "label occupancy (no mesh; the hits stay the voxels) (default: voxel)")
@@ -138,8 +142,8 @@ def run(args):
                 ok = call()
         except RuntimeError as error:
             detail = str(error)
-            if "devices found" in detail or "Vulkan" in detail:
-                detail = "no Vulkan ray-tracing device: " + detail
+            if "devices found" in detail:
+                detail = "no usable Vulkan device: " + detail
             raise RuntimeError(_fail(f"{what}: {detail}")) from None
         if not ok:
             raise RuntimeError(_fail(f"{what}: unknown error"))
@@ -149,6 +153,7 @@ def run(args):
     renderer.SetHeight(args.height)
     settings = renderer.GetSettings()
     settings.SetLOD(LODS.index(args.lod))
+    settings.SetBackend(BACKENDS.index(args.backend))
     settings.SetShading(SHADINGS.index(args.shading))
     settings.SetMaximumBounces(args.bounces)
     settings.SetSeed(args.seed)
@@ -201,6 +206,7 @@ def run(args):
         "nee": not args.no_nee,
         "seed": args.seed,
         "lod": args.lod,
+        "backend": renderer.GetBackendInUse(),
         "shading": args.shading,
         "setup_seconds": renderer.GetSetupSeconds(),
         "render_seconds": renderer.GetRenderSeconds(),
@@ -209,6 +215,15 @@ def run(args):
         "bytes_blas": renderer.GetBLASBytes(),
         "bytes_tlas": renderer.GetTLASBytes(),
         "bytes_neighbour_table": renderer.GetNeighbourTableBytes(),
+        # Device memory by part: encoding (block and DAG streams), acceleration (BLAS + TLAS +
+        # primitive map, or the compute backend's cell grid), materials, images, and the total.
+        "bytes_device": {
+            "encoding": renderer.GetEncodingBytes(),
+            "acceleration": renderer.GetAccelerationBytes(),
+            "materials": renderer.GetMaterialBytes(),
+            "images": renderer.GetImageBytes(),
+            "total": renderer.GetDeviceBytes(),
+        },
         "hidden_labels": args.hide,
         "clip": args.clip,
         "crop": args.crop,
@@ -226,9 +241,11 @@ def run(args):
             ("image", f"{args.width} x {args.height}, {result['spp']} spp, LOD {args.lod}, "
                       f"{args.shading} shading, "
                       f"{args.bounces} bounces, NEE {'on' if result['nee'] else 'off'}"),
-            ("setup", f"{result['setup_seconds']:.3f} s (upload + BVH)"),
+            ("backend", result["backend"]),
+            ("setup", f"{result['setup_seconds']:.3f} s (upload + "
+                      f"{'BVH' if result['backend'] == 'rt' else 'cell grid'})"),
             ("render", f"{result['render_seconds']:.3f} s ({result['ms_per_frame']:.1f} ms per pass)"),
-            ("BVH bytes", f"BLAS {result['bytes_blas']:,}, TLAS {result['bytes_tlas']:,}"),
+            ("device bytes", ", ".join(f"{k} {v:,}" for k, v in result["bytes_device"].items())),
             ("output", args.output),
         ])
     return 0

@@ -1,11 +1,14 @@
-// The Vulkan instance, the chosen ray-tracing device, its queue and the extension entry points.
+// The Vulkan instance, the chosen device, its queue and the extension entry points.
 //
-// Device choice: among the physical devices that have everything the renderer needs (Vulkan 1.2,
-// VK_KHR_acceleration_structure, VK_KHR_ray_tracing_pipeline, VK_KHR_buffer_device_address,
-// VK_KHR_deferred_host_operations, their features and a compute queue), a discrete GPU is
-// preferred, then an integrated one, a virtual one, and a CPU implementation (lavapipe) last.
+// Device choice: among the physical devices that have what every backend needs (Vulkan 1.2,
+// VK_KHR_buffer_device_address and its feature, a compute queue), a discrete GPU is preferred,
+// then an integrated one, a virtual one, and a CPU implementation (lavapipe) last; among devices
+// of one kind, one with ray tracing. Ray tracing (VK_KHR_acceleration_structure,
+// VK_KHR_ray_tracing_pipeline, VK_KHR_deferred_host_operations and their features) is enabled
+// where the device has it (hasRayTracing()); without it only the compute backend runs.
 // Environment:
 //   SVDAG_VK_DEVICE=<substring>  only devices whose name contains it (case-insensitive)
+//   SVDAG_VK_NO_RAY_TRACING=1    treat every device as one without ray tracing
 //   SVDAG_VK_VALIDATION=1        enable VK_LAYER_KHRONOS_validation (messages on stderr)
 // When nothing qualifies the constructor throws std::runtime_error naming every device found and
 // what it lacks ("no Vulkan driver/loader" when the instance cannot be created); it never crashes
@@ -30,7 +33,7 @@ namespace render
 void check(VkResult result, const char* what);
 const char* resultName(VkResult result);
 
-// Entry points of device extensions (not exported by the loader).
+// Entry points of device extensions (not exported by the loader; null without ray tracing).
 struct DeviceFunctions
 {
   PFN_vkCreateAccelerationStructureKHR createAccelerationStructure = nullptr;
@@ -52,7 +55,8 @@ struct DeviceMemoryError : std::runtime_error
   using std::runtime_error::runtime_error;
 };
 
-// Driver limits the renderer depends on (read from the driver, never assumed).
+// Driver limits the renderer depends on (read from the driver, never assumed; the ray tracing
+// ones are 0 on a device without it).
 struct RayTracingLimits
 {
   uint64_t maxMemoryAllocationSize = 0; // bytes of one allocation (Vulkan 1.1 maintenance3)
@@ -64,6 +68,7 @@ struct RayTracingLimits
   uint64_t maxInstanceCount = 0;  // per TLAS
   uint32_t minScratchOffsetAlignment = 0;
   uint32_t maxRayDispatchInvocationCount = 0;
+  uint32_t maxComputeWorkGroupCount[2] = { 0, 0 }; // x, y
 };
 
 class Context
@@ -82,6 +87,9 @@ public:
   uint32_t queueFamily() const { return this->QueueFamily; }
   const std::string& deviceName() const { return this->DeviceName; }
   bool isCpuDevice() const { return this->CpuDevice; }
+  // Whether the ray tracing backend can run; if not, what the device lacks for it.
+  bool hasRayTracing() const { return this->RayTracing; }
+  const std::string& rayTracingMissing() const { return this->RayTracingMissing; }
   const DeviceFunctions& fn() const { return this->Functions; }
   const RayTracingLimits& limits() const { return this->Limits; }
 
@@ -122,6 +130,8 @@ private:
   VkFence Fence = VK_NULL_HANDLE;
   std::string DeviceName;
   bool CpuDevice = false;
+  bool RayTracing = false;
+  std::string RayTracingMissing;
   VkPhysicalDeviceMemoryProperties MemoryProperties{};
   uint64_t HeapBytes = 0; // device-local heaps (all heaps if none is device-local)
   uint64_t AllocatedBytes = 0;

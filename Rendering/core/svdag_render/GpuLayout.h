@@ -94,7 +94,10 @@ typedef uint32_t uint;
 #define SVDAG_CONSTANT_TRANSMISSION 4
 #define SVDAG_CONSTANT_COUNT 5
 
-/* Descriptor set 0. */
+/* The compute backend's workgroup: SVDAG_COMPUTE_GROUP_SIZE^2 pixels (camera.comp). */
+#define SVDAG_COMPUTE_GROUP_SIZE 8
+
+/* Descriptor set 0 (the compute backend has no TLAS binding). */
 #define SVDAG_BINDING_TLAS 0
 #define SVDAG_BINDING_FRAME 1
 
@@ -154,6 +157,15 @@ SVDAG_UNIFORMS_BEGIN(FrameUniforms)
   uvec4 environmentMap2; // addresses: xy texels (vec4 per texel, rgb radiance); z, w unused
   uvec4 rayLimits;     // addresses: xy per-pixel ray limit (float; 0: none); z, w unused
   uvec4 statistics;    // addresses: xy luminance sums of squares (float per pixel), zw variance
+  // The compute backend (camera.comp, GridTraversal.h): rows of the affine map from world
+  // coordinates (relative to the scene's reference point) to volume index space, the inverse of
+  // the ray tracing backend's instance transform.
+  vec4 worldToIndexX;
+  vec4 worldToIndexY;
+  vec4 worldToIndexZ;
+  uvec4 cellGrid;      // addresses: xy each cell's first block (uint32, cells + 1 entries, Scene.h),
+                       // zw the hidden label bits (bit l of word l / 32; 0: none hidden)
+  uvec4 volumeDims;    // xyz: voxels along x, y, z; w: cells along z
   // Clipping (Module/core/svdag/Clipping.h): every ray, primary and secondary, is clipped to the
   // region the planes keep. x: planes used in clipPlanes (0: no clipping); y, z, w unused.
   uvec4 clipping;
@@ -188,8 +200,8 @@ SVDAG_GPU_FN vec3 svdagLabelColor(uint labelIndex)
 }
 
 #ifdef __cplusplus
-// 29 members and the clipping plane array (a vec4 array has a 16-byte stride in std140 too).
-static_assert(sizeof(FrameUniforms) == (29 + SVDAG_CLIP_MAX_SLOTS) * 16,
+// 34 members and the clipping plane array (a vec4 array has a 16-byte stride in std140 too).
+static_assert(sizeof(FrameUniforms) == (34 + SVDAG_CLIP_MAX_SLOTS) * 16,
   "FrameUniforms must stay a list of 16-byte members");
 } // namespace gpu
 } // namespace render

@@ -6,7 +6,14 @@
  * sampling continues the path, and an escaping path adds the environment and the sun weighted by
  * the power heuristic against the light-sampling densities. The sun is a disk of a given angular
  * radius (radius 0: a delta light that only light sampling can find). Emissive voxels add their emission where a path hits them. Russian roulette from
- * the third bounce. With NEE disabled the estimator is the plain "light only where a path escapes"
+ * the third bounce.
+ *
+ * The last scattering event (the one whose continuation would end the path) with a constant
+ * environment and nothing emissive: its continuation could only collect the environment and the
+ * sun where it escapes. So the environment is sampled there by the BSDF alone (for a constant
+ * environment the better of the two strategies) with an occlusion ray instead of a closest-hit
+ * one, the sun by light sampling alone (weight 1), and no environment shadow ray is traced: one
+ * ray fewer per path, the same expectation. A delta (transmission) sample still continues. With NEE disabled the estimator is the plain "light only where a path escapes"
  * one (the paper authors' estimator), kept for the error-versus-time comparison.
  *
  * Its interface types (PathTracerParams, PathHit) are in Shading.h, so that the includer can
@@ -158,7 +165,10 @@ SHADING_FN vec3 tracePath(
     bool lifted = !h.inside && h.lift > 0.0f;
     vec3 shadowOrigin = lifted ? above + h.lift * ns : above;
 
-    if (nee)
+    // The last scattering event with a constant environment and nothing emissive (see above).
+    bool lastEvent = nee && bounce + 1u == maxBounces && !(SVDAG_FEATURE_EMISSION) &&
+      !(SVDAG_FEATURE_ENV_MAP);
+    if (nee && !lastEvent)
     {
       float lightPdf;
       vec3 wl = environmentSample(p, vec2(random01(rng), random01(rng)), lightPdf);
@@ -174,6 +184,9 @@ SHADING_FN vec3 tracePath(
           radiance += throughput * f * environmentRadiance(p, wl) *
             (powerHeuristic(lightPdf, bsdfPdf(m, ns, wo, wl)) / lightPdf);
       }
+    }
+    if (nee)
+    {
       if (SVDAG_FEATURE_SUN && p.sunRadiance.a > 0.0f)
       {
         float sunPdf;
@@ -188,7 +201,7 @@ SHADING_FN vec3 tracePath(
             SVDAG_TRACE_OCCLUDED(blocked, shadowOrigin, ws, 1e30f);
           // Radiance E / omega over pdf 1 / omega is the irradiance E; a disk sun is MIS-weighted
           // against BSDF sampling, a delta sun (pdf 0) only reachable here.
-          float w = sunPdf > 0.0f ? powerHeuristic(sunPdf, bsdfPdf(m, ns, wo, ws)) : 1.0f;
+          float w = sunPdf > 0.0f && !lastEvent ? powerHeuristic(sunPdf, bsdfPdf(m, ns, wo, ws)) : 1.0f;
           vec3 contribution = w * fs * vec3(p.sunRadiance);
           if (!blocked)
             radiance += throughput * contribution;
@@ -203,6 +216,18 @@ SHADING_FN vec3 tracePath(
     if (max(s.weight.x, max(s.weight.y, s.weight.z)) <= 0.0f ||
       (!s.transmitted && !lifted && !(dot(s.direction, n) > 0.0f)))
       break;
+    if (lastEvent && !s.delta)
+    {
+      // The environment along the BSDF sample, unless something is in the way.
+      bool blocked;
+      if (lifted)
+        SVDAG_TRACE_OCCLUDED_LIFTED(blocked, shadowOrigin, s.direction, 1e30f);
+      else
+        SVDAG_TRACE_OCCLUDED(blocked, shadowOrigin, s.direction, 1e30f);
+      if (!blocked)
+        radiance += throughput * s.weight * environmentRadiance(p, s.direction);
+      break;
+    }
     throughput *= s.weight;
     previousPdf = s.pdf;
     previousDelta = s.delta;

@@ -1,12 +1,18 @@
-// The ray tracing pipeline of the path tracer and its shader binding table.
+// The path tracer's pipeline of one backend (RenderSettings.h's Backend), its descriptor set and
+// the commands of one pass.
 //
+// Compute backend: camera.comp (PathTrace.glsl's camera and path tracer over the cell-grid walk
+// of GridTraversal.h), dispatched in SVDAG_COMPUTE_GROUP_SIZE^2 pixel workgroups; descriptor set
+// 0 holds only the frame uniforms.
+//
+// Ray tracing backend: the ray tracing pipeline and its shader binding table.
 // Shaders (compiled to SPIR-V at build time and embedded): camera.rgen (primary outputs and
 // camera paths), two miss shaders (closest.rmiss for closest-hit queries, shadow.rmiss for
 // occlusion rays, at miss indices SVDAG_MISS_CLOSEST / SVDAG_MISS_SHADOW) and two procedural hit
 // groups with block.rchit: block.rint (per-block DAG traversal, first hits; sbtRecordOffset 0) and
 // block.rint compiled with SVDAG_ENTRY_ONLY=1 (entry-only hits for rays that continue through a
 // transmissive surface; sbtRecordOffset 1). The path tracer's feature
-// switches are specialization constants of camera.rgen (ShaderFeatures); setFeatures rebuilds
+// switches are specialization constants of camera.rgen / camera.comp (ShaderFeatures); setFeatures rebuilds
 // the pipeline, keeping the layouts (descriptor sets stay valid). Descriptor set 0: the TLAS (SVDAG_BINDING_TLAS) and the frame uniforms
 // (SVDAG_BINDING_FRAME), see GpuLayout.h. The SBT's handle size and alignments are read from
 // the driver.
@@ -15,6 +21,7 @@
 #include "svdag_render/Buffer.h"
 #include "svdag_render/Context.h"
 #include "svdag_render/GpuLayout.h"
+#include "svdag_render/RenderSettings.h"
 
 #include <array>
 #include <vector>
@@ -32,7 +39,7 @@ struct DescriptorBinding
   VkDescriptorType type;
 };
 constexpr std::array<DescriptorBinding, 2> DescriptorBindings{ {
-  { SVDAG_BINDING_TLAS, VK_DESCRIPTOR_TYPE_ACCELERATION_STRUCTURE_KHR },
+  { SVDAG_BINDING_TLAS, VK_DESCRIPTOR_TYPE_ACCELERATION_STRUCTURE_KHR }, // ray tracing only
   { SVDAG_BINDING_FRAME, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER },
 } };
 
@@ -56,7 +63,8 @@ struct ShaderFeatures
 class Pipeline
 {
 public:
-  explicit Pipeline(Context& context, const ShaderFeatures& features = ShaderFeatures());
+  // backend: Backend::RayTracing (the context must have ray tracing) or Backend::Compute.
+  Pipeline(Context& context, Backend backend, const ShaderFeatures& features = ShaderFeatures());
   ~Pipeline();
   Pipeline(const Pipeline&) = delete;
   Pipeline& operator=(const Pipeline&) = delete;
@@ -71,9 +79,15 @@ public:
   // Pipelines built so far (the constructor's included): a test sees rebuilds.
   uint64_t builds() const { return this->Builds; }
 
+  Backend backend() const { return this->Kind; }
   VkPipeline handle() const { return this->Handle; }
   VkPipelineLayout layout() const { return this->Layout; }
   VkDescriptorSetLayout setLayout() const { return this->SetLayout; }
+  // Points descriptor set 0 at the frame uniforms and (ray tracing) the TLAS.
+  void updateDescriptors(VkBuffer uniforms, VkAccelerationStructureKHR tlas);
+  // Records one pass over a width x height image: bind, trace or dispatch, and a barrier that
+  // makes the shader writes visible to the host.
+  void record(VkCommandBuffer cmd, uint32_t width, uint32_t height) const;
   // Shader binding table regions for vkCmdTraceRaysKHR.
   const VkStridedDeviceAddressRegionKHR& raygenRegion() const { return this->Raygen; }
   const VkStridedDeviceAddressRegionKHR& missRegion() const { return this->Miss; }
@@ -83,6 +97,8 @@ public:
 private:
   void createLayouts();
   void createPipeline();
+  void createRayTracingPipeline(const VkSpecializationInfo& specialization);
+  void createComputePipeline(const VkSpecializationInfo& specialization);
   void createShaderBindingTable();
   void destroyPipeline();
   void destroy();
@@ -100,10 +116,13 @@ private:
   void use(Built&& built);
 
   Context& Ctx;
+  Backend Kind;
   ShaderFeatures Features;
   uint64_t Builds = 0;
   VkDescriptorSetLayout SetLayout = VK_NULL_HANDLE;
   VkPipelineLayout Layout = VK_NULL_HANDLE;
+  VkDescriptorPool Pool = VK_NULL_HANDLE;
+  VkDescriptorSet Set = VK_NULL_HANDLE;
   VkPipeline Handle = VK_NULL_HANDLE;
   Buffer Table;
   VkStridedDeviceAddressRegionKHR Raygen{}, Miss{}, Hit{}, Callable{};

@@ -25,6 +25,25 @@ const char* lodName(Lod lod);
 // Parses lodName's names; throws std::invalid_argument otherwise.
 Lod parseLod(const std::string& name);
 
+// How rays find the blocks (the same path tracer, materials, outputs and features either way):
+//   RayTracing  the ray tracing pipeline: one procedural primitive per visible block in a BVH
+//               (the paper's method; needs VK_KHR_ray_tracing_pipeline);
+//   Compute     a compute shader walks the volume's grid of 16^3 cells front to back
+//               (Module/core/svdag/GridTraversal.h, the CPU ray caster's code): no BVH, hidden
+//               labels are bits; runs on any Vulkan 1.2 device;
+//   Auto        per device, the one measured faster (Renderer::backendFor documents the rule);
+//               Compute on a device without ray tracing.
+enum class Backend : uint32_t
+{
+  Auto = 0,
+  RayTracing = 1,
+  Compute = 2
+};
+// "auto", "rt", "compute".
+const char* backendName(Backend backend);
+// Parses backendName's names; throws std::invalid_argument otherwise.
+Backend parseBackend(const std::string& name);
+
 // The normal that lights a voxel hit (the hit itself, position, label and depth, is always the
 // lossless voxel surface): the entry face's (axis-aligned, blocky), or a smooth estimate from the
 // occupancy of the hit label around the hit point (Module/core/svdag/SmoothNormal.h; the face
@@ -76,6 +95,7 @@ constexpr uint32_t MaximumClipPlanes = 6;
 
 struct RenderSettings
 {
+  Backend backend = Backend::Auto;
   Lod lod = Lod::Voxel;
   // Lod::Auto draws a leaf (block) where a leaf (block) covers at most this many pixels.
   float autoLodPixels = 1.0f;

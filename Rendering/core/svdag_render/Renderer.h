@@ -2,8 +2,8 @@
 // pixel-center ray, and the progressive path-traced color (GpuLayout.h documents the outputs,
 // the pixel-center convention, sampling and tone mapping; PathTracer.h the integrator).
 //
-//   svdag::render::Renderer r;                  // throws when no ray-tracing device qualifies
-//   r.setVolume(volume);                        // uploads the streams, builds the BVH
+//   svdag::render::Renderer r;                  // throws when no Vulkan device qualifies
+//   r.setVolume(volume);                        // uploads the streams, builds the BVH or grid
 //   r.setCamera(svdag::render::frameVolume(volume->geometry, 30, 20));
 //   r.setImageSize(640, 480);
 //   const svdag::render::Image& image = r.render(); // adds samplesPerPixel samples per pixel
@@ -12,6 +12,10 @@
 // while nothing that changes the image changed since the last one (camera, image size, LOD,
 // materials, visibility, lighting, bounces, NEE, seed, background, clipping, volume); any such change
 // starts a new accumulation. Exposure and samplesPerPixel do not restart it.
+//
+// Backends (RenderSettings::backend): the ray tracing pipeline over a BVH of block boxes, or a
+// compute shader walking the cell grid (GridTraversal.h); the same path tracer, materials, outputs
+// and features. Auto resolves per device (backendFor).
 //
 // Materials are per label index (defaultMaterial: base color svdagLabelColor, roughness 0.6,
 // metallic 0, transmission 0, ior 1.5, specular 0.5, visible); an edit is a buffer upload.
@@ -45,6 +49,19 @@ class Context;
 class Scene;
 using shading::Material;
 
+// Bytes of device memory the renderer holds, by part.
+struct DeviceBytes
+{
+  uint64_t encoding = 0;     // the volume's streams: blocks (and their chunk table), roots, mids, leaves
+  uint64_t acceleration = 0; // BLAS, TLAS, instances, primitive -> block map (ray tracing), or the
+                             // cell grid and hidden label bits (compute)
+  uint64_t materials = 0;    // per-label materials and the environment's tables
+  uint64_t neighbours = 0;   // smooth shading's neighbour table (0 until smooth shading needs it)
+  uint64_t images = 0;       // outputs, accumulation sums and per-pixel ray limits
+  uint64_t other = 0;        // uniforms, the shader binding table, allocation rounding
+  uint64_t total = 0;        // all of it (Renderer::deviceBytes)
+};
+
 // Host copies of the outputs, pixel (x, y) at index x + width * y, y = 0 the bottom row.
 struct Image
 {
@@ -65,14 +82,27 @@ struct Image
 class Renderer
 {
 public:
-  // Creates the Vulkan context and the pipeline. Throws std::runtime_error (no ray-tracing
-  // device: the message names every device found and what it lacks).
+  // Creates the Vulkan context. Throws std::runtime_error (no usable device: the message names
+  // every device found and what it lacks).
   Renderer();
   ~Renderer();
   Renderer(const Renderer&) = delete;
   Renderer& operator=(const Renderer&) = delete;
 
   const std::string& deviceName() const;
+  bool hasRayTracing() const;
+
+  // The backend (RenderSettings::backend; also part of setSettings). A change rebuilds what the
+  // backends find blocks with (setupSeconds measures it) and restarts the accumulation. Throws
+  // std::runtime_error for RayTracing on a device without ray tracing (the previous one stays).
+  void setBackend(Backend backend);
+  // What a setting resolves to on this device. Auto: Compute on a device without ray tracing and
+  // on a CPU implementation (lavapipe: measured 1.5-4x faster, bench/README.md), RayTracing on a
+  // GPU with ray tracing (the paper's hardware path; measure with bench/gpu.sh). Throws like
+  // setBackend.
+  Backend backendFor(Backend requested) const;
+  // The backend in use: backendFor(settings().backend).
+  Backend backend() const { return this->backendFor(this->Settings.backend); }
 
   // Uploads a volume and builds its BVH (keeps the hidden labels). Throws std::runtime_error.
   void setVolume(std::shared_ptr<const Volume> volume);
@@ -87,8 +117,9 @@ public:
   // and maximum Scene::MaxBlockChunkShift). Smaller chunks exist to exercise the chunked path
   // on small volumes (tests).
   void setBlockChunkShift(uint32_t shift);
-  // Bytes of device memory the renderer holds now (streams, BVH, materials, images).
+  // Bytes of device memory the renderer holds now (streams, BVH or grid, materials, images).
   uint64_t deviceBytes() const;
+  DeviceBytes deviceBytesByPart() const;
   size_t blockChunkCount() const;
   // The primary rays: a pinhole camera (its rays follow the image's aspect), or explicit rays
   // (ViewRays, for example from a VTK camera's projection); the last call wins.
@@ -179,7 +210,8 @@ public:
   // An estimate of the current image's error: the root mean square over pixels of the standard
   // error of each pixel's mean luminance (linear units; 0 before two samples).
   double errorEstimate() const { return this->ErrorEstimate; }
-  // BVH builds (setVolume and visibility changes) and ray tracing pipeline builds so far.
+  // BVH builds (setVolume, visibility changes and backend switches on the ray tracing backend)
+  // and pipeline builds so far.
   uint64_t bvhBuilds() const { return this->BvhBuilds; }
   uint64_t pipelineBuilds() const;
 
@@ -201,6 +233,7 @@ public:
 private:
   void applyVisibility();
   void timeSetup(bool rebuilt, double seconds);
+  void applyBackend();
 
   struct Gpu;
   std::unique_ptr<Gpu> Device;

@@ -1,5 +1,10 @@
 // The GPU scene of one volume: its streams (blocks, roots, mids, leaves) in device buffers read by
-// the shaders through device addresses, and the ray-tracing BVH over its VISIBLE blocks.
+// the shaders through device addresses, and what the backend in use finds blocks with: for the
+// ray tracing backend the BVH over its VISIBLE blocks (below), for the compute backend the cell
+// grid: per cell of the volume's 16^3 grid, the index of its first block (blocks are sorted by
+// cell; cells + 1 uint32 entries, 4 bytes a cell), and the hidden labels as bits (one uint32 per
+// 32 labels, host-visible: hiding a label is a write, never a rebuild). Each backend's structure
+// exists only while that backend is in use: the compute backend holds no BLAS.
 //
 // Each visible block is one AABB primitive in volume INDEX space, where voxel (i, j, k) occupies
 // [i, i+1)^3 (Traversal.h); the AABB is the block's tight bounds box. Primitives are ordered by a
@@ -27,6 +32,7 @@
 #include "svdag_render/AccelerationStructure.h"
 #include "svdag_render/Buffer.h"
 #include "svdag_render/Context.h"
+#include "svdag_render/RenderSettings.h"
 #include "svdag_render/WorldFrame.h"
 
 #include <svdag/Volume.h>
@@ -50,24 +56,32 @@ public:
   // when Vulkan fails or a node stream exceeds what the shaders address (2^32 bits). The block
   // stream is cut into chunks of 2^blockChunkShift words (clamped to 4..MaxBlockChunkShift;
   // smaller chunks exist to test the chunked path on small volumes).
-  Scene(Context& context, std::shared_ptr<const Volume> volume,
+  // backend: Backend::RayTracing or Backend::Compute (resolved, not Auto).
+  Scene(Context& context, std::shared_ptr<const Volume> volume, Backend backend,
     uint32_t blockChunkShift = MaxBlockChunkShift);
   ~Scene();
   Scene(const Scene&) = delete;
   Scene& operator=(const Scene&) = delete;
 
-  // Rebuilds the BVH without the blocks of these label indices (out-of-range indices are
-  // ignored) if the set changed; returns whether it rebuilt. Cheap: no stream is uploaded again.
+  // Switches to the structure of another backend (building it; the other one is freed).
+  void setBackend(Backend backend);
+  Backend backend() const { return this->Kind; }
+  // Leaves out the blocks of these label indices (out-of-range indices are ignored); returns
+  // whether the set changed. Ray tracing: the BVH is rebuilt without them (cheap: no stream is
+  // uploaded again); compute: their bits are set.
   bool setHiddenLabels(const std::vector<uint32_t>& labelIndices);
   const std::vector<uint32_t>& hiddenLabels() const { return this->Hidden; }
   // Caps the primitives per BLAS below the driver's maxPrimitiveCount (0: no cap) and rebuilds
-  // if that changes the split; returns whether it rebuilt. More, smaller BLAS trace slower: this
+  // if that changes the split (ray tracing backend); returns whether it rebuilt. More, smaller BLAS trace slower: this
   // exists to exercise the multi-BLAS path on small volumes (tests).
   bool setPrimitivesPerBlasLimit(uint32_t limit);
 
   const Volume& volume() const { return *this->Source; }
   // The point subtracted from world coordinates on the GPU (see Precision above).
   const std::array<double, 3>& worldReference() const { return this->Reference; }
+  // The map from world coordinates minus worldReference() to index space, 3 rows of 4: the
+  // inverse of the instance transform (the compute backend transforms its rays with it).
+  std::array<double, 12> worldToIndex() const;
   // False after a failed (re)build (out of memory, say) until a later one succeeds.
   bool ready() const { return this->Built; }
   VkAccelerationStructureKHR tlas() const { return this->Tlas.handle(); }
@@ -82,6 +96,13 @@ public:
   // Primitives per BLAS: instance i's primitive p is entry i * this + p of the primitive -> block
   // buffer.
   uint32_t primitivesPerBlas() const { return this->PrimitivesPerBlas; }
+  // The compute backend's cell grid: each cell's first block (uint32, cells + 1 entries), and the
+  // hidden label bits (0 when no label is hidden).
+  VkDeviceAddress cellStartsAddress() const { return this->CellStarts.address(); }
+  VkDeviceAddress hiddenBitsAddress() const
+  {
+    return this->Hidden.empty() ? VkDeviceAddress(0) : this->HiddenBits.address();
+  }
 
   uint64_t visibleBlocks() const { return this->VisibleBlocks; }
   size_t blasCount() const { return this->Blas.size(); }
@@ -89,13 +110,20 @@ public:
   uint64_t tlasBytes() const { return this->Tlas.bytes(); }
   // Bytes of the volume's streams on the device.
   uint64_t streamBytes() const;
+  // Bytes of what the backend finds blocks with: BLAS, TLAS, instances and the primitive -> block
+  // map (ray tracing), or the cell grid and the hidden label bits (compute).
+  uint64_t accelerationBytes() const;
   double uploadSeconds() const { return this->UploadSeconds; }
   double buildSeconds() const { return this->BuildSeconds; }
 
 private:
   void build();
+  void buildCellGrid();
+  void writeHiddenBits();
+  void release();
 
   Context& Ctx;
+  Backend Kind;
   std::shared_ptr<const Volume> Source;
   std::vector<uint32_t> Hidden;
   std::array<double, 3> Reference{ { 0, 0, 0 } };
@@ -104,6 +132,8 @@ private:
   uint32_t BlockChunkShift = MaxBlockChunkShift;
   Buffer Roots, Mids, Leaves;
   Buffer PrimitiveBlocks;
+  Buffer CellStarts;
+  Buffer HiddenBits;
   Buffer Instances;
   std::vector<AccelerationStructure> Blas;
   AccelerationStructure Tlas;

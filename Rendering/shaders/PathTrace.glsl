@@ -1,0 +1,298 @@
+// The camera and the path tracer, shared by both backends (camera.rgen: the ray tracing pipeline;
+// camera.comp: the compute cell-grid traversal): per pixel, the un-jittered pixel-center ray gives
+// label, depth and normal (traced on the first pass of an accumulation, and reused as the first
+// camera path's first hit; GpuLayout.h documents the convention), then frame.sampling.y jittered
+// camera paths are traced with the shared integrator (PathTracer.h) and added to the pixel's
+// accumulated sums; hdr (mean) and color (tone-mapped) are written from the sums.
+//
+// The includer declares `SvdagPayload payload` (what a closest-hit query fills) and defines, for a
+// world ray (unit direction, relative to the scene's reference point) and an interval already
+// clipped to the clipping region:
+//   void svdagTraceInterval(vec3 origin, vec3 direction, float tmin, float tmax, uint hitGroup)
+//       the nearest hit into payload, left as a miss where there is none; hitGroup 1: entry only
+//   bool svdagOccludedInterval(vec3 origin, vec3 direction, float tmin, float tmax, uint hitGroup)
+//       whether anything is hit
+// and then calls svdagRenderPixel(pixel) for each pixel of the image.
+#ifndef SVDAG_RENDER_PATH_TRACE_GLSL
+#define SVDAG_RENDER_PATH_TRACE_GLSL
+
+// Feature switches: a scene that does not use a feature does not pay for it (the host computes
+// them from the scene and rebuilds the pipeline when they change).
+layout(constant_id = SVDAG_CONSTANT_NEE) const bool featureNee = true;
+layout(constant_id = SVDAG_CONSTANT_ENV_MAP) const bool featureEnvMap = false;
+layout(constant_id = SVDAG_CONSTANT_SUN) const bool featureSun = false;
+layout(constant_id = SVDAG_CONSTANT_EMISSION) const bool featureEmission = false;
+layout(constant_id = SVDAG_CONSTANT_TRANSMISSION) const bool featureTransmission = false;
+#define SVDAG_FEATURE_NEE featureNee
+#define SVDAG_FEATURE_ENV_MAP featureEnvMap
+#define SVDAG_FEATURE_SUN featureSun
+#define SVDAG_FEATURE_EMISSION featureEmission
+#define SVDAG_FEATURE_TRANSMISSION featureTransmission
+
+// Far end of every ray: beyond any scene, finite so that no inf enters the traversal.
+const float RAY_TMAX = 1.0e30;
+
+// Environment tables for Shading.h (set at the start of main()).
+SvdagFloats gEnvMarginal;
+SvdagFloats gEnvConditional;
+SvdagVec4s gEnvTexels;
+#define SVDAG_ENV_MARGINAL(i) gEnvMarginal.v[(i)]
+#define SVDAG_ENV_CONDITIONAL(i) gEnvConditional.v[(i)]
+#define SVDAG_ENV_TEXEL(i) gEnvTexels.v[(i)].xyz
+#include "svdag_render/Shading.h"
+
+layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer SvdagMaterials
+{
+  Material m[];
+};
+SvdagMaterials gMaterials;
+
+// Whether the first closest-hit query of the current camera path (its camera ray) hit a block.
+bool gCameraRayHit;
+bool gFirstQuery;
+
+// The pixel-center ray's hit (writePrimaryOutputs), reused as the first camera path's first hit:
+// the first sample of an accumulation goes through the pixel center, so a frame that restarts
+// traces its primary rays once, not twice.
+PathHit gPrimaryHit;
+bool gReusePrimary = false;
+
+// Clipping planes and crop box (Clipping.h, the code the CPU ray caster runs): every ray below
+// is clipped to the kept region before it is traced, so cut-away parts are neither seen nor cast
+// shadows, and a ray entering the region inside a solid hits the cut face.
+#define SVDAG_CLIP_PLANE(i) frame.clipPlanes[(i)]
+#include "svdag/Clipping.h"
+
+// Traces the part of [0, tmax] inside the clipping region into payload (a miss where none is).
+void traceClipped(vec3 origin, vec3 direction, float tmax, uint hitGroup)
+{
+  payload.label = 0u;
+  payload.t = SVDAG_DEPTH_MISS;
+  payload.normal = vec3(0.0);
+  payload.shading = vec4(0.0);
+  SvdagClipInterval c;
+  c.kept = true;
+  c.tmin = 0.0;
+  c.tmax = tmax;
+  c.enterPlane = -1;
+  if (frame.clipping.x != 0u)
+    c = svdagClipInterval(frame.clipping.x, origin, direction, 0.0, tmax);
+  if (!c.kept)
+    return;
+  svdagTraceInterval(origin, direction, c.tmin, c.tmax, hitGroup);
+  // Inside a solid at the clipped tmin (zero normal, Traversal.h): the cut face of the plane the
+  // ray entered the region through, with the region's outward normal, which faces the ray.
+  if (payload.label != 0u && c.enterPlane >= 0 && dot(payload.normal, payload.normal) == 0.0)
+    payload.normal = -frame.clipPlanes[c.enterPlane].xyz;
+}
+
+// The shading normal of the hit in payload (block.rchit); the face normal where it has none (a
+// ray that starts inside, whose normal the raygen may set afterwards, e.g. a clipping cut face).
+vec3 shadingNormal()
+{
+  return dot(payload.shading.xyz, payload.shading.xyz) > 0.0 ? payload.shading.xyz : payload.normal;
+}
+
+// hitGroup 0: the first hit; 1: the entry-only hit group (block.rint with SVDAG_ENTRY_ONLY), for
+// a ray continuing through a surface it has just crossed: the solid it starts in is skipped.
+PathHit traceClosest(vec3 origin, vec3 direction, float tmax, uint hitGroup)
+{
+  if (gFirstQuery && gReusePrimary)
+  {
+    gCameraRayHit = gPrimaryHit.hit;
+    gFirstQuery = false;
+    gReusePrimary = false;
+    return gPrimaryHit;
+  }
+  traceClipped(origin, direction, tmax, hitGroup);
+  PathHit h;
+  h.hit = payload.label != 0u;
+  // Traversal.h reports a ray that starts inside a solid at t = tmin with no entry face (never
+  // for entry-only rays).
+  h.inside = h.hit && dot(payload.normal, payload.normal) == 0.0;
+  h.t = payload.t;
+  h.label = h.hit ? payload.label - 1u : 0u;
+  h.normal = payload.normal;
+  h.shading = shadingNormal();
+  h.lift = payload.shading.w;
+  if (gFirstQuery)
+  {
+    gCameraRayHit = h.hit;
+    gFirstQuery = false;
+  }
+  return h;
+}
+
+// The hit group of occlusion rays: 0, or 1 (entry-only) for the shadow rays of smooth-shaded hits,
+// which start lifted above the voxel staircase and may start inside a voxel of a touching label
+// (SVDAG_TRACE_OCCLUDED_LIFTED): the solid they start in does not occlude.
+uint gOcclusionGroup = 0u;
+
+bool traceOccluded(vec3 origin, vec3 direction, float tmax)
+{
+  float tmin = 0.0;
+  if (frame.clipping.x != 0u)
+  {
+    // Only the kept part of the shadow ray can be occluded.
+    SvdagClipInterval c = svdagClipInterval(frame.clipping.x, origin, direction, 0.0, tmax);
+    if (!c.kept)
+      return false;
+    tmin = c.tmin;
+    tmax = c.tmax;
+  }
+  return svdagOccludedInterval(origin, direction, tmin, tmax, gOcclusionGroup);
+}
+
+Material labelMaterial(uint labelIndex)
+{
+  return gMaterials.m[min(labelIndex, max(frame.sampling.w, 1u) - 1u)];
+}
+
+bool traceOccludedLifted(vec3 origin, vec3 direction, float tmax)
+{
+  gOcclusionGroup = 1u;
+  bool result = traceOccluded(origin, direction, tmax);
+  gOcclusionGroup = 0u;
+  return result;
+}
+
+#define SVDAG_TRACE_CLOSEST(hit, o, d, tmax) hit = traceClosest(o, d, tmax, 0u)
+#define SVDAG_TRACE_CLOSEST_THROUGH(hit, o, d, tmax) hit = traceClosest(o, d, tmax, 1u)
+#define SVDAG_TRACE_OCCLUDED(result, o, d, tmax) result = traceOccluded(o, d, tmax)
+#define SVDAG_TRACE_OCCLUDED_LIFTED(result, o, d, tmax) result = traceOccludedLifted(o, d, tmax)
+#define SVDAG_MATERIAL(label) labelMaterial(label)
+#include "svdag_render/PathTracer.h"
+
+float srgbEncode(float linear)
+{
+  float c = clamp(linear, 0.0, 1.0);
+  return c <= 0.0031308 ? 12.92 * c : 1.055 * pow(c, 1.0 / 2.4) - 0.055;
+}
+
+uint packRGBA8(vec4 srgb)
+{
+  uvec4 b = uvec4(clamp(srgb, 0.0, 1.0) * 255.0 + 0.5);
+  return b.r | (b.g << 8u) | (b.b << 16u) | (b.a << 24u);
+}
+
+struct CameraRay
+{
+  vec3 origin;
+  vec3 direction;
+  float tmax;
+};
+
+// The camera ray through a point of the image (GpuLayout.h's ViewRays convention), ending at the
+// far plane and at the pixel's ray limit.
+CameraRay cameraRay(vec2 pixelPoint, uint index, uint width, uint height)
+{
+  float u = 2.0 * pixelPoint.x / float(width) - 1.0;
+  float v = 2.0 * pixelPoint.y / float(height) - 1.0;
+  CameraRay ray;
+  ray.origin = frame.rayOrigin.xyz + u * frame.rayOriginU.xyz + v * frame.rayOriginV.xyz;
+  vec3 span = frame.rayDirection.xyz + u * frame.rayDirectionU.xyz + v * frame.rayDirectionV.xyz;
+  float spanLength = length(span);
+  ray.direction = span / spanLength;
+  ray.tmax = frame.rayOrigin.w != 0.0 ? spanLength : RAY_TMAX;
+  if (frame.rayLimits.x != 0u || frame.rayLimits.y != 0u)
+    ray.tmax = min(ray.tmax, SvdagFloats(frame.rayLimits.xy).v[index]);
+  return ray;
+}
+
+// The pixel-center ray's label, depth and normal.
+void writePrimaryOutputs(uvec2 pixel, uint index, uint width, uint height)
+{
+  CameraRay ray = cameraRay(vec2(pixel) + 0.5, index, width, height);
+  payload.label = 0u;
+  payload.t = SVDAG_DEPTH_MISS;
+  payload.normal = vec3(0.0);
+  payload.shading = vec4(0.0);
+  if (ray.tmax > 0.0)
+    traceClipped(ray.origin, ray.direction, ray.tmax, 0u);
+  gPrimaryHit.hit = payload.label != 0u;
+  gPrimaryHit.inside = gPrimaryHit.hit && dot(payload.normal, payload.normal) == 0.0;
+  gPrimaryHit.t = payload.t;
+  gPrimaryHit.label = gPrimaryHit.hit ? payload.label - 1u : 0u;
+  gPrimaryHit.normal = payload.normal;
+  gPrimaryHit.shading = shadingNormal();
+  gPrimaryHit.lift = payload.shading.w;
+  SvdagUintOutput(frame.sceneOutputs.zw).v[index] = payload.label;
+  SvdagFloatOutput(frame.outputs.xy).v[index] = payload.label != 0u ? payload.t : SVDAG_DEPTH_MISS;
+  SvdagFloatOutput normals = SvdagFloatOutput(frame.outputs.zw);
+  // The shading normal, then (from 3 * width * height on) the entry face normal (GpuLayout.h).
+  vec3 shading = payload.label != 0u ? gPrimaryHit.shading : vec3(0.0);
+  normals.v[3u * index + 0u] = shading.x;
+  normals.v[3u * index + 1u] = shading.y;
+  normals.v[3u * index + 2u] = shading.z;
+  uint faces = 3u * width * height;
+  normals.v[faces + 3u * index + 0u] = payload.normal.x;
+  normals.v[faces + 3u * index + 1u] = payload.normal.y;
+  normals.v[faces + 3u * index + 2u] = payload.normal.z;
+}
+
+// One pixel of the frame: its primary outputs (on the first pass of an accumulation) and
+// frame.sampling.y camera paths added to its sums.
+void svdagRenderPixel(uvec2 pixel)
+{
+  uint width = frame.image.x;
+  uint height = frame.image.y;
+  if (pixel.x >= width || pixel.y >= height)
+    return;
+  uint index = pixel.x + width * pixel.y;
+  uint before = frame.sampling.x;
+  uint samples = frame.sampling.y;
+  if (before == 0u)
+    writePrimaryOutputs(pixel, index, width, height);
+
+  gEnvMarginal = SvdagFloats(frame.environmentMap.xy);
+  gEnvConditional = SvdagFloats(frame.environmentMap.zw);
+  gEnvTexels = SvdagVec4s(frame.environmentMap2.xy);
+  gMaterials = SvdagMaterials(frame.materials.xy);
+  PathTracerParams params =
+    PathTracerParams(frame.sunDirection, frame.sunRadiance, frame.environment, frame.lighting);
+
+  vec4 sum = vec4(0.0);
+  float squares = 0.0;
+  const vec3 luminance = vec3(0.2126, 0.7152, 0.0722);
+  for (uint s = 0u; s < samples; ++s)
+  {
+    // One independent stream per (pixel, global sample index, seed).
+    uint rng = pcgHash(index ^ pcgHash((before + s) ^ pcgHash(frame.sampling.z)));
+    vec2 jitter = vec2(random01(rng), random01(rng));
+    if (before == 0u && s == 0u)
+    {
+      jitter = vec2(0.5);
+      gReusePrimary = true;
+    }
+    CameraRay ray = cameraRay(vec2(pixel) + jitter, index, width, height);
+    gFirstQuery = true;
+    gCameraRayHit = false;
+    // Bounded so that sums of absurd emissions stay finite (tracePath never returns NaN/Inf).
+    vec3 radiance = ray.tmax > 0.0
+      ? min(tracePath(params, ray.origin, ray.direction, ray.tmax, rng), vec3(1.0e30))
+      : vec3(0.0);
+    gReusePrimary = false;
+    vec4 value = gCameraRayHit ? vec4(radiance, 1.0) : frame.background;
+    sum += value;
+    float y = min(dot(value.rgb, luminance), 1.0e15);
+    squares += y * y;
+  }
+
+  SvdagVec4Accumulation accumulation = SvdagVec4Accumulation(frame.materials.zw);
+  vec4 total = before == 0u ? sum : accumulation.v[index] + sum;
+  accumulation.v[index] = total;
+  SvdagFloatAccumulation squareSums = SvdagFloatAccumulation(frame.statistics.xy);
+  float totalSquares = before == 0u ? squares : squareSums.v[index] + squares;
+  squareSums.v[index] = totalSquares;
+  uint n = before + samples;
+  float meanLuminance = dot(total.rgb, luminance) / float(max(n, 1u));
+  SvdagFloatOutput(frame.statistics.zw).v[index] = n < 2u ? 0.0
+    : max(totalSquares / float(n) - meanLuminance * meanLuminance, 0.0) / float(n - 1u);
+  vec4 hdr = total / float(max(n, 1u));
+  SvdagVec4Output(frame.outputs2.xy).v[index] = hdr;
+  vec3 display = svdagToneMap(hdr.rgb, frame.display.x);
+  SvdagUintOutput(frame.outputs2.zw).v[index] =
+    packRGBA8(vec4(srgbEncode(display.r), srgbEncode(display.g), srgbEncode(display.b), hdr.a));
+}
+
+#endif

@@ -1,0 +1,95 @@
+#version 460
+// The camera of the compute backend: PathTrace.glsl's camera and path tracer, its rays walked
+// through the volume's grid of 16^3 cells by GridTraversal.h (the code the CPU ray caster runs),
+// each cell's blocks intersected by Traversal.h. No acceleration structure: the cell grid is a
+// table of each cell's first block (blocks are sorted by cell), and hidden labels are bits.
+#extension GL_GOOGLE_include_directive : require
+#include "Common.glsl"
+
+layout(local_size_x = SVDAG_COMPUTE_GROUP_SIZE, local_size_y = SVDAG_COMPUTE_GROUP_SIZE) in;
+
+SvdagPayload payload;
+
+#include "Streams.glsl"
+#include "HitPayload.glsl"
+
+// Cell c's blocks are [starts[c], starts[c + 1]) (Scene.h); bit l of the hidden bits: label
+// index l is not drawn (visibility 0 or setHiddenLabels), when any is hidden.
+SvdagWords gCellStarts;
+SvdagWords gHidden;
+bool gAnyHidden;
+#define SVDAG_GRID_CELL_BLOCKS(cell, first, end)                                                   \
+  {                                                                                                \
+    first = gCellStarts.w[(cell)];                                                                 \
+    end = gCellStarts.w[(cell) + 1u];                                                              \
+  }
+#define SVDAG_GRID_BLOCK(b, lo, hi, rootRef, label)                                                \
+  {                                                                                                \
+    SvdagBlockRecord record_ = svdagReadBlock(b);                                                  \
+    lo = record_.lo;                                                                               \
+    hi = record_.hi;                                                                               \
+    rootRef = record_.rootRef;                                                                     \
+    label = record_.label;                                                                         \
+  }
+#define SVDAG_GRID_SKIP(label) (gAnyHidden && ((gHidden.w[(label) >> 5u] >> ((label) & 31u)) & 1u) != 0u)
+#define SVDAG_GRID_LOD(lod, lo, hi, rootRef, origin, dir, tmin, tmax, s)                           \
+  svdagChooseLod(lo, hi, rootRef, origin, dir, tmin, tmax, s)
+#include "svdag/GridTraversal.h"
+
+// World (relative to the scene's reference point) -> volume index space (GpuLayout.h).
+vec3 indexPoint(vec3 p)
+{
+  return vec3(dot(frame.worldToIndexX.xyz, p) + frame.worldToIndexX.w,
+    dot(frame.worldToIndexY.xyz, p) + frame.worldToIndexY.w,
+    dot(frame.worldToIndexZ.xyz, p) + frame.worldToIndexZ.w);
+}
+
+vec3 indexVector(vec3 d)
+{
+  return vec3(dot(frame.worldToIndexX.xyz, d), dot(frame.worldToIndexY.xyz, d),
+    dot(frame.worldToIndexZ.xyz, d));
+}
+
+SvdagGridHit castGrid(vec3 origin, vec3 direction, float tmin, float tmax, bool entryOnly,
+  bool anyHit)
+{
+  return svdagCastGrid(indexPoint(origin), indexVector(direction), tmin, tmax,
+    ivec3(frame.volumeDims.xyz), ivec3(frame.grid.xy, frame.volumeDims.w), frame.widths.w,
+    frame.widths2.x, frame.image.z, entryOnly, anyHit);
+}
+
+// The world direction has unit length and the index-space one is not renormalised, so the walk
+// parameter is the world distance, as in the ray tracing backend.
+void svdagTraceInterval(vec3 origin, vec3 direction, float tmin, float tmax, uint hitGroup)
+{
+  SvdagGridHit h = castGrid(origin, direction, tmin, tmax, hitGroup == 1u, false);
+  if (!h.hit)
+  {
+    payload = svdagMissPayload();
+    return;
+  }
+  vec3 o = indexPoint(origin);
+  vec3 d = indexVector(direction);
+  // Relative to the hit cell's corner before the parameter is added, as the walk anchors it.
+  vec3 local = (o - vec3(h.cell * ivec3(CELL_SIZE))) + h.s * d;
+  mat3 worldToIndex = transpose(
+    mat3(frame.worldToIndexX.xyz, frame.worldToIndexY.xyz, frame.worldToIndexZ.xyz));
+  payload = svdagHitPayload(h.label, h.s, vec3(h.normal),
+    h.lod == SVDAG_LOD_VOXEL ? h.block : SVDAG_NO_BLOCK, local, d, worldToIndex);
+}
+
+bool svdagOccludedInterval(vec3 origin, vec3 direction, float tmin, float tmax, uint hitGroup)
+{
+  return castGrid(origin, direction, tmin, tmax, hitGroup == 1u, true).hit;
+}
+
+#include "PathTrace.glsl"
+
+void main()
+{
+  svdagBindStreams();
+  gCellStarts = SvdagWords(frame.cellGrid.xy);
+  gAnyHidden = frame.cellGrid.z != 0u || frame.cellGrid.w != 0u;
+  gHidden = SvdagWords(frame.cellGrid.zw);
+  svdagRenderPixel(gl_GlobalInvocationID.xy);
+}

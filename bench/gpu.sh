@@ -1,0 +1,108 @@
+#!/usr/bin/env bash
+# The prepared GPU benchmark: both backends at 1920x1080, 1 spp, voxel and block LOD, 1 and 4
+# bounces, on every .svdag file given (or in the folder given), through the C++ tool
+# vtksvdag-render (no VTK needed, Rendering/README.md "On a GPU machine"). Prints one table:
+# per file, LOD and bounces, the median milliseconds of an accumulating and of a restarting frame
+# for each backend, and the device bytes (encoding + what the backend finds blocks with).
+#
+# Here (to prepare the files from the shared volumes):
+#   for f in ../shared/data/*.nrrd; do .venv/bin/vtksvdag compress "$f" -o "DIR/$(basename "$f" .nrrd).svdag"; done
+# On the GPU machine (folder BIN holds vtksvdag-render and the libraries it links):
+#   bash bench/gpu.sh --bin BIN [--frames 20] [--width 1920 --height 1080] SVDAG_DIR_OR_FILES...
+#
+# Environment passed to the tool: SVDAG_VK_DEVICE (a device name substring) and the Vulkan
+# loader's VK_DRIVER_FILES. Exits non-zero if any run fails (its message is printed).
+set -uo pipefail
+
+bin=""
+frames=20
+width=1920
+height=1080
+inputs=()
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --bin) bin="$2"; shift 2 ;;
+    --frames) frames="$2"; shift 2 ;;
+    --width) width="$2"; shift 2 ;;
+    --height) height="$2"; shift 2 ;;
+    -h|--help) sed -n '2,16p' "$0"; exit 0 ;;
+    *) inputs+=("$1"); shift ;;
+  esac
+done
+if [ ${#inputs[@]} -eq 0 ]; then
+  echo "usage: bash bench/gpu.sh [--bin DIR] [--frames N] [--width W --height H] SVDAG_DIR_OR_FILES..." >&2
+  exit 1
+fi
+tool="vtksvdag-render"
+if [ -n "$bin" ]; then
+  tool="$bin/vtksvdag-render"
+  export LD_LIBRARY_PATH="$bin${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
+fi
+files=()
+for input in "${inputs[@]}"; do
+  if [ -d "$input" ]; then
+    for f in "$input"/*.svdag; do [ -e "$f" ] && files+=("$f"); done
+  else
+    files+=("$input")
+  fi
+done
+if [ ${#files[@]} -eq 0 ]; then
+  echo "bench/gpu.sh: no .svdag files in ${inputs[*]}" >&2
+  exit 1
+fi
+
+out="$(mktemp -d)"
+trap 'rm -rf "$out"' EXIT
+status=0
+# One JSON line per run (the tool's own output), tagged with the file.
+results="$out/results.jsonl"
+for f in "${files[@]}"; do
+  for lod in voxel block; do
+    for bounces in 1 4; do
+      for backend in rt compute; do
+        for restart in "" "--restart"; do
+          line=$("$tool" "$f" "$out/frame.png" --width "$width" --height "$height" --spp 1 \
+            --frames "$frames" --lod "$lod" --bounces "$bounces" --backend "$backend" $restart \
+            2>"$out/err")
+          if [ $? -ne 0 ]; then
+            echo "FAILED: $(basename "$f") $lod $bounces $backend $restart: $(cat "$out/err")" >&2
+            status=1
+            continue
+          fi
+          echo "{\"file\": \"$(basename "$f" .svdag)\", \"run\": $line}" >>"$results"
+        done
+      done
+    done
+  done
+done
+
+python3 - "$results" "$width" "$height" "$frames" <<'EOF'
+import json, sys
+path, width, height, frames = sys.argv[1:]
+rows = {}
+device = ""
+try:
+    lines = open(path).read().splitlines()
+except FileNotFoundError:
+    lines = []
+for line in lines:
+    r = json.loads(line)
+    run = r["run"]
+    device = run["device"]
+    key = (r["file"], run["lod"], run["bounces"])
+    kind = "restart" if run["restart"] else "accumulate"
+    rows.setdefault(key, {})[(run["backend"], kind)] = run
+print(f"{device}, {width}x{height}, 1 spp, median of {int(frames) - 1} frames after a warm-up (ms)")
+print(f"{'volume':<26} {'LOD':>6} {'b':>2} | {'rt acc':>8} {'rt rst':>8} | {'cmp acc':>8} {'cmp rst':>8}"
+      f" | {'rt/cmp':>6} | {'rt MB':>6} {'cmp MB':>6}")
+for (name, lod, bounces), runs in sorted(rows.items()):
+    ms = lambda b, k: runs[(b, k)]["ms_median"] if (b, k) in runs else float("nan")
+    mb = lambda b: ((runs[(b, "accumulate")]["bytes_device"]["encoding"] +
+                     runs[(b, "accumulate")]["bytes_device"]["acceleration"]) / 1e6
+                    if (b, "accumulate") in runs else float("nan"))
+    ratio = ms("rt", "accumulate") / ms("compute", "accumulate")
+    print(f"{name:<26} {lod:>6} {bounces:>2} | {ms('rt', 'accumulate'):8.2f} {ms('rt', 'restart'):8.2f} | "
+          f"{ms('compute', 'accumulate'):8.2f} {ms('compute', 'restart'):8.2f} | {ratio:6.2f} | "
+          f"{mb('rt'):6.2f} {mb('compute'):6.2f}")
+EOF
+exit $status
