@@ -42,12 +42,19 @@ files=()
 for input in "${inputs[@]}"; do
   if [ -d "$input" ]; then
     for f in "$input"/*.svdag; do [ -e "$f" ] && files+=("$f"); done
-  else
+  elif [ -f "$input" ]; then
     files+=("$input")
+  else
+    echo "bench/gpu.sh: $input is neither a .svdag file nor a folder" >&2
+    exit 1
   fi
 done
 if [ ${#files[@]} -eq 0 ]; then
   echo "bench/gpu.sh: no .svdag files in ${inputs[*]}" >&2
+  exit 1
+fi
+if ! command -v "$tool" >/dev/null; then
+  echo "bench/gpu.sh: $tool not found (build it, or pass --bin DIR)" >&2
   exit 1
 fi
 

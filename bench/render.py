@@ -1,31 +1,38 @@
 #!/usr/bin/env python3
-"""Rendering benchmark: frame times of the path tracer and its error against run time.
+"""Rendering benchmark: frame times of both backends, device bytes, and the path tracer's error
+against run time.
 
 Run from the repository root:
 
-    .venv/bin/python bench/render.py [--quick] [--out bench/out]
+    .venv/bin/python bench/render.py [--quick] [--out bench/out] [--volcanite PATH]
 
-1. Frame time: on ../shared/data/voronoi256.nrrd (and, at 256x256, on every other volume there;
-   camera framing the volume, azimuth 30,
-   elevation 20), milliseconds per 1-sample-per-pixel frame at 256x256, 512x512 and 1024x1024
-   for LOD voxel with 1 and 4 bounces and LOD block with 1 bounce, NEE off (the paper's
-   estimator, so the work per frame matches the paper code's) and on: the median of --frames
-   frames after one warm-up frame (the first frame compiles the shaders). `ms_median` is a frame
-   that adds to an accumulation (one camera path per pixel, what the paper code's frames do);
-   `ms_restart_median` a frame that starts one (after any change), which also traces the
-   pixel-center ray for label, depth and normal.
-2. Error against run time: on the same volume and view at --error-size pixels, lit by a disk sun
-   (8 degrees radius) plus a constant sky, a reference image per LOD from the same renderer with
-   NEE and --reference-spp samples per pixel (seed 1); then, per LOD, with NEE and without, one
-   sample per pixel per pass (seed 2) and, after 1, 2, 4, ... samples, the accumulated image's
-   RMSE (over all pixels and RGB channels) and mean relative error (mean over pixels whose
-   reference luminance is > 0.01 of |L - L_ref| / L_ref, L = luminance) against the tracing time
-   spent so far (the renderer's GetRenderSeconds: GPU passes, no readback).
+1. Frame time, both backends side by side (`rt`: the ray tracing pipeline over a BVH of block
+   boxes; `compute`: the compute shader walking the cell grid), on every volume in ../shared/data
+   (dense and sparse), camera framing the volume (azimuth 30, elevation 20), 1 sample per pixel,
+   NEE on, 1 bounce (primary ray + one occlusion ray: the work of Volcanite's default frame), at
+   256x256 and 512x512, LOD voxel, leaf and block; on voronoi256 also 4 bounces and the paper's
+   estimator (NEE off), beside the paper code's reported lavapipe frame times. Per configuration,
+   --frames rounds after a warm-up frame (shader compilation), each an accumulating frame (adds
+   one sample) and a restarting one (after ResetAccumulation: what every frame costs while the
+   camera moves), interleaved so that drifts of the shared machine hit both alike; medians.
+   Device bytes per part: encoding (block and DAG streams), acceleration (BLAS + TLAS + instances
+   + primitive map, or the cell grid + hidden-label bits), and the renderer's total.
+2. Volcanite (when a binary is given by --volcanite, the VOLCANITE environment variable or found
+   on PATH; it is not a dependency): its frame time on each volume through --volcanite-command
+   (a template; the last "<number> ms" it prints is taken), beside ours; without a binary, the
+   same-run figures anchors.md reports (marked as reported, not measured here).
+3. Error against run time: on voronoi256 at --error-size pixels, lit by a disk sun (8 degrees
+   radius) plus a constant sky, a reference image per LOD from the same renderer with NEE and
+   --reference-spp samples per pixel (seed 1); then, per LOD, with NEE and without, one sample
+   per pixel per pass (seed 2) and, after 1, 2, 4, ... samples, the accumulated image's RMSE
+   (over all pixels and RGB channels) and mean relative error (mean over pixels whose reference
+   luminance is > 0.01 of |L - L_ref| / L_ref, L = luminance) against the tracing time spent so
+   far (the renderer's GetRenderSeconds: GPU passes, no readback). Default backend (auto).
 
-Prints plain-text tables and writes render.csv (one row per measurement; `kind` is `frame` or
-`error`) and render_error.png (RMSE against seconds, log-log) to the output folder. The paper
-code's lavapipe frame times (../shared/notes/anchors.md) are printed beside ours, marked as
-reported, not measured here. --quick renders a small volume at tiny sizes (a smoke test).
+Prints plain-text tables and writes render.csv (one row per measurement; `kind` is `frame`,
+`volcanite` or `error`), render_backends.png (ms per frame of both backends at 256x256 (the
+smallest size measured), voxel LOD) and render_error.png (RMSE against seconds, log-log) to the output folder. --quick renders
+a small volume at a tiny size (a smoke test).
 """
 from __future__ import annotations
 
@@ -33,7 +40,11 @@ import argparse
 import csv
 import os
 import pathlib
+import re
+import shlex
+import shutil
 import statistics
+import subprocess
 import sys
 import time
 
@@ -44,13 +55,19 @@ REPO = pathlib.Path(__file__).resolve().parents[1]
 SHARED_DATA = pathlib.Path(os.environ.get("VTKSVDAG_SHARED_DATA") or REPO.parent / "shared" / "data")
 
 COLUMNS = [
-    "kind", "volume", "device", "width", "height", "lod", "bounces", "nee", "spp", "frames",
-    "ms_median", "ms_min", "ms_restart_median", "seconds", "rmse", "mean_rel_error",
-    "setup_seconds", "bytes_blas", "bytes_tlas",
+    "kind", "volume", "device", "backend", "width", "height", "lod", "bounces", "nee", "spp",
+    "frames", "ms_median", "ms_min", "ms_restart_median", "restart_ratio", "seconds", "rmse",
+    "mean_rel_error", "setup_seconds", "bytes_blas", "bytes_tlas", "bytes_encoding",
+    "bytes_acceleration", "bytes_device",
 ]
 LODS = {"block": 0, "leaf": 1, "voxel": 2}
+BACKENDS = ("rt", "compute")
 # The paper code on lavapipe, 256x256, 1 spp, voronoi256 (ranges over days; anchors.md).
 ANCHORS_MS = {("voxel", 1): "140-220", ("voxel", 4): "155-220", ("block", 1): "79-128"}
+# Volcanite 0.6 on lavapipe, 256x256, default frame (primary + shadow rays), same-run comparison
+# of 2026-12-01 (anchors.md): ms per frame and GPU bytes in use (encoding + brick cache).
+VOLCANITE_REPORTED = {"voronoi256": ("9.3 (8.7)", 6.3e6), "fib_ts2_groundtruth250": ("9.3 (8.6)", 6.2e6)}
+DEFAULT_VOLCANITE_COMMAND = "{binary} --headless --resolution {width}x{height} --frames {frames} {volume}"
 
 
 def load_volume(quick):
@@ -60,7 +77,7 @@ def load_volume(quick):
     return name, read(str(SHARED_DATA / f"{name}.nrrd"))
 
 
-def make_renderer(volume, size, lod, bounces, nee):
+def make_renderer(volume, size, lod, bounces, nee, backend="auto"):
     from vtksvdag.vtkSVDAGRendering import vtkSegmentationSVDAGRenderer
 
     r = vtkSegmentationSVDAGRenderer()
@@ -68,6 +85,7 @@ def make_renderer(volume, size, lod, bounces, nee):
     r.SetWidth(size)
     r.SetHeight(size)
     s = r.GetSettings()
+    s.SetBackend(backend)
     s.SetLOD(LODS[lod])
     s.SetMaximumBounces(bounces)
     s.SetNextEventEstimation(nee)
@@ -88,32 +106,152 @@ def hdr(r):
     return vtk_to_numpy(r.GetOutput().GetPointData().GetArray("HDR"))[:, :3].astype(np.float64)
 
 
-def frame_times(volume, name, sizes, frames):
+def configurations(name, quick):
+    """(lod, bounces, nee) per volume: Volcanite's work at every LOD; on the anchored volume also
+    4 bounces and the paper's estimator."""
+    if quick:
+        return [("voxel", 1, True), ("block", 1, True), ("voxel", 1, False)]
+    configs = [(lod, 1, True) for lod in ("voxel", "leaf", "block")]
+    if name == "voronoi256":
+        configs += [("voxel", 4, True), ("voxel", 1, False), ("voxel", 4, False), ("block", 1, False)]
+    return configs
+
+
+def frame_times(volume, name, sizes, frames, configs):
     rows = []
     for size in sizes:
-        for lod, bounces in (("voxel", 1), ("voxel", 4), ("block", 1)):
-            for nee in (False, True):
-                r = make_renderer(volume, size, lod, bounces, nee)
+        for lod, bounces, nee in configs:
+            for backend in BACKENDS:
+                r = make_renderer(volume, size, lod, bounces, nee, backend)
                 render(r)  # warm-up: shader compilation
+                if r.GetBackendInUse() != backend:
+                    raise RuntimeError(f"asked for the {backend} backend, got {r.GetBackendInUse()!r}")
                 times, restart = [], []
                 for _ in range(frames):
                     render(r)
                     times.append(r.GetLastFrameMilliseconds())
-                for _ in range(frames):
                     r.ResetAccumulation()
                     render(r)
                     restart.append(r.GetLastFrameMilliseconds())
+                median, restart_median = statistics.median(times), statistics.median(restart)
                 rows.append(dict(
-                    kind="frame", volume=name, device=r.GetDeviceName(), width=size, height=size,
-                    lod=lod, bounces=bounces, nee=int(nee), spp=1, frames=frames,
-                    ms_median=round(statistics.median(times), 3), ms_min=round(min(times), 3),
-                    ms_restart_median=round(statistics.median(restart), 3),
+                    kind="frame", volume=name, device=r.GetDeviceName(), backend=backend,
+                    width=size, height=size, lod=lod, bounces=bounces, nee=int(nee), spp=1,
+                    frames=frames, ms_median=round(median, 3), ms_min=round(min(times), 3),
+                    ms_restart_median=round(restart_median, 3),
+                    restart_ratio=round(restart_median / median, 3),
                     setup_seconds=round(r.GetSetupSeconds(), 6), bytes_blas=r.GetBLASBytes(),
-                    bytes_tlas=r.GetTLASBytes()))
-                print(f"  {size:>5} {lod:>6} {bounces:>2} bounces NEE {'on ' if nee else 'off'}: "
-                      f"{rows[-1]['ms_median']:9.1f} ms (min {rows[-1]['ms_min']:.1f}, restarting "
-                      f"{rows[-1]['ms_restart_median']:.1f})", flush=True)
+                    bytes_tlas=r.GetTLASBytes(), bytes_encoding=r.GetEncodingBytes(),
+                    bytes_acceleration=r.GetAccelerationBytes(), bytes_device=r.GetDeviceBytes()))
+                print(f"  {name:<24} {size:>4} {lod:>6} {bounces} bounce{'s' if bounces > 1 else ' '} "
+                      f"NEE {'on ' if nee else 'off'} {backend:>7}: {median:8.2f} ms "
+                      f"(restarting {restart_median:.2f}, x{restart_median / median:.2f}), "
+                      f"{(r.GetEncodingBytes() + r.GetAccelerationBytes()) / 1e6:.2f} MB", flush=True)
     return rows
+
+
+def print_frame_table(rows, name):
+    rows = [r for r in rows if r["kind"] == "frame" and r["volume"] == name]
+    anchored = name == "voronoi256"
+    print(f"\n{name}: ms per frame, 1 spp (accumulating / restarting), and device bytes of encoding + "
+          "acceleration   [paper code on lavapipe, voronoi256, NEE off: reported, not measured here]")
+    print(f"{'size':>9} {'LOD':>6} {'b':>2} {'NEE':>4} | {'rt':>15} | {'compute':>15} | {'rt/compute':>10} | "
+          f"{'rt MB':>6} {'cmp MB':>6}   paper")
+    keys = []
+    for r in rows:
+        key = (r["width"], r["lod"], r["bounces"], r["nee"])
+        if key not in keys:
+            keys.append(key)
+    for size, lod, bounces, nee in keys:
+        by = {r["backend"]: r for r in rows if (r["width"], r["lod"], r["bounces"], r["nee"]) ==
+              (size, lod, bounces, nee)}
+        if set(by) != set(BACKENDS):
+            continue
+        mb = lambda b: (by[b]["bytes_encoding"] + by[b]["bytes_acceleration"]) / 1e6
+        anchor = ANCHORS_MS.get((lod, bounces), "") if size == 256 and anchored and not nee else ""
+        print(f"{size:>4}x{size:<4} {lod:>6} {bounces:>2} {'on' if nee else 'off':>4} | "
+              f"{by['rt']['ms_median']:6.1f} / {by['rt']['ms_restart_median']:6.1f} | "
+              f"{by['compute']['ms_median']:6.1f} / {by['compute']['ms_restart_median']:6.1f} | "
+              f"{by['rt']['ms_median'] / by['compute']['ms_median']:10.2f} | "
+              f"{mb('rt'):6.2f} {mb('compute'):6.2f}   {anchor}")
+
+
+def find_volcanite(path):
+    for candidate in (path, os.environ.get("VOLCANITE"), shutil.which("volcanite")):
+        if candidate and pathlib.Path(candidate).is_file():
+            return str(candidate)
+    return None
+
+
+def volcanite_times(binary, template, volumes, size, frames):
+    """Volcanite's frame time per volume: the last '<number> ms' its output holds."""
+    rows = []
+    for name, path in volumes:
+        command = template.format(binary=shlex.quote(binary), volume=shlex.quote(str(path)),
+                                  width=size, height=size, frames=frames)
+        run = subprocess.run(command, shell=True, capture_output=True, text=True, timeout=600)
+        found = re.findall(r"([0-9]+(?:\.[0-9]+)?)\s*ms", run.stdout + run.stderr)
+        if run.returncode != 0 or not found:
+            print(f"  Volcanite on {name}: no frame time (exit {run.returncode}; command: {command})")
+            continue
+        rows.append(dict(kind="volcanite", volume=name, width=size, height=size, frames=frames,
+                         ms_median=float(found[-1])))
+        print(f"  Volcanite on {name}: {float(found[-1]):.2f} ms", flush=True)
+    return rows
+
+
+def print_volcanite_table(rows, measured):
+    print("\nAgainst Volcanite, 256x256, voxel LOD, primary + one shadow/occlusion ray per pixel"
+          + ("" if measured else "   [Volcanite: anchors.md's same-run figures, reported, not measured here]"))
+    print(f"{'volume':<24} {'compute ms':>10} {'rt ms':>8} {'Volcanite ms':>14} {'compute MB':>10} "
+          f"{'Volcanite MB':>12} {'bytes ratio':>11}")
+    volcanite = {r["volume"]: r["ms_median"] for r in rows if r["kind"] == "volcanite"}
+    for name in sorted({r["volume"] for r in rows if r["kind"] == "frame"}):
+        pick = {r["backend"]: r for r in rows if r["kind"] == "frame" and r["volume"] == name
+                and r["width"] == 256 and r["lod"] == "voxel" and r["bounces"] == 1 and r["nee"] == 1}
+        if set(pick) != set(BACKENDS):
+            continue
+        ours_mb = (pick["compute"]["bytes_encoding"] + pick["compute"]["bytes_acceleration"]) / 1e6
+        if measured:
+            theirs, theirs_mb = (f"{volcanite[name]:.2f}" if name in volcanite else ""), None
+        elif name in VOLCANITE_REPORTED:
+            theirs, theirs_mb = VOLCANITE_REPORTED[name][0], VOLCANITE_REPORTED[name][1] / 1e6
+        else:
+            continue
+        print(f"{name:<24} {pick['compute']['ms_median']:10.2f} {pick['rt']['ms_median']:8.2f} "
+              f"{theirs:>14} {ours_mb:10.2f} {theirs_mb if theirs_mb else float('nan'):12.2f} "
+              f"{ours_mb / theirs_mb if theirs_mb else float('nan'):11.2f}")
+
+
+def plot_backends(rows, path):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    frames = [r for r in rows if r["kind"] == "frame"]
+    if not frames:
+        return
+    size = 256 if any(r["width"] == 256 for r in frames) else min(r["width"] for r in frames)
+    picked = [r for r in frames if r["width"] == size and r["lod"] == "voxel" and r["bounces"] == 1
+              and r["nee"] == 1]
+    names = sorted({r["volume"] for r in picked})
+    if not names:
+        return
+    fig, ax = plt.subplots(figsize=(8, 4))
+    x = np.arange(len(names))
+    for offset, backend, color in ((-0.2, "rt", "tab:orange"), (0.2, "compute", "tab:blue")):
+        ms = [next((r["ms_median"] for r in picked if r["volume"] == n and r["backend"] == backend),
+                   np.nan) for n in names]
+        ax.bar(x + offset, ms, width=0.4, color=color, label=backend)
+    ax.set_xticks(x)
+    ax.set_xticklabels(names, rotation=30, ha="right", fontsize=8)
+    ax.set_ylabel(f"ms per frame ({size}x{size}, voxel LOD, 1 spp)")
+    ax.set_title("Both backends, primary + occlusion ray")
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
 
 
 def light(r):
@@ -215,13 +353,18 @@ def print_frame_table(rows, name):
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--quick", action="store_true", help="a small volume at tiny sizes (seconds)")
-    parser.add_argument("--out", default=str(REPO / "bench" / "out"), help="folder for the CSV and plot")
-    parser.add_argument("--frames", type=int, default=5, help="timed frames per configuration (median)")
-    parser.add_argument("--sizes", type=int, nargs="+", help="image sizes (default 256 512 1024)")
+    parser.add_argument("--quick", action="store_true", help="a small volume at a tiny size (seconds)")
+    parser.add_argument("--out", default=str(REPO / "bench" / "out"), help="folder for the CSV and plots")
+    parser.add_argument("--frames", type=int, default=5, help="timed rounds per configuration (median)")
+    parser.add_argument("--sizes", type=int, nargs="+", help="image sizes (default 256 512)")
+    parser.add_argument("--volumes", nargs="+", help="shared volumes to time (default: all)")
     parser.add_argument("--error-size", type=int, default=128, help="image size of the error study")
     parser.add_argument("--reference-spp", type=int, default=2048, help="samples of the reference")
     parser.add_argument("--max-spp", type=int, default=256, help="last checkpoint of the error curves")
+    parser.add_argument("--volcanite", help="path of a Volcanite binary (else $VOLCANITE or PATH)")
+    parser.add_argument("--volcanite-command", default=DEFAULT_VOLCANITE_COMMAND,
+                        help="how Volcanite renders one volume (placeholders {binary} {volume} "
+                             "{width} {height} {frames}); the last '<n> ms' printed is its frame time")
     args = parser.parse_args(argv)
     if args.quick:
         sizes = args.sizes or [32]
@@ -231,7 +374,7 @@ def main(argv=None) -> int:
         args.max_spp = min(args.max_spp, 8)
         lods = ["voxel", "block"]
     else:
-        sizes = args.sizes or [256, 512, 1024]
+        sizes = args.sizes or [256, 512]
         lods = ["voxel", "leaf", "block"]
     out = pathlib.Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -241,19 +384,27 @@ def main(argv=None) -> int:
     print(f"volume {name}: {' x '.join(str(d) for d in volume.dims)} voxels, "
           f"{len(volume.labels)} labels (loaded in {time.perf_counter() - start:.1f} s)")
     print("Frame times:")
-    rows = frame_times(volume, name, sizes, args.frames)
+    rows = frame_times(volume, name, sizes, args.frames, configurations(name, args.quick))
     print_frame_table(rows, name)
+    volumes = [(name, SHARED_DATA / f"{name}.nrrd")]
     if not args.quick:
-        # The real volumes too, at the anchors' size.
+        from vtksvdag import read
+
         for path in sorted(SHARED_DATA.glob("*.nrrd")):
             other = path.name[: -len(".nrrd")]
-            if other == name:
+            if other == name or (args.volumes and other not in args.volumes):
                 continue
-            from vtksvdag import read
-
+            volumes.append((other, path))
             print(f"Frame times, {other}:")
-            rows += frame_times(read(str(path)), other, [256], args.frames)
+            rows += frame_times(read(str(path)), other, sizes, args.frames, configurations(other, False))
             print_frame_table(rows, other)
+
+    binary = find_volcanite(args.volcanite)
+    if binary:
+        print(f"\nVolcanite: {binary}")
+        rows += volcanite_times(binary, args.volcanite_command, volumes, 256, max(args.frames, 5))
+    print_volcanite_table(rows, measured=binary is not None)
+
     print(f"\nError against run time ({args.error_size}x{args.error_size}, 4 bounces):")
     rows += error_curves(volume, name, args.error_size, lods, args.reference_spp, args.max_spp)
 
@@ -263,13 +414,15 @@ def main(argv=None) -> int:
             print(f"{r['lod']:>6} {'on' if r['nee'] else 'off':>4} {r['spp']:>5} "
                   f"{r['seconds']:9.3f} {float(r['rmse']):10.5f} {float(r['mean_rel_error']):9.4f}")
 
-    csv_path, png_path = out / "render.csv", out / "render_error.png"
+    csv_path = out / "render.csv"
     with open(csv_path, "w", newline="") as f:
         writer = csv.DictWriter(f, fieldnames=COLUMNS, restval="")
         writer.writeheader()
         writer.writerows(rows)
-    plot(rows, png_path)
-    print(f"\nwrote {csv_path} and {png_path} ({time.perf_counter() - start:.0f} s)")
+    plot(rows, out / "render_error.png")
+    plot_backends(rows, out / "render_backends.png")
+    print(f"\nwrote {csv_path}, render_error.png and render_backends.png "
+          f"({time.perf_counter() - start:.0f} s)")
     return 0
 
 

@@ -11,9 +11,10 @@ import pytest
 REPO = pathlib.Path(__file__).resolve().parents[2]
 SCRIPT = REPO / "bench" / "render.py"
 COLUMNS = [
-    "kind", "volume", "device", "width", "height", "lod", "bounces", "nee", "spp", "frames",
-    "ms_median", "ms_min", "ms_restart_median", "seconds", "rmse", "mean_rel_error",
-    "setup_seconds", "bytes_blas", "bytes_tlas",
+    "kind", "volume", "device", "backend", "width", "height", "lod", "bounces", "nee", "spp",
+    "frames", "ms_median", "ms_min", "ms_restart_median", "restart_ratio", "seconds", "rmse",
+    "mean_rel_error", "setup_seconds", "bytes_blas", "bytes_tlas", "bytes_encoding",
+    "bytes_acceleration", "bytes_device",
 ]
 
 
@@ -36,13 +37,22 @@ def test_csv_columns_and_rows(quick_run):
     frames = [r for r in rows if r["kind"] == "frame"]
     errors = [r for r in rows if r["kind"] == "error"]
     assert len(frames) + len(errors) == len(rows)
-    # 3 configurations (voxel 1 and 4 bounces, block 1 bounce) x NEE off/on at one size.
-    assert {(r["lod"], r["bounces"], r["nee"]) for r in frames} == {
-        (lod, b, n) for lod, b in (("voxel", "1"), ("voxel", "4"), ("block", "1")) for n in "01"}
+    # 3 configurations (voxel and block with NEE, voxel without) x both backends at one size.
+    assert sorted((r["lod"], r["nee"], r["backend"]) for r in frames) == sorted(
+        (lod, nee, backend) for lod, nee in (("voxel", "1"), ("block", "1"), ("voxel", "0"))
+        for backend in ("rt", "compute"))
     for r in frames:
         assert float(r["ms_median"]) > 0 and float(r["ms_min"]) <= float(r["ms_median"])
         assert float(r["ms_restart_median"]) > 0
-        assert int(r["bytes_blas"]) > 0 and r["device"]
+        assert abs(float(r["restart_ratio"]) - float(r["ms_restart_median"]) / float(r["ms_median"])) < 0.01
+        assert r["device"] and int(r["bytes_encoding"]) > 0 and int(r["bytes_acceleration"]) > 0
+        assert int(r["bytes_device"]) > int(r["bytes_encoding"]) + int(r["bytes_acceleration"])
+        # The compute backend holds no BVH; the rt one does, and more acceleration bytes.
+        assert (int(r["bytes_blas"]) > 0) == (r["backend"] == "rt")
+    for lod, nee in (("voxel", "1"), ("block", "1")):
+        pair = {r["backend"]: r for r in frames if (r["lod"], r["nee"]) == (lod, nee)}
+        assert int(pair["rt"]["bytes_acceleration"]) > int(pair["compute"]["bytes_acceleration"])
+        assert pair["rt"]["bytes_encoding"] == pair["compute"]["bytes_encoding"]
     # Error curves per LOD and estimator at 1, 2, 4, 8 spp, time growing with the samples.
     for lod in ("voxel", "block"):
         for nee in "01":
@@ -55,4 +65,6 @@ def test_csv_columns_and_rows(quick_run):
         nee_curve = [float(r["rmse"]) for r in errors if r["lod"] == lod and r["nee"] == "1"]
         assert nee_curve[-1] < nee_curve[0]
     assert (out / "render_error.png").stat().st_size > 0
+    assert (out / "render_backends.png").exists()
     assert "reported, not measured here" in stdout
+    assert "Against Volcanite" in stdout

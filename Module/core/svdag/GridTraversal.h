@@ -177,8 +177,10 @@ SVDAG_FN SvdagGridHit svdagCastGrid(SVDAG_STREAMS_PARAM SVDAG_GRID_PARAM SVDAG_G
         if (SVDAG_GRID_SKIP(label))
           continue;
         uint blockLod = SVDAG_GRID_LOD(lod, lo, hi, rootRef, local, localDir, tmin, tmax, s);
+        // Searched only up to the nearest hit so far: a block whose box starts beyond it is
+        // rejected by the slab test, a walk stops there (a tie at `best` keeps the first).
         SvdagBlockHit h = svdagIntersectBlock(SVDAG_STREAMS_ARG lo, hi, rootRef,
-          midRefBits, leafRefBits, local, localDir, tmin, tmax, blockLod,
+          midRefBits, leafRefBits, local, localDir, tmin, best, blockLod,
           entryOnly);
         if (h.hit && (!result.hit || h.t < best))
         {

@@ -1,0 +1,47 @@
+"""Smoke test of the prepared GPU benchmark: `bench/gpu.sh` runs the C++ tool for both backends,
+both LODs and both bounce counts, accumulating and restarting, and prints one table row per
+file, LOD and bounce count (here on lavapipe, at a tiny size). Asserts structure, not timings."""
+import pathlib
+import subprocess
+
+import numpy as np
+
+import vtksvdag
+
+REPO = pathlib.Path(__file__).resolve().parents[2]
+
+
+def tool_folder():
+    import vtksvdag.vtkSVDAGRendering as module
+
+    # <build>/python/vtksvdag/vtkSVDAGRendering*.so -> <build>/bin
+    folder = pathlib.Path(module.__file__).resolve().parents[2] / "bin"
+    assert (folder / "vtksvdag-render").is_file(), f"vtksvdag-render was not built in {folder}"
+    return folder
+
+
+def test_gpu_script_prints_one_table(tmp_path):
+    rng = np.random.default_rng(2)
+    labels = np.where(rng.random((24, 20, 18)) < 0.4, rng.integers(1, 6, (24, 20, 18)), 0).astype(np.uint16)
+    for name in ("a", "b"):
+        vtksvdag.from_numpy(labels if name == "a" else labels[:, :, ::-1].copy()).save(tmp_path / f"{name}.svdag")
+    run = subprocess.run(["bash", str(REPO / "bench" / "gpu.sh"), "--bin", str(tool_folder()),
+                          "--width", "32", "--height", "24", "--frames", "2", str(tmp_path)],
+                         capture_output=True, text=True, timeout=600)
+    assert run.returncode == 0, run.stdout[-2000:] + run.stderr[-2000:]
+    lines = run.stdout.strip().splitlines()
+    assert "32x24, 1 spp" in lines[0]
+    rows = [line.split() for line in lines[2:]]
+    assert sorted((r[0], r[1], r[2]) for r in rows) == sorted(
+        (f, lod, b) for f in "ab" for lod in ("voxel", "block") for b in ("1", "4"))
+    for r in rows:
+        numbers = [float(v) for v in r[3:] if v != "|"]
+        assert len(numbers) == 7 and all(n > 0 for n in numbers), r
+    # A missing input or an empty folder is an error, not an empty table.
+    bad = subprocess.run(["bash", str(REPO / "bench" / "gpu.sh"), str(tmp_path / "none")],
+                         capture_output=True, text=True, timeout=60)
+    assert bad.returncode != 0 and "neither a .svdag file nor a folder" in bad.stderr
+    (tmp_path / "empty").mkdir()
+    bad = subprocess.run(["bash", str(REPO / "bench" / "gpu.sh"), str(tmp_path / "empty")],
+                         capture_output=True, text=True, timeout=60)
+    assert bad.returncode != 0 and "no .svdag files" in bad.stderr
