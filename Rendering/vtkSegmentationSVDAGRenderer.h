@@ -1,6 +1,6 @@
 /**
  * @class   vtkSegmentationSVDAGRenderer
- * @brief   path-traces a vtkSegmentationSVDAG with Vulkan ray tracing into an image (an algorithm)
+ * @brief   path-traces a vtkSegmentationSVDAG with Vulkan into an image (an algorithm)
  *
  * A vtkImageAlgorithm: one input port, a vtkSegmentationSVDAG (SetInputConnection from a reader
  * or from vtkImageDataToSegmentationSVDAG, or SetInputData), one output, a vtkImageData of
@@ -61,11 +61,13 @@
  * whole volume with ResetCamera(azimuth, elevation, zoom); a camera never set is framed on the
  * first pass.
  *
- * The Vulkan device is chosen on the first pass: a GPU with ray tracing if present, else a
- * CPU implementation (lavapipe); the environment variable SVDAG_VK_DEVICE=<substring> forces
- * one, SVDAG_VK_VALIDATION=1 enables the validation layer. A pass that fails reports the reason
- * with vtkErrorMacro (for example no device with ray tracing: the message names each device
- * found and what it lacks) and leaves an empty output.
+ * The Vulkan device is chosen on the first pass: a GPU if present (one with ray tracing first),
+ * else a CPU implementation (lavapipe); the environment variable SVDAG_VK_DEVICE=<substring>
+ * forces one, SVDAG_VK_VALIDATION=1 enables the validation layer. The backend (Settings'
+ * Backend: the ray tracing pipeline or the compute cell-grid walk) is per device by default;
+ * GetBackendInUse tells which one runs. A pass that fails reports the reason with vtkErrorMacro
+ * (for example no usable device: the message names each device found and what it lacks; or the
+ * rt backend on a device without ray tracing) and leaves an empty output.
  */
 #ifndef vtkSegmentationSVDAGRenderer_h
 #define vtkSegmentationSVDAGRenderer_h
@@ -180,7 +182,7 @@ public:
   int GetAccumulatedSamples() const;
   double GetRenderSeconds() const;
   double GetErrorEstimate() const;
-  /** BVH builds (volume uploads and visibility changes) and ray tracing pipeline builds (feature
+  /** BVH builds (rt backend: volume uploads and visibility changes) and pipeline builds (feature
    * changes) since the device was created: material edits rebuild neither. */
   vtkTypeInt64 GetNumberOfBVHBuilds() const;
   vtkTypeInt64 GetNumberOfPipelineBuilds() const;

@@ -31,8 +31,8 @@
  * - Picking: Pick(renderer, x, y) reads the label, position and normal under a display pixel
  *   from the last frame traced for that renderer.
  *
- * Errors (no Vulkan device with ray tracing: the message names every device found and what it
- * lacks; a render window that is not OpenGL) are reported with vtkErrorMacro, and the volume is
+ * Errors (no usable Vulkan device: the message names every device found and what it lacks; the
+ * rt backend on a device without ray tracing; a render window that is not OpenGL) are reported with vtkErrorMacro, and the volume is
  * not drawn.
  */
 #ifndef vtkSegmentationSVDAGVolumeMapper_h
@@ -121,7 +121,7 @@ public:
   ///@}
 
   /** Creates the Vulkan renderer now (else on the first render): returns false and reports the
-   * reason (no device with ray tracing: every device found and what it lacks) with
+   * reason (no usable device: every device found and what it lacks) with
    * vtkErrorMacro. */
   bool InitializeDevice();
 

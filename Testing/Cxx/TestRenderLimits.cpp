@@ -199,6 +199,7 @@ TEST(RenderLimits, TwoBlasAtTheDriversPrimitiveLimitMatchTheCpuRayCaster)
   phase("validate");
 
   svdag::render::Renderer renderer;
+  renderer.setBackend(svdag::render::Backend::RayTracing); // the BLAS split is this backend's
   renderer.setImageSize(64, 64);
   renderer.setLod(svdag::render::Lod::Voxel);
   renderer.setSamplesPerPixel(1);
@@ -252,5 +253,19 @@ TEST(RenderLimits, TwoBlasAtTheDriversPrimitiveLimitMatchTheCpuRayCaster)
   EXPECT_GE(total.blocksB.size(), 100u);
   EXPECT_GE(total.hitsA, 1000u);
   EXPECT_GE(total.hitsB, 1000u);
+
+  // The compute backend on the same 16.78 M blocks (its cell grid: one uint32 per cell), the same
+  // views against the CPU ray caster; it frees the BVH.
+  renderer.setBackend(svdag::render::Backend::Compute);
+  EXPECT_EQ(renderer.blasCount(), 0u);
+  for (const View& view : views)
+  {
+    SCOPED_TRACE(std::string("compute: ") + view.name);
+    const ViewResult r = compareView(renderer, *volume, layout, view.eye, view.target, view.angle);
+    EXPECT_EQ(r.labelMismatches, 0u);
+    EXPECT_LE(r.maxDepthError, 1e-4);
+    EXPECT_GE(r.hits, 100u);
+  }
+  phase("compute backend, 3 views");
   std::printf("[ total    ] %.1f s\n", secondsSince(start));
 }

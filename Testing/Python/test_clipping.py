@@ -51,8 +51,9 @@ def world_point(volume, p):
     return origin + m @ (np.asarray(p, float) - 0.5)
 
 
-def make_renderer(volume, lod, planes=(), crop=None, camera=(30.0, 20.0, 1.2)):
+def make_renderer(volume, lod, planes=(), crop=None, camera=(30.0, 20.0, 1.2), backend="auto"):
     r = vtkSegmentationSVDAGRenderer()
+    r.GetSettings().SetBackend(backend)
     r.SetInputData(volume)
     r.SetWidth(WIDTH)
     r.SetHeight(HEIGHT)
@@ -115,8 +116,9 @@ def coarse_box_labels(labels, volume, lod, points):
     return [set(values[row]) for row in inside]
 
 
-def assert_matches_cpu(labels, volume, lod, planes=(), crop=None, camera=(30.0, 20.0, 1.2), what=""):
-    renderer = make_renderer(volume, lod, planes, crop, camera)
+def assert_matches_cpu(labels, volume, lod, planes=(), crop=None, camera=(30.0, 20.0, 1.2), what="",
+                       backend="auto"):
+    renderer = make_renderer(volume, lod, planes, crop, camera, backend)
     g_label, g_depth, g_normal = gpu_outputs(renderer)
     c_label, c_depth, c_normal, c_plane = cpu_outputs(make_caster(volume, lod, planes, crop), renderer)
     hit_same = (g_label > 0) == (c_label > 0)
@@ -184,8 +186,9 @@ def axis_volume():
 
 # --- GPU against the CPU ray caster ------------------------------------------------------------
 
+@pytest.mark.parametrize("backend", ["rt", "compute"])
 @pytest.mark.parametrize("lod", list(LODS), ids=list(LODS))
-def test_random_planes_and_crop_match_cpu(random_volume, lod):
+def test_random_planes_and_crop_match_cpu(random_volume, lod, backend):
     labels, volume = random_volume
     shape_xyz = np.array(labels.shape[::-1], float)
     rng = np.random.default_rng({"block": 1, "leaf": 2, "voxel": 3}[lod])
@@ -199,7 +202,7 @@ def test_random_planes_and_crop_match_cpu(random_volume, lod):
     for i, (what, planes, crop) in enumerate(cases):
         camera = (rng.uniform(-180, 180), rng.uniform(-60, 60), rng.uniform(1.0, 1.8))
         g_label, _, c_plane, _ = assert_matches_cpu(labels, volume, LODS[lod], planes, crop, camera,
-                                                    f"{lod} {what}")
+                                                    f"{lod} {what} ({backend})", backend)
         assert (g_label > 0).sum() > 30, what
         cut_pixels += int((c_plane >= 0).sum())
     assert cut_pixels > 100  # the cases do show cut faces

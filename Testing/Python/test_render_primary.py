@@ -150,8 +150,13 @@ def outputs(renderer):
             vtk_to_numpy(data.GetArray("Depth")).astype(np.float64))
 
 
-def make_renderer(volume):
+# Both backends: the ray tracing pipeline and the compute cell-grid walk trace the same hits.
+BACKENDS = ["rt", "compute"]
+
+
+def make_renderer(volume, backend="auto"):
     renderer = vtkSegmentationSVDAGRenderer()
+    renderer.GetSettings().SetBackend(backend)
     renderer.SetInputData(volume)
     renderer.SetWidth(WIDTH)
     renderer.SetHeight(HEIGHT)
@@ -229,10 +234,11 @@ def assert_matches_cpu(labels, volume, renderer, lod, what):
     return gpu_label, cpu_label
 
 
+@pytest.mark.parametrize("backend", BACKENDS)
 @pytest.mark.parametrize("which", ["random_volume", "real_volume", "far_volume"])
-def test_primary_hits_match_cpu_ray_caster(which, request):
+def test_primary_hits_match_cpu_ray_caster(which, backend, request):
     labels, volume = request.getfixturevalue(which)
-    renderer = make_renderer(volume)
+    renderer = make_renderer(volume, backend)
     rng = np.random.default_rng({"random_volume": 7, "real_volume": 11, "far_volume": 13}[which])
     hits = 0
     views = random_views(rng, labels, volume)
@@ -240,7 +246,8 @@ def test_primary_hits_match_cpu_ray_caster(which, request):
         assert set_camera(renderer) == 1
         for lod in LODS:
             gpu_label, _ = assert_matches_cpu(labels, volume, renderer, lod,
-                                              f"{which}, {description}:")
+                                              f"{which}, {backend}, {description}:")
+            assert renderer.GetBackendInUse() == backend
             hits += np.count_nonzero(gpu_label)
     # The views must actually see the volume (a test of empty images would prove nothing).
     assert hits > 0.2 * len(views) * len(LODS) * WIDTH * HEIGHT
@@ -304,10 +311,11 @@ def test_outputs_are_consistent(real_volume):
     assert renderer.GetDeviceName() != ""
 
 
-def test_auto_lod_chooses_per_ray(real_volume):
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_auto_lod_chooses_per_ray(real_volume, backend):
     """AUTO with a huge pixel budget draws blocks everywhere, with a tiny one voxels everywhere,
     and in between each pixel shows what one of the fixed levels shows."""
-    renderer = make_renderer(real_volume[1])
+    renderer = make_renderer(real_volume[1], backend)
     renderer.ResetCamera(-40, 25, 1.0)
     fixed = {}
     for lod in LODS:
@@ -331,9 +339,10 @@ def test_auto_lod_chooses_per_ray(real_volume):
     assert some_level.mean() >= 0.999
 
 
-def test_hidden_labels_vanish(real_volume):
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_hidden_labels_vanish(real_volume, backend):
     labels, volume = real_volume
-    renderer = make_renderer(volume)
+    renderer = make_renderer(volume, backend)
     renderer.ResetCamera(10, 30, 1.3)
     assert renderer.Render() == 1
     label, _ = outputs(renderer)
@@ -349,7 +358,7 @@ def test_hidden_labels_vanish(real_volume):
     # built without those labels (compared by label value, the label tables differ).
     without = build(labels, spacing=(1.0, 0.9, 1.2), origin=(-50.0, 0.0, 20.0),
                     excluded=values[hidden])
-    reference = make_renderer(without)
+    reference = make_renderer(without, backend)
     for name in ("CameraPosition", "CameraFocalPoint", "CameraViewUp"):
         getattr(reference, "Set" + name)(getattr(renderer, "Get" + name)())
     assert reference.Render() == 1

@@ -28,9 +28,10 @@ def sphere_zyx(radius, center, shape):
     return inside.astype(np.uint8)
 
 
-def render(volume, shading, size=96, view=(30.0, 20.0, 1.0), bounces=0):
+def render(volume, shading, size=96, view=(30.0, 20.0, 1.0), bounces=0, backend="auto"):
     """(label, depth, normal, face normal, hdr, origin, directions) of one pass."""
     renderer = vtkSegmentationSVDAGRenderer()
+    renderer.GetSettings().SetBackend(backend)
     renderer.SetInputData(volume)
     renderer.SetWidth(size)
     renderer.SetHeight(size)
@@ -76,9 +77,11 @@ def sphere(request):
     return radius, center, compress_zyx(sphere_zyx(radius, center, (n, n, n)))
 
 
-def test_smooth_normals_beat_face_normals_cpu_and_gpu(sphere):
+@pytest.mark.parametrize("backend", ["rt", "compute"])
+def test_smooth_normals_beat_face_normals_cpu_and_gpu(sphere, backend):
     radius, center, volume = sphere
-    label, depth, normal, face, _, origin, dirs = render(volume, SMOOTH, size=128, view=(30.0, 20.0, 1.3))
+    label, depth, normal, face, _, origin, dirs = render(volume, SMOOTH, size=128, view=(30.0, 20.0, 1.3),
+                                                         backend=backend)
     hit = np.nonzero(label)[0]
     assert len(hit) > 1500
     truth, _ = analytic(origin, dirs, depth, center)

@@ -19,7 +19,8 @@
 //
 // Materials are per label index (defaultMaterial: base color svdagLabelColor, roughness 0.6,
 // metallic 0, transmission 0, ior 1.5, specular 0.5, visible); an edit is a buffer upload.
-// Visibility 0 hides the label like setHiddenLabels: its blocks leave the BVH.
+// Visibility 0 hides the label like setHiddenLabels: its blocks leave the BVH (rt) or their
+// label's hidden bit is set (compute).
 //
 // Known limitation: transmission is thin-walled: a transmitted ray continues straight through
 // the solid it entered (the entry-only hit group skips the run it starts in, per block), so
@@ -104,9 +105,11 @@ public:
   // The backend in use: backendFor(settings().backend).
   Backend backend() const { return this->backendFor(this->Settings.backend); }
 
-  // Uploads a volume and builds its BVH (keeps the hidden labels). Throws std::runtime_error.
+  // Uploads a volume and builds its BVH or cell grid (keeps the hidden labels). Throws
+  // std::runtime_error.
   void setVolume(std::shared_ptr<const Volume> volume);
-  // Label indices left out of the BVH; rebuilds it when the set changes (setupSeconds then
+  // Label indices not drawn: left out of the BVH, which is rebuilt when the set changes (rt), or
+  // hidden bits (compute; no rebuild). Either restarts the accumulation (setupSeconds then
   // measures the rebuild).
   void setHiddenLabels(const std::vector<uint32_t>& labelIndices);
   // Caps the blocks (primitives) per BLAS (0: the driver's limit); see
@@ -221,7 +224,7 @@ public:
   const Image& render();
   const Image& image() const { return this->Output; }
 
-  // Upload + BVH build of the last setVolume, or BVH rebuild of the last setHiddenLabels that
+  // Upload + BVH or grid build of the last setVolume, or rebuild of the last setHiddenLabels that
   // changed the set, seconds.
   double setupSeconds() const { return this->SetupSeconds; }
   // Wall time of the last frame (record, trace, wait), milliseconds.
