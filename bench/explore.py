@@ -1,16 +1,19 @@
 #!/usr/bin/env python3
 """What an exploring user's change costs: the next frame after a clipping-plane move, a query
-(labels hidden: the acceleration structure is rebuilt from the blocks on the device), a color
-change and a highlight change (material uploads), on every shared volume.
+(labels hidden: the rt backend rebuilds its BVH from the blocks on the device, the compute
+backend sets bits), a color change and a highlight change (material uploads), on every shared
+volume.
 
     xvfb-run -a .venv/bin/python bench/explore.py [--size 512] [--repeats 3] [--volumes NAME ...]
+        [--backend auto|rt|compute]
 
 In a pyvista off-screen Plotter (--size square pixels), each volume is added with
 ``add_segmentation(color_by="voxel_count", spp=1, lod="voxel", auto_adjust=False)`` and refined
 once; then each change is applied and one render made, --repeats times (changes alternate, so
 every repeat changes the state again). Per change: the median wall ms from the change to the
 rendered frame, of it the trace (``GetLastTraceMilliseconds``), the rest (rebuild, uploads,
-compositing: ``other_ms``), and the BVH builds the change caused. Writes bench/out/explore.csv.
+compositing: ``other_ms``), and the BVH builds the change caused; ``backend`` is the backend that
+ran. Writes bench/out/explore.csv.
 """
 import argparse
 import csv
@@ -23,7 +26,7 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 SHARED = ROOT.parent / "shared" / "data"
 
 
-def measure(path, size, repeats):
+def measure(path, size, repeats, backend):
     import pyvista as pv
 
     import vtksvdag
@@ -32,7 +35,7 @@ def measure(path, size, repeats):
     plotter = pv.Plotter(off_screen=True, window_size=(size, size))
     try:
         actor = vtksvdag.add_segmentation(plotter, volume, color_by="voxel_count", spp=1,
-                                          lod="voxel", auto_adjust=False)
+                                          lod="voxel", auto_adjust=False, backend=backend)
         mapper = actor.GetMapper()
         vtksvdag.refine(plotter)
         plotter.render()
@@ -87,7 +90,8 @@ def measure(path, size, repeats):
         for name, values in samples.items():
             wall = statistics.median(v[0] for v in values)
             trace = statistics.median(v[1] for v in values)
-            rows.append({"volume": path.stem, "labels": len(volume.labels), "change": name,
+            rows.append({"volume": path.stem, "labels": len(volume.labels),
+                         "backend": mapper.GetBackendInUse(), "change": name,
                          "frame_ms": round(wall, 2), "trace_ms": round(trace, 2),
                          "other_ms": round(wall - trace, 2),
                          "bvh_builds": max(v[2] for v in values)})
@@ -102,6 +106,7 @@ def main():
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--volumes", nargs="*")
     parser.add_argument("--out", type=pathlib.Path, default=ROOT / "bench" / "out")
+    parser.add_argument("--backend", choices=("auto", "rt", "compute"), default="auto")
     args = parser.parse_args()
     if not SHARED.is_dir():
         print(f"explore.py: {SHARED} not found (the shared volumes); nothing to measure")
@@ -113,9 +118,9 @@ def main():
     print(f"{'volume':24s} {'labels':>6s} {'change':>9s} {'frame ms':>9s} {'trace ms':>9s} "
           f"{'other ms':>9s} {'BVH':>4s}")
     for path in paths:
-        for row in measure(path, args.size, args.repeats):
+        for row in measure(path, args.size, args.repeats, args.backend):
             rows.append(row)
-            print(f"{row['volume']:24s} {row['labels']:6d} {row['change']:>9s} "
+            print(f"{row['volume']:24s} {row['labels']:6d} {row['backend'] + ' ' + row['change']:>17s} "
                   f"{row['frame_ms']:9.1f} {row['trace_ms']:9.1f} {row['other_ms']:9.1f} "
                   f"{row['bvh_builds']:4d}", flush=True)
     args.out.mkdir(parents=True, exist_ok=True)

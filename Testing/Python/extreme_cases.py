@@ -983,6 +983,7 @@ def several_blas():
     images = []
     for limit in (0, 7):
         renderer = image_renderer(volume, 48, 32)
+        renderer.GetSettings().SetBackend("rt")  # the BLAS split is the rt backend's
         renderer.GetSettings().SetMaximumBlocksPerBLAS(limit)
         renderer.ResetCamera(25, 30, 1.2)
         ok = renderer.Render()

@@ -46,21 +46,24 @@ def test_csv_has_three_routes_with_positive_times(quick_run):
     assert "Ratios ours / gpu-raycast" in stdout
 
 
-def test_explore_changes_rebuild_only_for_a_query(tmp_path):
+@pytest.mark.parametrize("backend", ["rt", "compute"])
+def test_explore_changes_rebuild_only_for_a_query(tmp_path, backend):
     """bench/explore.py on one small volume: every change traced a new frame, and only the query
-    rebuilt the acceleration structure (structure and counts, no timings)."""
+    rebuilt the acceleration structure on the rt backend, nothing on compute (hidden bits)
+    (structure and counts, no timings)."""
     require_shared_data(SHARED_DATA / "fib25_64.nrrd")
     completed = subprocess.run(
         [sys.executable, str(REPO / "bench" / "explore.py"), "--volumes", "fib25_64",
-         "--repeats", "1", "--size", "64", "--out", str(tmp_path)],
+         "--repeats", "1", "--size", "64", "--out", str(tmp_path), "--backend", backend],
         capture_output=True, text=True, cwd=REPO, env=os.environ.copy(), timeout=600,
     )
     assert completed.returncode == 0, completed.stdout[-3000:] + completed.stderr[-3000:]
     with open(tmp_path / "explore.csv", newline="") as f:
         rows = {r["change"]: r for r in csv.DictReader(f)}
     assert set(rows) == {"none", "clip", "query", "color", "highlight"}
+    assert {r["backend"] for r in rows.values()} == {backend}
     assert {name: int(r["bvh_builds"]) for name, r in rows.items()} == {
-        "none": 0, "clip": 0, "query": 1, "color": 0, "highlight": 0}
+        "none": 0, "clip": 0, "query": int(backend == "rt"), "color": 0, "highlight": 0}
     assert float(rows["none"]["trace_ms"]) == 0  # a refined still view is not traced again
     for name in ("clip", "query", "color", "highlight"):
         assert float(rows[name]["trace_ms"]) > 0, name
