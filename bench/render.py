@@ -335,22 +335,6 @@ def plot(rows, path):
     plt.close(fig)
 
 
-def print_frame_table(rows, name):
-    rows = [r for r in rows if r["kind"] == "frame" and r["volume"] == name]
-    anchored = name == "voronoi256"
-    print(f"\nFrame time on {name}, 1 spp, median (ms), accumulating frames   "
-          "[paper code on lavapipe, voronoi256 only: reported, not measured here]")
-    print(f"{'size':>9} {'LOD':>6} {'bounces':>7} {'NEE off':>9} {'NEE on':>9}   paper (256x256)")
-    keys = sorted({(r["width"], r["lod"], r["bounces"]) for r in rows},
-                  key=lambda k: (k[0], k[1] != "voxel", k[2]))
-    for size, lod, bounces in keys:
-        ms = {r["nee"]: r["ms_median"] for r in rows
-              if (r["width"], r["lod"], r["bounces"]) == (size, lod, bounces)}
-        anchor = ANCHORS_MS.get((lod, bounces), "") if size == 256 and anchored else ""
-        print(f"{size:>4}x{size:<4} {lod:>6} {bounces:>7} {ms.get(0, float('nan')):9.1f} "
-              f"{ms.get(1, float('nan')):9.1f}   {anchor}")
-
-
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true", help="a small volume at a tiny size (seconds)")

@@ -425,7 +425,8 @@ void Context::createDevice()
   enabled.rt.rayTracingPipeline = VK_TRUE;
   std::vector<const char*> extensions(std::begin(RequiredExtensions), std::end(RequiredExtensions));
   if (this->RayTracing)
-    extensions.insert(extensions.end(), std::begin(RayTracingExtensions), std::end(RayTracingExtensions));
+    extensions.insert(
+      extensions.end(), std::begin(RayTracingExtensions), std::end(RayTracingExtensions));
   else
     enabled.v12.pNext = nullptr;
   const float priority = 1.0f;
@@ -451,16 +452,17 @@ void Context::createDevice()
   DeviceFunctions& f = this->Functions;
   if (this->RayTracing)
   {
-  load(f.createAccelerationStructure, "vkCreateAccelerationStructureKHR");
-  load(f.destroyAccelerationStructure, "vkDestroyAccelerationStructureKHR");
-  load(f.getAccelerationStructureBuildSizes, "vkGetAccelerationStructureBuildSizesKHR");
-  load(f.getAccelerationStructureDeviceAddress, "vkGetAccelerationStructureDeviceAddressKHR");
-  load(f.cmdBuildAccelerationStructures, "vkCmdBuildAccelerationStructuresKHR");
-  load(f.cmdWriteAccelerationStructuresProperties, "vkCmdWriteAccelerationStructuresPropertiesKHR");
-  load(f.cmdCopyAccelerationStructure, "vkCmdCopyAccelerationStructureKHR");
-  load(f.createRayTracingPipelines, "vkCreateRayTracingPipelinesKHR");
-  load(f.getRayTracingShaderGroupHandles, "vkGetRayTracingShaderGroupHandlesKHR");
-  load(f.cmdTraceRays, "vkCmdTraceRaysKHR");
+    load(f.createAccelerationStructure, "vkCreateAccelerationStructureKHR");
+    load(f.destroyAccelerationStructure, "vkDestroyAccelerationStructureKHR");
+    load(f.getAccelerationStructureBuildSizes, "vkGetAccelerationStructureBuildSizesKHR");
+    load(f.getAccelerationStructureDeviceAddress, "vkGetAccelerationStructureDeviceAddressKHR");
+    load(f.cmdBuildAccelerationStructures, "vkCmdBuildAccelerationStructuresKHR");
+    load(f.cmdWriteAccelerationStructuresProperties,
+      "vkCmdWriteAccelerationStructuresPropertiesKHR");
+    load(f.cmdCopyAccelerationStructure, "vkCmdCopyAccelerationStructureKHR");
+    load(f.createRayTracingPipelines, "vkCreateRayTracingPipelinesKHR");
+    load(f.getRayTracingShaderGroupHandles, "vkGetRayTracingShaderGroupHandlesKHR");
+    load(f.cmdTraceRays, "vkCmdTraceRaysKHR");
   }
 
   VkCommandPoolCreateInfo poolInfo{ VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO };
