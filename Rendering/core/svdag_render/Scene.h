@@ -72,8 +72,8 @@ public:
   bool setHiddenLabels(const std::vector<uint32_t>& labelIndices);
   const std::vector<uint32_t>& hiddenLabels() const { return this->Hidden; }
   // Caps the primitives per BLAS below the driver's maxPrimitiveCount (0: no cap) and rebuilds
-  // if that changes the split (ray tracing backend); returns whether it rebuilt. More, smaller BLAS trace slower: this
-  // exists to exercise the multi-BLAS path on small volumes (tests).
+  // if that changes the split (ray tracing backend); returns whether it rebuilt. More, smaller
+  // BLAS trace slower: this exists to exercise the multi-BLAS path on small volumes (tests).
   bool setPrimitivesPerBlasLimit(uint32_t limit);
 
   const Volume& volume() const { return *this->Source; }
