@@ -22,6 +22,7 @@
 #include <functional>
 #include <limits>
 #include <map>
+#include <cstdlib>
 #include <random>
 #include <sstream>
 #include <string>
@@ -274,6 +275,20 @@ std::vector<LabelVolume> volumes()
     if (x >= 3 && x < 29 && y >= 2 && y < 18 && z >= 8 && z < 24)
       return 1u + uint32_t(((x / 8) + (z / 8)) % 3);
     return y == 0 ? 5u : 0u;
+  }));
+  // Small clusters far apart: most regions of 4^3 cells are empty, so the walk crosses them in
+  // one step (GridTraversal.h), partly empty regions at the grid's clipped edges included.
+  out.push_back(makeVolume("clusters 210x180x150", { 210, 180, 150 }, [](int x, int y, int z) {
+    const int centers[5][3] = { { 20, 30, 25 }, { 150, 40, 120 }, { 100, 170, 60 },
+      { 200, 100, 140 }, { 70, 90, 80 } };
+    for (int c = 0; c < 5; ++c)
+    {
+      const int dx = x - centers[c][0], dy = y - centers[c][1], dz = z - centers[c][2];
+      if (dx * dx + dy * dy + dz * dz < 400 + 60 * c)
+        return uint32_t(1 + c % 3);
+    }
+    // A thin rod along the diagonal.
+    return (std::abs(x - y) <= 1 && std::abs(y - (z + 15)) <= 1) ? 4u : 0u;
   }));
   // A long thin volume: rays from far away cross many cells (cell DDA, float re-anchoring).
   out.push_back(makeVolume("long 1500x6x5", { 1500, 6, 5 },
