@@ -607,3 +607,59 @@ def test_window_resize_and_release(boxes):
     renderer.ReleaseGraphicsResources(window)
     window.Render()
     assert mapper_pick(mapper, renderer, W, H)[0] == after[0]
+
+
+# Backends -----------------------------------------------------------------------------------------
+def test_backend_setting_names_and_errors(boxes):
+    """Backend is one setting for the renderer, the mapper and pyvista: names, clamped ints, a
+    clear error for a wrong name; pyvista's backend= reaches the mapper, which reports what
+    runs, and both backends draw the same picks."""
+    from vtksvdag.vtkSVDAGRendering import vtkSegmentationSVDAGRenderSettings as S
+
+    settings = S()
+    assert settings.GetBackend() == S.BACKEND_AUTO and settings.GetBackendAsString() == "auto"
+    settings.SetBackend("compute")
+    assert settings.GetBackend() == S.BACKEND_COMPUTE
+    from conftest import capture_errors
+
+    messages = capture_errors(settings)
+    settings.SetBackend("optix")
+    assert settings.GetBackendAsString() == "compute"  # unchanged, reported
+    assert len(messages) == 1 and "unknown backend 'optix' (auto, rt or compute)" in messages[0]
+    settings.SetBackend(9)  # ints clamp, like the other enumerations
+    assert settings.GetBackend() == S.BACKEND_COMPUTE
+    settings.SetBackendToRT()
+    assert settings.GetBackendAsString() == "rt"
+
+    import pyvista as pv
+
+    import vtksvdag
+
+    labels, _ = boxes
+    picks = {}
+    for backend in ("rt", "compute"):
+        plotter = pv.Plotter(off_screen=True, window_size=(96, 80))
+        try:
+            actor = vtksvdag.add_segmentation(plotter, labels, spp=1, lod="voxel", backend=backend)
+            vtksvdag.refine(plotter)
+            mapper = actor.GetMapper()
+            assert mapper.GetBackendInUse() == backend
+            assert (mapper.GetAccelerationBytes() > 0 and mapper.GetEncodingBytes() > 0
+                    and mapper.GetDeviceBytes() > mapper.GetEncodingBytes())
+            renderer = plotter.renderer
+            picks[backend] = [mapper.GetPickedLabel() if mapper.Pick(renderer, x, y) else None
+                              for x in range(2, 96, 4) for y in range(2, 80, 4)]
+        finally:
+            plotter.close()
+    agree = np.mean([a == b for a, b in zip(picks["rt"], picks["compute"])])
+    assert agree >= 0.97 and sum(p is not None for p in picks["rt"]) > 50
+
+    plotter = pv.Plotter(off_screen=True, window_size=(32, 32))
+    try:
+        with pytest.raises(ValueError, match="backend must be one of"):
+            vtksvdag.add_segmentation(plotter, np.ones((4, 4, 4), np.uint8), backend="optix")
+    finally:
+        plotter.close()
+    result = subprocess.run([sys.executable, "-m", "vtksvdag", "render", "x.nrrd", "-o", "x.png",
+                             "--backend", "optix"], capture_output=True, text=True, cwd=REPO)
+    assert result.returncode == 2 and "--backend" in result.stderr and "compute" in result.stderr
