@@ -5,16 +5,17 @@
  * environment (importance-sampled) and the directional light are sampled with a shadow ray; BSDF
  * sampling continues the path, and an escaping path adds the environment and the sun weighted by
  * the power heuristic against the light-sampling densities. The sun is a disk of a given angular
- * radius (radius 0: a delta light that only light sampling can find). Emissive voxels add their emission where a path hits them. Russian roulette from
- * the third bounce.
+ * radius (radius 0: a delta light that only light sampling can find). Emissive voxels add their
+ * emission where a path hits them. Russian roulette from the third bounce. With NEE disabled the
+ * estimator is the plain "light only where a path escapes" one (the paper authors' estimator),
+ * kept for the error-versus-time comparison.
  *
- * The last scattering event (the one whose continuation would end the path) with a constant
+ * The last scattering event (the one whose continuation would end the path) with NEE, a constant
  * environment and nothing emissive: its continuation could only collect the environment and the
  * sun where it escapes. So the environment is sampled there by the BSDF alone (for a constant
  * environment the better of the two strategies) with an occlusion ray instead of a closest-hit
  * one, the sun by light sampling alone (weight 1), and no environment shadow ray is traced: one
- * ray fewer per path, the same expectation. A delta (transmission) sample still continues. With NEE disabled the estimator is the plain "light only where a path escapes"
- * one (the paper authors' estimator), kept for the error-versus-time comparison.
+ * ray fewer per path, the same expectation. A delta (transmission) sample still continues.
  *
  * Its interface types (PathTracerParams, PathHit) are in Shading.h, so that the includer can
  * define its trace functions before including this file. The includer defines:
