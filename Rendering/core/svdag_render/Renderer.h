@@ -98,7 +98,7 @@ public:
   // std::runtime_error for RayTracing on a device without ray tracing (the previous one stays).
   void setBackend(Backend backend);
   // What a setting resolves to on this device. Auto: Compute on a device without ray tracing and
-  // on a CPU implementation (lavapipe: measured 1.5-4x faster, bench/README.md), RayTracing on a
+  // on a CPU implementation (lavapipe: measured 1.65-5.6x faster, bench/README.md), RayTracing on a
   // GPU with ray tracing (the paper's hardware path; measure with bench/gpu.sh). Throws like
   // setBackend.
   Backend backendFor(Backend requested) const;
