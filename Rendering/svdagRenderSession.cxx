@@ -72,6 +72,9 @@ render::Renderer& RenderSession::prepare(const std::shared_ptr<const Volume>& vo
   if (this->Uploaded != volume)
   {
     this->Uploaded.reset();
+    // The settings first: the upload builds what they ask for (the backend's structure, the
+    // BLAS split) once, not a default one that the next setSettings would rebuild.
+    r.setSettings(this->Settings->GetCoreSettings());
     r.setVolume(volume);
     this->Uploaded = volume;
     this->MaterialsTime = 0;

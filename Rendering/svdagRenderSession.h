@@ -43,7 +43,8 @@ public:
   const std::string& error() const { return this->Error; }
   // The core renderer, or null before a successful initialize().
   render::Renderer* renderer() const { return this->Core.get(); }
-  // Uploads `volume` if it is not the one held and the materials if the label properties
+  // Uploads `volume` if it is not the one held (after applying the settings, so that it is
+  // built for their backend) and the materials if the label properties
   // changed since the last upload; throws like the core. Needs initialize().
   render::Renderer& prepare(const std::shared_ptr<const Volume>& volume);
   // The volume held (null before prepare).

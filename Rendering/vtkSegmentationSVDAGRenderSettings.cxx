@@ -37,7 +37,41 @@ void assign(vtkObject* owner, T& member, const T& value)
     owner->Modified();
   }
 }
+
+// An enumeration set by number, clamped to [first, last] like VTK's clamped setters ...
+template <typename E>
+void assignClamped(vtkObject* owner, E& member, int value, E first, E last)
+{
+  assign(owner, member, static_cast<E>(std::min(std::max(value, int(first)), int(last))));
+}
+
+// ... or by name: a name `parse` rejects is reported (as "<setter>: <why>") and changes nothing.
+template <typename E, typename Parse>
+void assignNamed(vtkObject* owner, E& member, const char* name, Parse parse, const char* setter)
+{
+  try
+  {
+    assign(owner, member, parse(name ? name : ""));
+  }
+  catch (const std::invalid_argument& e)
+  {
+    vtkErrorWithObjectMacro(owner, << setter << ": " << e.what());
+  }
+}
 } // namespace
+
+// The VTK enumerations are the core's values (the setters pass them through).
+using Self = vtkSegmentationSVDAGRenderSettings;
+static_assert(int(core::Lod::Block) == Self::LOD_BLOCK && int(core::Lod::Leaf) == Self::LOD_LEAF &&
+    int(core::Lod::Voxel) == Self::LOD_VOXEL && int(core::Lod::Auto) == Self::LOD_AUTO,
+  "LOD values");
+static_assert(int(core::Shading::Voxel) == Self::SHADING_VOXEL &&
+    int(core::Shading::Smooth) == Self::SHADING_SMOOTH,
+  "shading values");
+static_assert(int(core::Backend::Auto) == Self::BACKEND_AUTO &&
+    int(core::Backend::RayTracing) == Self::BACKEND_RT &&
+    int(core::Backend::Compute) == Self::BACKEND_COMPUTE,
+  "backend values");
 
 vtkSegmentationSVDAGRenderSettings::vtkSegmentationSVDAGRenderSettings()
   : Settings(new core::RenderSettings)
@@ -48,8 +82,7 @@ vtkSegmentationSVDAGRenderSettings::~vtkSegmentationSVDAGRenderSettings() = defa
 
 void vtkSegmentationSVDAGRenderSettings::SetLOD(int lod)
 {
-  assign(this, this->Settings->lod,
-    static_cast<core::Lod>(std::min(std::max(lod, int(LOD_BLOCK)), int(LOD_AUTO))));
+  assignClamped(this, this->Settings->lod, lod, core::Lod::Block, core::Lod::Auto);
 }
 
 int vtkSegmentationSVDAGRenderSettings::GetLOD() const
@@ -308,20 +341,12 @@ void vtkSegmentationSVDAGRenderSettings::GetCroppingRegionPlanes(double bounds[6
 
 void vtkSegmentationSVDAGRenderSettings::SetShading(int shading)
 {
-  assign(this, this->Settings->shading,
-    static_cast<core::Shading>(std::min(std::max(shading, int(SHADING_VOXEL)), int(SHADING_SMOOTH))));
+  assignClamped(this, this->Settings->shading, shading, core::Shading::Voxel, core::Shading::Smooth);
 }
 
 void vtkSegmentationSVDAGRenderSettings::SetShading(const char* name)
 {
-  try
-  {
-    assign(this, this->Settings->shading, core::parseShading(name ? name : ""));
-  }
-  catch (const std::invalid_argument& e)
-  {
-    vtkErrorMacro("SetShading: " << e.what());
-  }
+  assignNamed(this, this->Settings->shading, name, core::parseShading, "SetShading");
 }
 
 int vtkSegmentationSVDAGRenderSettings::GetShading() const
@@ -336,20 +361,12 @@ const char* vtkSegmentationSVDAGRenderSettings::GetShadingAsString() const
 
 void vtkSegmentationSVDAGRenderSettings::SetBackend(int backend)
 {
-  assign(this, this->Settings->backend,
-    static_cast<core::Backend>(std::min(std::max(backend, int(BACKEND_AUTO)), int(BACKEND_COMPUTE))));
+  assignClamped(this, this->Settings->backend, backend, core::Backend::Auto, core::Backend::Compute);
 }
 
 void vtkSegmentationSVDAGRenderSettings::SetBackend(const char* name)
 {
-  try
-  {
-    assign(this, this->Settings->backend, core::parseBackend(name ? name : ""));
-  }
-  catch (const std::invalid_argument& e)
-  {
-    vtkErrorMacro("SetBackend: " << e.what());
-  }
+  assignNamed(this, this->Settings->backend, name, core::parseBackend, "SetBackend");
 }
 
 int vtkSegmentationSVDAGRenderSettings::GetBackend() const

@@ -247,14 +247,17 @@ void Scene::buildCellGrid()
   this->Ctx.checkFits((cells + 1) * 4 + std::max<uint64_t>(words, 1) * 4,
     "The compute backend's cell grid", (cells + 1) * 4);
   this->release();
-  // starts[c] = the first block whose cell is >= c (blocks are sorted by cell).
+  // starts[c] = the first block whose cell is >= c (blocks are sorted by cell); and the blocks
+  // of each label, from which writeHiddenBits counts the visible ones.
   std::vector<uint32_t> starts(size_t(cells + 1), 0);
+  this->LabelBlocks.assign(v.labels.size(), 0);
   uint64_t c = 0;
   for (uint64_t b = 0; b < v.blockCount; ++b)
   {
-    const uint64_t cell = v.block(b).cell;
-    while (c <= cell)
+    const Block block = v.block(b);
+    while (c <= block.cell)
       starts[size_t(c++)] = uint32_t(b);
+    ++this->LabelBlocks[block.label];
   }
   while (c <= cells)
     starts[size_t(c++)] = uint32_t(v.blockCount);
@@ -272,16 +275,11 @@ void Scene::writeHiddenBits()
   // The GPU is idle between frames (the renderer waits for every frame): written in place.
   uint32_t* bits = static_cast<uint32_t*>(this->HiddenBits.mapped());
   std::memset(bits, 0, size_t(this->HiddenBits.size()));
-  for (uint32_t l : this->Hidden)
-    bits[l / 32] |= 1u << (l % 32);
   uint64_t hiddenBlocks = 0;
-  if (!this->Hidden.empty())
+  for (uint32_t l : this->Hidden)
   {
-    for (uint64_t b = 0; b < this->Source->blockCount; ++b)
-    {
-      const uint32_t label = this->Source->block(b).label;
-      hiddenBlocks += (bits[label / 32] >> (label % 32)) & 1u;
-    }
+    bits[l / 32] |= 1u << (l % 32);
+    hiddenBlocks += this->LabelBlocks[l];
   }
   this->VisibleBlocks = this->Source->blockCount - hiddenBlocks;
 }

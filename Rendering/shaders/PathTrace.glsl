@@ -93,6 +93,22 @@ vec3 shadingNormal()
   return dot(payload.shading.xyz, payload.shading.xyz) > 0.0 ? payload.shading.xyz : payload.normal;
 }
 
+// The hit in payload as the path tracer's PathHit.
+PathHit payloadHit()
+{
+  PathHit h;
+  h.hit = payload.label != 0u;
+  // Traversal.h reports a ray that starts inside a solid at t = tmin with no entry face (never
+  // for entry-only rays).
+  h.inside = h.hit && dot(payload.normal, payload.normal) == 0.0;
+  h.t = payload.t;
+  h.label = h.hit ? payload.label - 1u : 0u;
+  h.normal = payload.normal;
+  h.shading = shadingNormal();
+  h.lift = payload.shading.w;
+  return h;
+}
+
 // hitGroup 0: the first hit; 1: the entry-only hit group (block.rint with SVDAG_ENTRY_ONLY), for
 // a ray continuing through a surface it has just crossed: the solid it starts in is skipped.
 PathHit traceClosest(vec3 origin, vec3 direction, float tmax, uint hitGroup)
@@ -105,16 +121,7 @@ PathHit traceClosest(vec3 origin, vec3 direction, float tmax, uint hitGroup)
     return gPrimaryHit;
   }
   traceClipped(origin, direction, tmax, hitGroup);
-  PathHit h;
-  h.hit = payload.label != 0u;
-  // Traversal.h reports a ray that starts inside a solid at t = tmin with no entry face (never
-  // for entry-only rays).
-  h.inside = h.hit && dot(payload.normal, payload.normal) == 0.0;
-  h.t = payload.t;
-  h.label = h.hit ? payload.label - 1u : 0u;
-  h.normal = payload.normal;
-  h.shading = shadingNormal();
-  h.lift = payload.shading.w;
+  PathHit h = payloadHit();
   if (gFirstQuery)
   {
     gCameraRayHit = h.hit;
@@ -209,13 +216,7 @@ void writePrimaryOutputs(uvec2 pixel, uint index, uint width, uint height)
   payload.shading = vec4(0.0);
   if (ray.tmax > 0.0)
     traceClipped(ray.origin, ray.direction, ray.tmax, 0u);
-  gPrimaryHit.hit = payload.label != 0u;
-  gPrimaryHit.inside = gPrimaryHit.hit && dot(payload.normal, payload.normal) == 0.0;
-  gPrimaryHit.t = payload.t;
-  gPrimaryHit.label = gPrimaryHit.hit ? payload.label - 1u : 0u;
-  gPrimaryHit.normal = payload.normal;
-  gPrimaryHit.shading = shadingNormal();
-  gPrimaryHit.lift = payload.shading.w;
+  gPrimaryHit = payloadHit();
   SvdagUintOutput(frame.sceneOutputs.zw).v[index] = payload.label;
   SvdagFloatOutput(frame.outputs.xy).v[index] = payload.label != 0u ? payload.t : SVDAG_DEPTH_MISS;
   SvdagFloatOutput normals = SvdagFloatOutput(frame.outputs.zw);

@@ -134,6 +134,7 @@ private:
   Buffer PrimitiveBlocks;
   Buffer CellStarts;
   Buffer HiddenBits;
+  std::vector<uint64_t> LabelBlocks; // blocks per label index (compute: the visible count)
   Buffer Instances;
   std::vector<AccelerationStructure> Blas;
   AccelerationStructure Tlas;
