@@ -15,16 +15,16 @@ PIP=(.venv/bin/python -m pip install -q --disable-pip-version-check -c Python/co
 "${PIP[@]}" --no-deps pyvista==0.46.5
 # pytest-pyvista's verify_image_cache (image regression); --no-deps for the same reason.
 "${PIP[@]}" --no-deps pytest-pyvista==0.3.3
-# The pure-Python package, editable, with its console script `vtksvdag`.
-"${PIP[@]}" --no-deps -e Python
+# The package's metadata and console script `vtksvdag` from pyproject.toml, editable and without
+# its CMake build (the build below is the development one, in build/).
+"${PIP[@]}" --no-deps -e . --config-settings=wheel.cmake=false
 
 cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release -DPython3_EXECUTABLE=/usr/bin/python3 >/dev/null
 cmake --build build
 
-# The wrapped modules live in build/python/vtksvdag; the package merges both directories.
-# Python/ goes on sys.path too (before build/python): setuptools' editable finder runs after the
-# path finder, which would otherwise take build/python/vtksvdag alone as a namespace package and
-# never import Python/vtksvdag/__init__.py.
+# The wrapped modules live in build/python/vtksvdag; the package's extend_path merges every
+# vtksvdag directory on sys.path, so both go there (a PYTHONPATH before them, as
+# scripts/sanitize.sh sets, takes precedence for the wrapped modules).
 SITE=$(.venv/bin/python -c 'import sysconfig; print(sysconfig.get_paths()["purelib"])')
 printf '%s\n' "$ROOT/Python" "$ROOT/build/python" > "$SITE/vtksvdag-build.pth"
 echo "vtkSVDAG is set up: .venv/bin/vtksvdag --help"
