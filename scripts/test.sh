@@ -11,6 +11,9 @@ status=0
 if [ "${CI:-}" = true ] || [ -n "${VTKSVDAG_SANITIZE_TESTS:-}" ]; then
   bash scripts/sanitize.sh || status=1
 fi
+# The installs a user makes (CMake package, out-of-tree example, pip into a fresh venv), before
+# the main suites so that the output ends with their summaries.
+xvfb-run -a -s "-screen 0 1024x768x24" bash scripts/test-install.sh || status=1
 xvfb-run -a -s "-screen 0 1024x768x24" ctest --test-dir build --output-on-failure -j2 || status=1
 xvfb-run -a -s "-screen 0 1024x768x24" .venv/bin/python -m pytest -q Testing/Python || status=1
 exit $status
