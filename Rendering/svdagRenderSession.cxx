@@ -118,5 +118,15 @@ vtkTypeInt64 RenderSession::deviceBytes(const char* part) const
   return vtkTypeInt64(bytes);
 }
 
+int RenderSession::deviceUsers()
+{
+  return int(render::Renderer::deviceUsers());
+}
+
+vtkTypeInt64 RenderSession::deviceId() const
+{
+  return this->Core ? vtkTypeInt64(this->Core->deviceSerial()) : 0;
+}
+
 } // namespace vtkglue
 } // namespace svdag

@@ -54,6 +54,12 @@ public:
   const char* backendInUse() const;
   // Bytes of device memory by part (all 0 before initialize()).
   vtkTypeInt64 deviceBytes(const char* part) const;
+  // Core renderers sharing the process's Vulkan device now (every mapper and renderer of the
+  // process uses one device; 0 when none exists), and which device this session uses (1 for the
+  // process's first, higher after the device was released and created again; 0 before
+  // initialize()).
+  static int deviceUsers();
+  vtkTypeInt64 deviceId() const;
 
 private:
   vtkSmartPointer<vtkSegmentationSVDAGRenderSettings> Settings;

@@ -372,6 +372,16 @@ vtkTypeInt64 vtkSegmentationSVDAGRenderer::GetImageBytes() const
   return this->Internal->Session.deviceBytes("images");
 }
 
+int vtkSegmentationSVDAGRenderer::GetDeviceUsers()
+{
+  return svdag::vtkglue::RenderSession::deviceUsers();
+}
+
+vtkTypeInt64 vtkSegmentationSVDAGRenderer::GetDeviceId() const
+{
+  return this->Internal->Session.deviceId();
+}
+
 const char* vtkSegmentationSVDAGRenderer::GetDeviceName() const
 {
   const svdag::render::Renderer* r = this->Internal->Session.renderer();

@@ -176,6 +176,15 @@ public:
   ///@}
 
   ///@{
+  /** Every mapper and renderer of a process shares one Vulkan device (created on first use,
+   * released with its last user). GetDeviceUsers: how many use it now (0: none exists);
+   * GetDeviceId: which device this one uses (1 for the process's first, higher after the device
+   * was released and created again; 0 before the first pass). */
+  static int GetDeviceUsers();
+  vtkTypeInt64 GetDeviceId() const;
+  ///@}
+
+  ///@{
   /** Samples per pixel in the current image, the seconds of tracing that produced it, and an
    * estimate of its error: the root mean square over pixels of the standard error of each
    * pixel's mean luminance (linear units; 0 before two samples). */

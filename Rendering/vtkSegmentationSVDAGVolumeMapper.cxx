@@ -652,6 +652,16 @@ double vtkSegmentationSVDAGVolumeMapper::GetLastFrameMilliseconds()
   return this->Internal->FrameMilliseconds;
 }
 
+int vtkSegmentationSVDAGVolumeMapper::GetDeviceUsers()
+{
+  return svdag::vtkglue::RenderSession::deviceUsers();
+}
+
+vtkTypeInt64 vtkSegmentationSVDAGVolumeMapper::GetDeviceId()
+{
+  return this->Internal->Session.deviceId();
+}
+
 const char* vtkSegmentationSVDAGVolumeMapper::GetDeviceName()
 {
   const core::Renderer* r = this->Internal->Session.renderer();

@@ -163,6 +163,15 @@ public:
   ///@}
 
   ///@{
+  /** Every mapper and renderer of a process shares one Vulkan device (created on first use,
+   * released with its last user). GetDeviceUsers: how many use it now (0: none exists);
+   * GetDeviceId: which device this one uses (1 for the process's first, higher after the device
+   * was released and created again; 0 before the first pass). */
+  static int GetDeviceUsers();
+  vtkTypeInt64 GetDeviceId();
+  ///@}
+
+  ///@{
   /**
    * The label under display pixel (x, y) (pixels, origin at the bottom left, as VTK's display
    * coordinates) in the last frame traced for `renderer`. Returns true on a hit; then

@@ -1,5 +1,7 @@
 #include "svdag_render/Context.h"
 
+#include "svdag_render/Pipeline.h"
+
 #include <algorithm>
 #include <cctype>
 #include <cstdio>
@@ -218,13 +220,45 @@ void check(VkResult result, const char* what)
   }
 }
 
-Context::Context()
+namespace
+{
+// The process's device: held by its users (Context::Keep), only observed here.
+std::mutex DeviceLock;
+std::weak_ptr<Device> CurrentDevice;
+uint64_t DevicesCreated = 0;
+} // namespace
+
+std::shared_ptr<Device> Device::acquire()
+{
+  std::lock_guard<std::mutex> lock(DeviceLock);
+  if (std::shared_ptr<Device> device = CurrentDevice.lock())
+    return device;
+  std::shared_ptr<Device> device(new Device());
+  device->Serial = ++DevicesCreated;
+  CurrentDevice = device;
+  return device;
+}
+
+size_t Device::users()
+{
+  std::lock_guard<std::mutex> lock(DeviceLock);
+  return size_t(CurrentDevice.use_count());
+}
+
+uint64_t Device::created()
+{
+  std::lock_guard<std::mutex> lock(DeviceLock);
+  return DevicesCreated;
+}
+
+Device::Device()
 {
   try
   {
     this->createInstance();
     this->pickPhysicalDevice();
     this->createDevice();
+    this->Own.reset(new Context(*this));
   }
   catch (...)
   {
@@ -233,22 +267,24 @@ Context::Context()
   }
 }
 
-Context::~Context()
+Device::~Device()
 {
   this->destroy();
 }
 
-void Context::destroy()
+void Device::destroy()
 {
-  if (this->Device)
+  if (this->Handle)
   {
-    vkDeviceWaitIdle(this->Device);
-    if (this->Fence)
-      vkDestroyFence(this->Device, this->Fence, nullptr);
-    if (this->CommandPool)
-      vkDestroyCommandPool(this->Device, this->CommandPool, nullptr);
-    vkDestroyDevice(this->Device, nullptr);
-    this->Device = VK_NULL_HANDLE;
+    vkDeviceWaitIdle(this->Handle); // no user is left: nothing else submits
+    for (auto& library : this->Libraries)
+      library.reset();
+    this->Own.reset();
+    if (this->PipelineCache)
+      vkDestroyPipelineCache(this->Handle, this->PipelineCache, nullptr);
+    this->PipelineCache = VK_NULL_HANDLE;
+    vkDestroyDevice(this->Handle, nullptr);
+    this->Handle = VK_NULL_HANDLE;
   }
   if (this->Messenger)
   {
@@ -265,7 +301,102 @@ void Context::destroy()
   }
 }
 
-void Context::createInstance()
+uint64_t Device::sharedBytes() const
+{
+  return this->Own ? this->Own->allocatedBytes() : 0;
+}
+
+PipelineLibrary& Device::pipelines(Backend backend)
+{
+  std::lock_guard<std::mutex> lock(this->PipelineLock);
+  std::unique_ptr<PipelineLibrary>& library = this->Libraries[size_t(backend)];
+  if (!library)
+    library = std::make_unique<PipelineLibrary>(*this->Own, backend);
+  return *library;
+}
+
+uint64_t Device::pipelineCompilations() const
+{
+  uint64_t compilations = 0;
+  for (const auto& library : this->Libraries)
+    compilations += library ? library->compilations() : 0;
+  return compilations;
+}
+
+VkResult Device::submit(const VkSubmitInfo& info, VkFence fence)
+{
+  std::lock_guard<std::mutex> lock(this->QueueLock);
+  return vkQueueSubmit(this->Queue, 1, &info, fence);
+}
+
+Context::Context()
+  : Keep(Device::acquire())
+  , Dev(Keep.get())
+{
+  try
+  {
+    this->createCommandObjects();
+  }
+  catch (...)
+  {
+    this->destroy();
+    throw;
+  }
+}
+
+Context::Context(Device& device)
+  : Dev(&device)
+{
+  try
+  {
+    this->createCommandObjects();
+  }
+  catch (...)
+  {
+    this->destroy();
+    throw;
+  }
+}
+
+Context::~Context()
+{
+  this->destroy();
+}
+
+void Context::createCommandObjects()
+{
+  VkCommandPoolCreateInfo poolInfo{ VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO };
+  poolInfo.flags = VK_COMMAND_POOL_CREATE_TRANSIENT_BIT;
+  poolInfo.queueFamilyIndex = this->Dev->queueFamily();
+  check(vkCreateCommandPool(this->device(), &poolInfo, nullptr, &this->CommandPool),
+    "vkCreateCommandPool");
+  VkFenceCreateInfo fenceInfo{ VK_STRUCTURE_TYPE_FENCE_CREATE_INFO };
+  check(vkCreateFence(this->device(), &fenceInfo, nullptr, &this->Fence), "vkCreateFence");
+}
+
+void Context::destroy()
+{
+  VkDevice device = this->device();
+  if (this->Fence)
+  {
+    // Every submission waits for its fence; one whose wait failed may still run.
+    if (this->InFlight)
+      vkWaitForFences(device, 1, &this->Fence, VK_TRUE, UINT64_MAX);
+    vkDestroyFence(device, this->Fence, nullptr);
+  }
+  if (this->CommandPool)
+    vkDestroyCommandPool(device, this->CommandPool, nullptr);
+  this->Fence = VK_NULL_HANDLE;
+  this->CommandPool = VK_NULL_HANDLE;
+}
+
+void Context::noteAllocation(int64_t bytes)
+{
+  this->AllocatedBytes += uint64_t(bytes);
+  this->Dev->noteAllocation(bytes);
+}
+
+void Device::createInstance()
 {
   uint32_t loaderVersion = 0;
   if (vkEnumerateInstanceVersion(&loaderVersion) != VK_SUCCESS ||
@@ -327,7 +458,7 @@ void Context::createInstance()
   }
 }
 
-void Context::pickPhysicalDevice()
+void Device::pickPhysicalDevice()
 {
   uint32_t count = 0;
   vkEnumeratePhysicalDevices(this->Instance, &count, nullptr);
@@ -379,7 +510,7 @@ void Context::pickPhysicalDevice()
     this->RayTracingMissing += (i ? ", " : "") + best->rayTracingMissing[i];
 }
 
-void Context::createDevice()
+void Device::createDevice()
 {
   VkPhysicalDeviceAccelerationStructurePropertiesKHR asProps{
     VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_ACCELERATION_STRUCTURE_PROPERTIES_KHR
@@ -440,12 +571,12 @@ void Context::createDevice()
   info.pQueueCreateInfos = &queueInfo;
   info.enabledExtensionCount = uint32_t(extensions.size());
   info.ppEnabledExtensionNames = extensions.data();
-  check(vkCreateDevice(this->PhysicalDevice, &info, nullptr, &this->Device), "vkCreateDevice");
-  vkGetDeviceQueue(this->Device, this->QueueFamily, 0, &this->Queue);
+  check(vkCreateDevice(this->PhysicalDevice, &info, nullptr, &this->Handle), "vkCreateDevice");
+  vkGetDeviceQueue(this->Handle, this->QueueFamily, 0, &this->Queue);
 
   auto load = [this](auto& fn, const char* name) {
     fn = reinterpret_cast<std::remove_reference_t<decltype(fn)>>(
-      vkGetDeviceProcAddr(this->Device, name));
+      vkGetDeviceProcAddr(this->Handle, name));
     if (!fn)
       throw std::runtime_error(std::string("Vulkan entry point missing: ") + name);
   };
@@ -465,19 +596,16 @@ void Context::createDevice()
     load(f.cmdTraceRays, "vkCmdTraceRaysKHR");
   }
 
-  VkCommandPoolCreateInfo poolInfo{ VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO };
-  poolInfo.flags = VK_COMMAND_POOL_CREATE_TRANSIENT_BIT;
-  poolInfo.queueFamilyIndex = this->QueueFamily;
-  check(vkCreateCommandPool(this->Device, &poolInfo, nullptr, &this->CommandPool),
-    "vkCreateCommandPool");
-  VkFenceCreateInfo fenceInfo{ VK_STRUCTURE_TYPE_FENCE_CREATE_INFO };
-  check(vkCreateFence(this->Device, &fenceInfo, nullptr, &this->Fence), "vkCreateFence");
+  // One cache for every pipeline any user compiles (kept in memory, for the device's life).
+  VkPipelineCacheCreateInfo cacheInfo{ VK_STRUCTURE_TYPE_PIPELINE_CACHE_CREATE_INFO };
+  check(vkCreatePipelineCache(this->Handle, &cacheInfo, nullptr, &this->PipelineCache),
+    "vkCreatePipelineCache");
 }
 
 uint32_t Context::memoryType(
   uint32_t typeBits, VkMemoryPropertyFlags required, VkMemoryPropertyFlags preferred) const
 {
-  const VkPhysicalDeviceMemoryProperties& m = this->MemoryProperties;
+  const VkPhysicalDeviceMemoryProperties& m = this->Dev->memoryProperties();
   for (const VkMemoryPropertyFlags want : { required | preferred, required })
   {
     for (uint32_t i = 0; i < m.memoryTypeCount; ++i)
@@ -491,8 +619,13 @@ uint32_t Context::memoryType(
 
 uint64_t Context::availableBytes() const
 {
-  const uint64_t cap = this->MemoryLimit ? std::min(this->MemoryLimit, this->HeapBytes) : this->HeapBytes;
-  return cap > this->AllocatedBytes ? cap - this->AllocatedBytes : 0;
+  const uint64_t heaps = this->Dev->heapBytes();
+  const uint64_t everyone = this->Dev->allocatedBytes();
+  uint64_t available = heaps > everyone ? heaps - everyone : 0;
+  if (this->MemoryLimit)
+    available = std::min(available,
+      this->MemoryLimit > this->AllocatedBytes ? this->MemoryLimit - this->AllocatedBytes : 0);
+  return available;
 }
 
 void Context::checkFits(uint64_t bytes, const std::string& what, uint64_t largestAllocation) const
@@ -502,15 +635,16 @@ void Context::checkFits(uint64_t bytes, const std::string& what, uint64_t larges
   {
     throw DeviceMemoryError(what + " needs " + std::to_string(bytes) +
       " bytes of device memory, but " + std::to_string(available) + " bytes are available (" +
-      this->DeviceName + ": " + std::to_string(this->HeapBytes) + " bytes of memory heaps" +
+      this->deviceName() + ": " + std::to_string(this->heapBytes()) + " bytes of memory heaps" +
       (this->MemoryLimit ? ", a limit of " + std::to_string(this->MemoryLimit) + " bytes" : "") +
-      ", " + std::to_string(this->AllocatedBytes) + " bytes in use by this renderer)");
+      ", " + std::to_string(this->AllocatedBytes) + " bytes in use by this renderer, " +
+      std::to_string(this->Dev->allocatedBytes()) + " by every user of the device)");
   }
-  const uint64_t cap = this->Limits.maxMemoryAllocationSize;
+  const uint64_t cap = this->limits().maxMemoryAllocationSize;
   if (cap && largestAllocation > cap)
   {
     throw DeviceMemoryError(what + " needs one allocation of " + std::to_string(largestAllocation) +
-      " bytes, but " + this->DeviceName + " allocates at most " + std::to_string(cap) +
+      " bytes, but " + this->deviceName() + " allocates at most " + std::to_string(cap) +
       " bytes at once");
   }
 }
@@ -522,7 +656,7 @@ void Context::submitAndWait(const std::function<void(VkCommandBuffer)>& record)
   allocInfo.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
   allocInfo.commandBufferCount = 1;
   VkCommandBuffer cmd = VK_NULL_HANDLE;
-  check(vkAllocateCommandBuffers(this->Device, &allocInfo, &cmd), "vkAllocateCommandBuffers");
+  check(vkAllocateCommandBuffers(this->device(), &allocInfo, &cmd), "vkAllocateCommandBuffers");
   // Frees the command buffer on every path, exceptions from `record` included.
   struct Release
   {
@@ -530,7 +664,7 @@ void Context::submitAndWait(const std::function<void(VkCommandBuffer)>& record)
     VkCommandPool pool;
     VkCommandBuffer cmd;
     ~Release() { vkFreeCommandBuffers(device, pool, 1, &cmd); }
-  } release{ this->Device, this->CommandPool, cmd };
+  } release{ this->device(), this->CommandPool, cmd };
 
   VkCommandBufferBeginInfo begin{ VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO };
   begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
@@ -546,9 +680,11 @@ void Context::submitAndWait(const std::function<void(VkCommandBuffer)>& record)
   VkSubmitInfo submit{ VK_STRUCTURE_TYPE_SUBMIT_INFO };
   submit.commandBufferCount = 1;
   submit.pCommandBuffers = &cmd;
-  check(vkResetFences(this->Device, 1, &this->Fence), "vkResetFences");
-  check(vkQueueSubmit(this->Queue, 1, &submit, this->Fence), "vkQueueSubmit");
-  check(vkWaitForFences(this->Device, 1, &this->Fence, VK_TRUE, UINT64_MAX), "vkWaitForFences");
+  check(vkResetFences(this->device(), 1, &this->Fence), "vkResetFences");
+  check(this->Dev->submit(submit, this->Fence), "vkQueueSubmit");
+  this->InFlight = true;
+  check(vkWaitForFences(this->device(), 1, &this->Fence, VK_TRUE, UINT64_MAX), "vkWaitForFences");
+  this->InFlight = false;
 }
 
 } // namespace render

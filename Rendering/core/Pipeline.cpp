@@ -74,10 +74,9 @@ struct Modules
 };
 } // namespace
 
-Pipeline::Pipeline(Context& context, Backend backend, const ShaderFeatures& features)
+PipelineLibrary::PipelineLibrary(Context& context, Backend backend)
   : Ctx(context)
   , Kind(backend)
-  , Features(features)
 {
   if (backend != Backend::RayTracing && backend != Backend::Compute)
     throw std::invalid_argument("a pipeline is built for the rt or the compute backend");
@@ -88,8 +87,140 @@ Pipeline::Pipeline(Context& context, Backend backend, const ShaderFeatures& feat
   try
   {
     this->createLayouts();
-    this->createPipeline();
-    this->createShaderBindingTable();
+  }
+  catch (...)
+  {
+    this->destroy();
+    throw;
+  }
+}
+
+PipelineLibrary::~PipelineLibrary()
+{
+  this->destroy();
+}
+
+void PipelineLibrary::destroy()
+{
+  VkDevice device = this->Ctx.device();
+  for (auto& program : this->Programs)
+  {
+    program->table.reset();
+    vkDestroyPipeline(device, program->handle, nullptr);
+  }
+  this->Programs.clear();
+  if (this->Layout)
+    vkDestroyPipelineLayout(device, this->Layout, nullptr);
+  if (this->SetLayout)
+    vkDestroyDescriptorSetLayout(device, this->SetLayout, nullptr);
+  this->Layout = VK_NULL_HANDLE;
+  this->SetLayout = VK_NULL_HANDLE;
+}
+
+uint64_t PipelineLibrary::compilations() const
+{
+  std::lock_guard<std::mutex> lock(this->Lock);
+  return this->Programs.size();
+}
+
+const PipelineLibrary::Program& PipelineLibrary::program(const ShaderFeatures& features)
+{
+  std::lock_guard<std::mutex> lock(this->Lock);
+  for (const auto& program : this->Programs)
+  {
+    if (program->features == features)
+      return *program;
+  }
+  auto program = std::make_unique<Program>();
+  program->features = features;
+  this->compile(*program);
+  this->Programs.push_back(std::move(program));
+  return *this->Programs.back();
+}
+
+void PipelineLibrary::createLayouts()
+{
+  const VkShaderStageFlags stages = this->Kind == Backend::Compute
+    ? VkShaderStageFlags(VK_SHADER_STAGE_COMPUTE_BIT)
+    : VkShaderStageFlags(VK_SHADER_STAGE_RAYGEN_BIT_KHR | VK_SHADER_STAGE_MISS_BIT_KHR |
+        VK_SHADER_STAGE_INTERSECTION_BIT_KHR | VK_SHADER_STAGE_CLOSEST_HIT_BIT_KHR);
+  const std::vector<DescriptorBinding> used = bindingsOf(this->Kind);
+  std::vector<VkDescriptorSetLayoutBinding> bindings(used.size());
+  this->PoolSizes.resize(used.size());
+  for (size_t i = 0; i < used.size(); ++i)
+  {
+    bindings[i].binding = used[i].binding;
+    bindings[i].descriptorType = used[i].type;
+    bindings[i].descriptorCount = 1;
+    bindings[i].stageFlags = stages;
+    this->PoolSizes[i] = { used[i].type, 1 };
+  }
+  VkDescriptorSetLayoutCreateInfo setInfo{ VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO };
+  setInfo.bindingCount = uint32_t(bindings.size());
+  setInfo.pBindings = bindings.data();
+  check(vkCreateDescriptorSetLayout(this->Ctx.device(), &setInfo, nullptr, &this->SetLayout),
+    "vkCreateDescriptorSetLayout");
+  VkPipelineLayoutCreateInfo layoutInfo{ VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO };
+  layoutInfo.setLayoutCount = 1;
+  layoutInfo.pSetLayouts = &this->SetLayout;
+  check(vkCreatePipelineLayout(this->Ctx.device(), &layoutInfo, nullptr, &this->Layout),
+    "vkCreatePipelineLayout");
+}
+
+void PipelineLibrary::compile(Program& program)
+{
+  // The camera shader's feature switches (GpuLayout.h's SVDAG_CONSTANT_* ids).
+  const ShaderFeatures& f = program.features;
+  VkBool32 constants[SVDAG_CONSTANT_COUNT] = {};
+  constants[SVDAG_CONSTANT_NEE] = f.nextEventEstimation;
+  constants[SVDAG_CONSTANT_ENV_MAP] = f.environmentMap;
+  constants[SVDAG_CONSTANT_SUN] = f.sun;
+  constants[SVDAG_CONSTANT_EMISSION] = f.emission;
+  constants[SVDAG_CONSTANT_TRANSMISSION] = f.transmission;
+  VkSpecializationMapEntry entries[SVDAG_CONSTANT_COUNT];
+  for (uint32_t i = 0; i < SVDAG_CONSTANT_COUNT; ++i)
+    entries[i] = { i, uint32_t(i * sizeof(VkBool32)), sizeof(VkBool32) };
+  VkSpecializationInfo specialization{ SVDAG_CONSTANT_COUNT, entries, sizeof(constants),
+    constants };
+  try
+  {
+    if (this->Kind == Backend::Compute)
+      this->createComputePipeline(program, specialization);
+    else
+      this->createRayTracingPipeline(program, specialization);
+    this->createShaderBindingTable(program);
+  }
+  catch (...)
+  {
+    program.table.reset();
+    if (program.handle)
+      vkDestroyPipeline(this->Ctx.device(), program.handle, nullptr);
+    program.handle = VK_NULL_HANDLE;
+    throw;
+  }
+}
+
+Pipeline::Pipeline(Context& context, Backend backend, const ShaderFeatures& features)
+  : Ctx(context)
+  , Library(context.shared().pipelines(backend))
+{
+  try
+  {
+    const std::vector<VkDescriptorPoolSize>& sizes = this->Library.poolSizes();
+    VkDescriptorPoolCreateInfo poolInfo{ VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO };
+    poolInfo.maxSets = 1;
+    poolInfo.poolSizeCount = uint32_t(sizes.size());
+    poolInfo.pPoolSizes = sizes.data();
+    check(vkCreateDescriptorPool(this->Ctx.device(), &poolInfo, nullptr, &this->Pool),
+      "vkCreateDescriptorPool");
+    VkDescriptorSetLayout setLayout = this->Library.setLayout();
+    VkDescriptorSetAllocateInfo alloc{ VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO };
+    alloc.descriptorPool = this->Pool;
+    alloc.descriptorSetCount = 1;
+    alloc.pSetLayouts = &setLayout;
+    check(vkAllocateDescriptorSets(this->Ctx.device(), &alloc, &this->Set),
+      "vkAllocateDescriptorSets");
+    this->setFeatures(features);
   }
   catch (...)
   {
@@ -103,122 +234,26 @@ Pipeline::~Pipeline()
   this->destroy();
 }
 
-bool Pipeline::setFeatures(const ShaderFeatures& features)
-{
-  if (features == this->Features && this->Handle)
-    return false;
-  if (this->Handle)
-    this->Kept.push_back(this->release());
-  for (auto it = this->Kept.begin(); it != this->Kept.end(); ++it)
-  {
-    if (it->features == features)
-    {
-      Built kept = std::move(*it);
-      this->Kept.erase(it);
-      this->use(std::move(kept));
-      return false;
-    }
-  }
-  this->Features = features;
-  this->createPipeline();
-  this->createShaderBindingTable();
-  return true;
-}
-
-Pipeline::Built Pipeline::release()
-{
-  Built built;
-  built.features = this->Features;
-  built.handle = this->Handle;
-  built.table = std::move(this->Table);
-  built.raygen = this->Raygen;
-  built.miss = this->Miss;
-  built.hit = this->Hit;
-  built.callable = this->Callable;
-  this->Handle = VK_NULL_HANDLE;
-  return built;
-}
-
-void Pipeline::use(Built&& built)
-{
-  this->Features = built.features;
-  this->Handle = built.handle;
-  this->Table = std::move(built.table);
-  this->Raygen = built.raygen;
-  this->Miss = built.miss;
-  this->Hit = built.hit;
-  this->Callable = built.callable;
-}
-
-void Pipeline::destroyPipeline()
-{
-  this->Table.reset();
-  if (this->Handle)
-    vkDestroyPipeline(this->Ctx.device(), this->Handle, nullptr);
-  this->Handle = VK_NULL_HANDLE;
-  for (Built& kept : this->Kept)
-  {
-    kept.table.reset();
-    vkDestroyPipeline(this->Ctx.device(), kept.handle, nullptr);
-  }
-  this->Kept.clear();
-}
-
 void Pipeline::destroy()
 {
-  VkDevice device = this->Ctx.device();
-  this->destroyPipeline();
   if (this->Pool)
-    vkDestroyDescriptorPool(device, this->Pool, nullptr);
+    vkDestroyDescriptorPool(this->Ctx.device(), this->Pool, nullptr);
   this->Pool = VK_NULL_HANDLE;
   this->Set = VK_NULL_HANDLE;
-  if (this->Layout)
-    vkDestroyPipelineLayout(device, this->Layout, nullptr);
-  if (this->SetLayout)
-    vkDestroyDescriptorSetLayout(device, this->SetLayout, nullptr);
-  this->Layout = VK_NULL_HANDLE;
-  this->SetLayout = VK_NULL_HANDLE;
 }
 
-void Pipeline::createLayouts()
+bool Pipeline::setFeatures(const ShaderFeatures& features)
 {
-  const VkShaderStageFlags stages = this->Kind == Backend::Compute
-    ? VkShaderStageFlags(VK_SHADER_STAGE_COMPUTE_BIT)
-    : VkShaderStageFlags(VK_SHADER_STAGE_RAYGEN_BIT_KHR | VK_SHADER_STAGE_MISS_BIT_KHR |
-        VK_SHADER_STAGE_INTERSECTION_BIT_KHR | VK_SHADER_STAGE_CLOSEST_HIT_BIT_KHR);
-  const std::vector<DescriptorBinding> used = bindingsOf(this->Kind);
-  std::vector<VkDescriptorSetLayoutBinding> bindings(used.size());
-  std::vector<VkDescriptorPoolSize> sizes(used.size());
-  for (size_t i = 0; i < used.size(); ++i)
+  if (this->Current && this->Current->features == features)
+    return false;
+  this->Current = &this->Library.program(features);
+  for (const ShaderFeatures& used : this->Used)
   {
-    bindings[i].binding = used[i].binding;
-    bindings[i].descriptorType = used[i].type;
-    bindings[i].descriptorCount = 1;
-    bindings[i].stageFlags = stages;
-    sizes[i] = { used[i].type, 1 };
+    if (used == features)
+      return false;
   }
-  VkDescriptorSetLayoutCreateInfo setInfo{ VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO };
-  setInfo.bindingCount = uint32_t(bindings.size());
-  setInfo.pBindings = bindings.data();
-  check(vkCreateDescriptorSetLayout(this->Ctx.device(), &setInfo, nullptr, &this->SetLayout),
-    "vkCreateDescriptorSetLayout");
-  VkPipelineLayoutCreateInfo layoutInfo{ VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO };
-  layoutInfo.setLayoutCount = 1;
-  layoutInfo.pSetLayouts = &this->SetLayout;
-  check(vkCreatePipelineLayout(this->Ctx.device(), &layoutInfo, nullptr, &this->Layout),
-    "vkCreatePipelineLayout");
-  VkDescriptorPoolCreateInfo poolInfo{ VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO };
-  poolInfo.maxSets = 1;
-  poolInfo.poolSizeCount = uint32_t(sizes.size());
-  poolInfo.pPoolSizes = sizes.data();
-  check(vkCreateDescriptorPool(this->Ctx.device(), &poolInfo, nullptr, &this->Pool),
-    "vkCreateDescriptorPool");
-  VkDescriptorSetAllocateInfo alloc{ VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO };
-  alloc.descriptorPool = this->Pool;
-  alloc.descriptorSetCount = 1;
-  alloc.pSetLayouts = &this->SetLayout;
-  check(vkAllocateDescriptorSets(this->Ctx.device(), &alloc, &this->Set),
-    "vkAllocateDescriptorSets");
+  this->Used.push_back(features);
+  return true;
 }
 
 void Pipeline::updateDescriptors(VkBuffer uniforms, VkAccelerationStructureKHR tlas)
@@ -230,7 +265,7 @@ void Pipeline::updateDescriptors(VkBuffer uniforms, VkAccelerationStructureKHR t
   asInfo.pAccelerationStructures = &tlas;
   VkDescriptorBufferInfo uniformInfo{ uniforms, 0, sizeof(gpu::FrameUniforms) };
   std::vector<VkWriteDescriptorSet> writes;
-  for (const DescriptorBinding& b : bindingsOf(this->Kind))
+  for (const DescriptorBinding& b : bindingsOf(this->backend()))
   {
     VkWriteDescriptorSet w{ VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET };
     w.dstSet = this->Set;
@@ -248,11 +283,11 @@ void Pipeline::updateDescriptors(VkBuffer uniforms, VkAccelerationStructureKHR t
 
 void Pipeline::record(VkCommandBuffer cmd, uint32_t width, uint32_t height) const
 {
-  const bool compute = this->Kind == Backend::Compute;
+  const bool compute = this->backend() == Backend::Compute;
   const VkPipelineBindPoint bind =
     compute ? VK_PIPELINE_BIND_POINT_COMPUTE : VK_PIPELINE_BIND_POINT_RAY_TRACING_KHR;
-  vkCmdBindPipeline(cmd, bind, this->Handle);
-  vkCmdBindDescriptorSets(cmd, bind, this->Layout, 0, 1, &this->Set, 0, nullptr);
+  vkCmdBindPipeline(cmd, bind, this->Current->handle);
+  vkCmdBindDescriptorSets(cmd, bind, this->layout(), 0, 1, &this->Set, 0, nullptr);
   if (compute)
   {
     const uint32_t group = SVDAG_COMPUTE_GROUP_SIZE;
@@ -260,8 +295,8 @@ void Pipeline::record(VkCommandBuffer cmd, uint32_t width, uint32_t height) cons
   }
   else
   {
-    this->Ctx.fn().cmdTraceRays(
-      cmd, &this->Raygen, &this->Miss, &this->Hit, &this->Callable, width, height, 1);
+    const PipelineLibrary::Program& p = *this->Current;
+    this->Ctx.fn().cmdTraceRays(cmd, &p.raygen, &p.miss, &p.hit, &p.callable, width, height, 1);
   }
   // Makes the shader writes visible to the host reads after the pass.
   VkMemoryBarrier barrier{ VK_STRUCTURE_TYPE_MEMORY_BARRIER };
@@ -272,28 +307,8 @@ void Pipeline::record(VkCommandBuffer cmd, uint32_t width, uint32_t height) cons
     VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &barrier, 0, nullptr, 0, nullptr);
 }
 
-void Pipeline::createPipeline()
-{
-  // The camera shader's feature switches (GpuLayout.h's SVDAG_CONSTANT_* ids).
-  VkBool32 constants[SVDAG_CONSTANT_COUNT] = {};
-  constants[SVDAG_CONSTANT_NEE] = this->Features.nextEventEstimation;
-  constants[SVDAG_CONSTANT_ENV_MAP] = this->Features.environmentMap;
-  constants[SVDAG_CONSTANT_SUN] = this->Features.sun;
-  constants[SVDAG_CONSTANT_EMISSION] = this->Features.emission;
-  constants[SVDAG_CONSTANT_TRANSMISSION] = this->Features.transmission;
-  VkSpecializationMapEntry entries[SVDAG_CONSTANT_COUNT];
-  for (uint32_t i = 0; i < SVDAG_CONSTANT_COUNT; ++i)
-    entries[i] = { i, uint32_t(i * sizeof(VkBool32)), sizeof(VkBool32) };
-  VkSpecializationInfo specialization{ SVDAG_CONSTANT_COUNT, entries, sizeof(constants),
-    constants };
-  if (this->Kind == Backend::Compute)
-    this->createComputePipeline(specialization);
-  else
-    this->createRayTracingPipeline(specialization);
-  ++this->Builds;
-}
-
-void Pipeline::createComputePipeline(const VkSpecializationInfo& specialization)
+void PipelineLibrary::createComputePipeline(
+  Program& program, const VkSpecializationInfo& specialization)
 {
   VkDevice device = this->Ctx.device();
   Modules modules{ device, {} };
@@ -306,11 +321,13 @@ void Pipeline::createComputePipeline(const VkSpecializationInfo& specialization)
   info.stage.pName = "main";
   info.stage.pSpecializationInfo = &specialization;
   info.layout = this->Layout;
-  check(vkCreateComputePipelines(device, VK_NULL_HANDLE, 1, &info, nullptr, &this->Handle),
+  check(vkCreateComputePipelines(
+          device, this->Ctx.shared().pipelineCache(), 1, &info, nullptr, &program.handle),
     "vkCreateComputePipelines");
 }
 
-void Pipeline::createRayTracingPipeline(const VkSpecializationInfo& specialization)
+void PipelineLibrary::createRayTracingPipeline(
+  Program& program, const VkSpecializationInfo& specialization)
 {
   VkDevice device = this->Ctx.device();
   struct StageCode
@@ -376,12 +393,12 @@ void Pipeline::createRayTracingPipeline(const VkSpecializationInfo& specializati
   info.pGroups = groups;
   info.maxPipelineRayRecursionDepth = 1; // every ray is traced from raygen
   info.layout = this->Layout;
-  check(this->Ctx.fn().createRayTracingPipelines(
-          device, VK_NULL_HANDLE, VK_NULL_HANDLE, 1, &info, nullptr, &this->Handle),
+  check(this->Ctx.fn().createRayTracingPipelines(device, VK_NULL_HANDLE,
+          this->Ctx.shared().pipelineCache(), 1, &info, nullptr, &program.handle),
     "vkCreateRayTracingPipelinesKHR");
 }
 
-void Pipeline::createShaderBindingTable()
+void PipelineLibrary::createShaderBindingTable(Program& program)
 {
   if (this->Kind != Backend::RayTracing)
     return;
@@ -390,7 +407,7 @@ void Pipeline::createShaderBindingTable()
   const VkDeviceSize stride = alignUp(handleSize, limits.shaderGroupHandleAlignment);
   const VkDeviceSize regionSize = alignUp(stride, limits.shaderGroupBaseAlignment);
   std::vector<uint8_t> handles(GroupCount * handleSize);
-  check(this->Ctx.fn().getRayTracingShaderGroupHandles(this->Ctx.device(), this->Handle, 0,
+  check(this->Ctx.fn().getRayTracingShaderGroupHandles(this->Ctx.device(), program.handle, 0,
           GroupCount, handles.size(), handles.data()),
     "vkGetRayTracingShaderGroupHandlesKHR");
   // Regions start at multiples of shaderGroupBaseAlignment: raygen (one record), miss (the two
@@ -406,15 +423,15 @@ void Pipeline::createShaderBindingTable()
     std::memcpy(table.data() + recordOffsets[g], handles.data() + g * handleSize, handleSize);
   // The table's base address must itself be aligned to shaderGroupBaseAlignment; over-allocate.
   const VkDeviceSize base = limits.shaderGroupBaseAlignment;
-  this->Table = Buffer(this->Ctx, table.size() + base, VK_BUFFER_USAGE_SHADER_BINDING_TABLE_BIT_KHR,
-    MemoryUse::Upload);
-  const VkDeviceAddress start = alignUp(this->Table.address(), base);
-  std::memcpy(static_cast<uint8_t*>(this->Table.mapped()) + (start - this->Table.address()),
+  program.table = Buffer(this->Ctx, table.size() + base,
+    VK_BUFFER_USAGE_SHADER_BINDING_TABLE_BIT_KHR, MemoryUse::Upload);
+  const VkDeviceAddress start = alignUp(program.table.address(), base);
+  std::memcpy(static_cast<uint8_t*>(program.table.mapped()) + (start - program.table.address()),
     table.data(), table.size());
-  this->Raygen = { start, regionSize, regionSize };
-  this->Miss = { start + missOffset, stride, 2 * stride };
-  this->Hit = { start + hitOffset, stride, 2 * stride };
-  this->Callable = { 0, 0, 0 };
+  program.raygen = { start, regionSize, regionSize };
+  program.miss = { start + missOffset, stride, 2 * stride };
+  program.hit = { start + hitOffset, stride, 2 * stride };
+  program.callable = { 0, 0, 0 };
 }
 
 } // namespace render

@@ -144,7 +144,8 @@ struct Renderer::Gpu
   Buffer envMarginal, envConditional, envTexels;
   glm::uvec2 envSize{ 1, 1 };
 
-  ~Gpu() { vkDeviceWaitIdle(context.device()); }
+  // Nothing of this renderer is in flight between calls (every submission waits for its fence);
+  // the device itself may be busy with another renderer's work, so it is not waited for.
 
   Pipeline& pipeline(Backend backend, const ShaderFeatures& features)
   {
@@ -203,6 +204,31 @@ Renderer::~Renderer() = default;
 const std::string& Renderer::deviceName() const
 {
   return this->Device->context.deviceName();
+}
+
+size_t Renderer::deviceUsers()
+{
+  return Context::users();
+}
+
+uint64_t Renderer::deviceSerial() const
+{
+  return this->Device->context.shared().serial();
+}
+
+uint64_t Renderer::deviceAllocatedBytes() const
+{
+  return this->Device->context.shared().allocatedBytes();
+}
+
+uint64_t Renderer::sharedDeviceBytes() const
+{
+  return this->Device->context.shared().sharedBytes();
+}
+
+uint64_t Renderer::pipelineCompilations() const
+{
+  return this->Device->context.shared().pipelineCompilations();
 }
 
 bool Renderer::hasRayTracing() const

@@ -1,4 +1,5 @@
-// The Vulkan instance, the chosen device, its queue and the extension entry points.
+// The Vulkan instance, the chosen device, its queue and the extension entry points: one Device
+// per process, shared by every renderer through its Context.
 //
 // Device choice: among the physical devices that have what every backend needs (Vulkan 1.2,
 // VK_KHR_buffer_device_address and its feature, a compute queue), a discrete GPU is preferred,
@@ -10,7 +11,7 @@
 //   SVDAG_VK_DEVICE=<substring>  only devices whose name contains it (case-insensitive)
 //   SVDAG_VK_NO_RAY_TRACING=1    treat every device as one without ray tracing
 //   SVDAG_VK_VALIDATION=1        enable VK_LAYER_KHRONOS_validation (messages on stderr)
-// When nothing qualifies the constructor throws std::runtime_error naming every device found and
+// (read when the device is created). When nothing qualifies Device::acquire throws std::runtime_error naming every device found and
 // what it lacks ("no Vulkan driver/loader" when the instance cannot be created); it never crashes
 // on a machine without Vulkan (the loader is linked, but an absent driver is an error, not a
 // crash).
@@ -18,8 +19,11 @@
 
 #include <vulkan/vulkan.h>
 
+#include <atomic>
 #include <cstdint>
 #include <functional>
+#include <memory>
+#include <mutex>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -71,73 +75,160 @@ struct RayTracingLimits
   uint32_t maxComputeWorkGroupCount[2] = { 0, 0 }; // x, y
 };
 
-class Context
+class Context;
+class PipelineLibrary;
+enum class Backend : uint32_t;
+
+// The process's Vulkan instance, device and queue, shared by every Context (one per renderer):
+// the first Context creates it, the last one to go destroys it (a later Context creates a new
+// one, reading the environment variables again). A failed creation is not remembered: every
+// Context that asks tries again and throws the same error. Besides the device it holds what the
+// renderers share: the pipeline cache and, per backend, the pipelines of every feature set asked
+// for (Pipeline.h's PipelineLibrary), and the count of device memory all users hold.
+// Submissions to the one queue are serialised (Context::submitAndWait); the methods may be
+// called from several threads.
+class Device
 {
 public:
-  // Creates the instance and the device (see the file comment). Throws std::runtime_error.
-  Context();
-  ~Context();
-  Context(const Context&) = delete;
-  Context& operator=(const Context&) = delete;
+  // The device in use, or a new one (see the file comment). Throws std::runtime_error.
+  static std::shared_ptr<Device> acquire();
+  // Contexts holding the device now (0: no device exists).
+  static size_t users();
+  // Devices created in this process so far (a new one after the last user went counts again).
+  static uint64_t created();
 
+  ~Device();
+  Device(const Device&) = delete;
+  Device& operator=(const Device&) = delete;
+
+  // Which of the process's devices this is: 1 for the first one created, 2 for the next...
+  uint64_t serial() const { return this->Serial; }
   VkInstance instance() const { return this->Instance; }
   VkPhysicalDevice physicalDevice() const { return this->PhysicalDevice; }
-  VkDevice device() const { return this->Device; }
+  VkDevice device() const { return this->Handle; }
   VkQueue queue() const { return this->Queue; }
   uint32_t queueFamily() const { return this->QueueFamily; }
   const std::string& deviceName() const { return this->DeviceName; }
   bool isCpuDevice() const { return this->CpuDevice; }
-  // Whether the ray tracing backend can run; if not, what the device lacks for it.
   bool hasRayTracing() const { return this->RayTracing; }
   const std::string& rayTracingMissing() const { return this->RayTracingMissing; }
   const DeviceFunctions& fn() const { return this->Functions; }
   const RayTracingLimits& limits() const { return this->Limits; }
-
-  // A memory type allowed by typeBits with all `required` flags, preferring one that also has
-  // `preferred`. Throws std::runtime_error when none exists.
-  uint32_t memoryType(uint32_t typeBits, VkMemoryPropertyFlags required,
-    VkMemoryPropertyFlags preferred = 0) const;
-
-  // Device memory this context holds (every Buffer counts itself) and may hold: the size of
-  // the memory heaps, or less if a limit is set (0: none), for a renderer sharing its GPU.
-  uint64_t allocatedBytes() const { return this->AllocatedBytes; }
+  const VkPhysicalDeviceMemoryProperties& memoryProperties() const { return this->MemoryProperties; }
   uint64_t heapBytes() const { return this->HeapBytes; }
-  void setMemoryLimit(uint64_t bytes) { this->MemoryLimit = bytes; }
-  uint64_t memoryLimit() const { return this->MemoryLimit; }
-  // Bytes that can still be allocated: min(heaps, limit) - allocated.
-  uint64_t availableBytes() const;
-  // Throws DeviceMemoryError naming `bytes` (for `what`) and availableBytes() when they do not
-  // fit, or when one allocation of `largestAllocation` bytes exceeds the driver's limit.
-  void checkFits(uint64_t bytes, const std::string& what, uint64_t largestAllocation) const;
+  VkPipelineCache pipelineCache() const { return this->PipelineCache; }
+
+  // Device memory every user holds together, and the part the device holds for all of them
+  // (the pipelines' shader binding tables).
+  uint64_t allocatedBytes() const { return this->AllocatedBytes.load(); }
+  uint64_t sharedBytes() const;
   void noteAllocation(int64_t bytes) { this->AllocatedBytes += uint64_t(bytes); }
 
-  // Records commands into a one-time command buffer, submits it and waits for completion.
-  void submitAndWait(const std::function<void(VkCommandBuffer)>& record);
+  // The pipelines of one backend (created on first use; the backend must be one the device can
+  // run). Pipeline compilations so far, over every backend and user.
+  PipelineLibrary& pipelines(Backend backend);
+  uint64_t pipelineCompilations() const;
+
+  // Submits to the queue under the device's lock.
+  VkResult submit(const VkSubmitInfo& info, VkFence fence);
 
 private:
+  Device();
   void createInstance();
   void pickPhysicalDevice();
   void createDevice();
   void destroy();
 
+  uint64_t Serial = 0;
   VkInstance Instance = VK_NULL_HANDLE;
   VkDebugUtilsMessengerEXT Messenger = VK_NULL_HANDLE; // with SVDAG_VK_VALIDATION only
   VkPhysicalDevice PhysicalDevice = VK_NULL_HANDLE;
-  VkDevice Device = VK_NULL_HANDLE;
+  VkDevice Handle = VK_NULL_HANDLE;
   VkQueue Queue = VK_NULL_HANDLE;
   uint32_t QueueFamily = 0;
-  VkCommandPool CommandPool = VK_NULL_HANDLE;
-  VkFence Fence = VK_NULL_HANDLE;
+  VkPipelineCache PipelineCache = VK_NULL_HANDLE;
   std::string DeviceName;
   bool CpuDevice = false;
   bool RayTracing = false;
   std::string RayTracingMissing;
   VkPhysicalDeviceMemoryProperties MemoryProperties{};
   uint64_t HeapBytes = 0; // device-local heaps (all heaps if none is device-local)
-  uint64_t AllocatedBytes = 0;
-  uint64_t MemoryLimit = 0;
+  std::atomic<uint64_t> AllocatedBytes{ 0 };
   DeviceFunctions Functions;
   RayTracingLimits Limits;
+  std::mutex QueueLock;
+  std::mutex PipelineLock;
+  // The device's own allocations (shader binding tables) are counted on this context.
+  std::unique_ptr<Context> Own;
+  std::unique_ptr<PipelineLibrary> Libraries[3]; // indexed by Backend
+};
+
+// One user's (one renderer's) handle on the shared Device: its own command pool and fence, and
+// the count of the device memory it holds, checked against its own limit.
+class Context
+{
+public:
+  // Takes the process's device, creating it if there is none (Device::acquire). Throws
+  // std::runtime_error naming every device found and what it lacks.
+  Context();
+  ~Context();
+  Context(const Context&) = delete;
+  Context& operator=(const Context&) = delete;
+
+  // Contexts sharing the process's device now (Device::users).
+  static size_t users() { return Device::users(); }
+  Device& shared() const { return *this->Dev; }
+
+  VkInstance instance() const { return this->Dev->instance(); }
+  VkPhysicalDevice physicalDevice() const { return this->Dev->physicalDevice(); }
+  VkDevice device() const { return this->Dev->device(); }
+  VkQueue queue() const { return this->Dev->queue(); }
+  uint32_t queueFamily() const { return this->Dev->queueFamily(); }
+  const std::string& deviceName() const { return this->Dev->deviceName(); }
+  bool isCpuDevice() const { return this->Dev->isCpuDevice(); }
+  // Whether the ray tracing backend can run; if not, what the device lacks for it.
+  bool hasRayTracing() const { return this->Dev->hasRayTracing(); }
+  const std::string& rayTracingMissing() const { return this->Dev->rayTracingMissing(); }
+  const DeviceFunctions& fn() const { return this->Dev->fn(); }
+  const RayTracingLimits& limits() const { return this->Dev->limits(); }
+
+  // A memory type allowed by typeBits with all `required` flags, preferring one that also has
+  // `preferred`. Throws std::runtime_error when none exists.
+  uint32_t memoryType(uint32_t typeBits, VkMemoryPropertyFlags required,
+    VkMemoryPropertyFlags preferred = 0) const;
+
+  // Device memory this context holds (every Buffer counts itself on the context it was made
+  // with) and may hold. The limit (0: none) is this context's own, for a renderer sharing its
+  // GPU: it caps this context's bytes, whatever the other users of the device hold; the heaps
+  // cap what all users hold together.
+  uint64_t allocatedBytes() const { return this->AllocatedBytes; }
+  uint64_t heapBytes() const { return this->Dev->heapBytes(); }
+  void setMemoryLimit(uint64_t bytes) { this->MemoryLimit = bytes; }
+  uint64_t memoryLimit() const { return this->MemoryLimit; }
+  // Bytes that can still be allocated: min(heaps - what every user holds, limit - allocated).
+  uint64_t availableBytes() const;
+  // Throws DeviceMemoryError naming `bytes` (for `what`) and availableBytes() when they do not
+  // fit, or when one allocation of `largestAllocation` bytes exceeds the driver's limit.
+  void checkFits(uint64_t bytes, const std::string& what, uint64_t largestAllocation) const;
+  void noteAllocation(int64_t bytes);
+
+  // Records commands into a one-time command buffer, submits it (the device serialises
+  // submissions) and waits for its completion.
+  void submitAndWait(const std::function<void(VkCommandBuffer)>& record);
+
+private:
+  friend class Device;
+  explicit Context(Device& device); // the device's own context (holds no reference)
+  void createCommandObjects();
+  void destroy();
+
+  std::shared_ptr<Device> Keep; // null for the device's own context
+  Device* Dev = nullptr;
+  VkCommandPool CommandPool = VK_NULL_HANDLE;
+  VkFence Fence = VK_NULL_HANDLE;
+  bool InFlight = false; // submitted, not yet waited for
+  uint64_t AllocatedBytes = 0;
+  uint64_t MemoryLimit = 0;
 };
 
 } // namespace render

@@ -12,8 +12,9 @@
 // groups with block.rchit: block.rint (per-block DAG traversal, first hits; sbtRecordOffset 0) and
 // block.rint compiled with SVDAG_ENTRY_ONLY=1 (entry-only hits for rays that continue through a
 // transmissive surface; sbtRecordOffset 1). The path tracer's feature
-// switches are specialization constants of camera.rgen / camera.comp (ShaderFeatures); setFeatures rebuilds
-// the pipeline, keeping the layouts (descriptor sets stay valid). Descriptor set 0: the TLAS (SVDAG_BINDING_TLAS) and the frame uniforms
+// switches are specialization constants of camera.rgen / camera.comp (ShaderFeatures). The layouts
+// and pipelines are the device's, shared by every renderer (PipelineLibrary); each renderer has
+// its own descriptor set. Descriptor set 0: the TLAS (SVDAG_BINDING_TLAS) and the frame uniforms
 // (SVDAG_BINDING_FRAME), see GpuLayout.h. The SBT's handle size and alignments are read from
 // the driver.
 #pragma once
@@ -24,6 +25,8 @@
 #include "svdag_render/RenderSettings.h"
 
 #include <array>
+#include <memory>
+#include <mutex>
 #include <vector>
 
 namespace svdag
@@ -60,6 +63,59 @@ struct ShaderFeatures
   bool operator!=(const ShaderFeatures& o) const { return !(*this == o); }
 };
 
+// The pipelines of one backend on one device, shared by every renderer (Device::pipelines):
+// the descriptor set and pipeline layouts, and one compiled pipeline (with its shader binding
+// table, ray tracing) per feature set asked for, kept for the device's life, so that a feature
+// toggled back or a second renderer with the same features costs no compilation. Compiled
+// through the device's pipeline cache.
+class PipelineLibrary
+{
+public:
+  // One compiled pipeline: its features, handle, shader binding table and the table's regions.
+  struct Program
+  {
+    ShaderFeatures features;
+    VkPipeline handle = VK_NULL_HANDLE;
+    Buffer table;
+    VkStridedDeviceAddressRegionKHR raygen{}, miss{}, hit{}, callable{};
+  };
+
+  // context: the device's own (it counts the shader binding tables). backend: RayTracing (the
+  // device must have ray tracing) or Compute.
+  PipelineLibrary(Context& context, Backend backend);
+  ~PipelineLibrary();
+  PipelineLibrary(const PipelineLibrary&) = delete;
+  PipelineLibrary& operator=(const PipelineLibrary&) = delete;
+
+  // The program of these features, compiled the first time any user asks for them (the
+  // reference stays valid for the library's life). Thread-safe.
+  const Program& program(const ShaderFeatures& features);
+  Backend backend() const { return this->Kind; }
+  VkPipelineLayout layout() const { return this->Layout; }
+  VkDescriptorSetLayout setLayout() const { return this->SetLayout; }
+  // The pool sizes of one descriptor set of this backend.
+  const std::vector<VkDescriptorPoolSize>& poolSizes() const { return this->PoolSizes; }
+  uint64_t compilations() const;
+
+private:
+  void createLayouts();
+  void compile(Program& program);
+  void createRayTracingPipeline(Program& program, const VkSpecializationInfo& specialization);
+  void createComputePipeline(Program& program, const VkSpecializationInfo& specialization);
+  void createShaderBindingTable(Program& program);
+  void destroy();
+
+  Context& Ctx;
+  Backend Kind;
+  VkDescriptorSetLayout SetLayout = VK_NULL_HANDLE;
+  VkPipelineLayout Layout = VK_NULL_HANDLE;
+  std::vector<VkDescriptorPoolSize> PoolSizes;
+  mutable std::mutex Lock;
+  std::vector<std::unique_ptr<Program>> Programs;
+};
+
+// One renderer's use of a backend's shared pipelines: its own descriptor set (its uniforms and
+// TLAS) and the program of the features it renders with now.
 class Pipeline
 {
 public:
@@ -69,64 +125,41 @@ public:
   Pipeline(const Pipeline&) = delete;
   Pipeline& operator=(const Pipeline&) = delete;
 
-  // Switches to the pipeline (and shader binding table) of these features, building it the first
-  // time they are asked for; returns whether it built one. The pipelines built before are kept
-  // (a few: one per feature set a session uses), so toggling a feature back, such as emission
-  // when a highlighted label is hidden and shown, costs no shader compilation. Call only while
-  // no frame is in flight (the renderer waits for every frame).
+  // Switches to the pipeline (and shader binding table) of these features; returns whether this
+  // renderer had not used them before. The device compiles each feature set once for all
+  // renderers and keeps it (Device::pipelineCompilations counts compilations), so toggling a
+  // feature back, such as emission when a highlighted label is hidden and shown, costs nothing.
+  // Call only while no frame of this renderer is in flight (the renderer waits for every frame).
   bool setFeatures(const ShaderFeatures& features);
-  const ShaderFeatures& features() const { return this->Features; }
-  // Pipelines built so far (the constructor's included): a test sees rebuilds.
-  uint64_t builds() const { return this->Builds; }
+  const ShaderFeatures& features() const { return this->Current->features; }
+  // Feature sets this renderer used so far (the constructor's included): a test sees what a
+  // change asks for, whether or not another renderer compiled it already.
+  uint64_t builds() const { return this->Used.size(); }
 
-  Backend backend() const { return this->Kind; }
-  VkPipeline handle() const { return this->Handle; }
-  VkPipelineLayout layout() const { return this->Layout; }
-  VkDescriptorSetLayout setLayout() const { return this->SetLayout; }
-  // Points descriptor set 0 at the frame uniforms and (ray tracing) the TLAS.
+  Backend backend() const { return this->Library.backend(); }
+  VkPipeline handle() const { return this->Current->handle; }
+  VkPipelineLayout layout() const { return this->Library.layout(); }
+  VkDescriptorSetLayout setLayout() const { return this->Library.setLayout(); }
+  // Points this renderer's descriptor set 0 at its frame uniforms and (ray tracing) its TLAS.
   void updateDescriptors(VkBuffer uniforms, VkAccelerationStructureKHR tlas);
   // Records one pass over a width x height image: bind, trace or dispatch, and a barrier that
   // makes the shader writes visible to the host.
   void record(VkCommandBuffer cmd, uint32_t width, uint32_t height) const;
   // Shader binding table regions for vkCmdTraceRaysKHR.
-  const VkStridedDeviceAddressRegionKHR& raygenRegion() const { return this->Raygen; }
-  const VkStridedDeviceAddressRegionKHR& missRegion() const { return this->Miss; }
-  const VkStridedDeviceAddressRegionKHR& hitRegion() const { return this->Hit; }
-  const VkStridedDeviceAddressRegionKHR& callableRegion() const { return this->Callable; }
+  const VkStridedDeviceAddressRegionKHR& raygenRegion() const { return this->Current->raygen; }
+  const VkStridedDeviceAddressRegionKHR& missRegion() const { return this->Current->miss; }
+  const VkStridedDeviceAddressRegionKHR& hitRegion() const { return this->Current->hit; }
+  const VkStridedDeviceAddressRegionKHR& callableRegion() const { return this->Current->callable; }
 
 private:
-  void createLayouts();
-  void createPipeline();
-  void createRayTracingPipeline(const VkSpecializationInfo& specialization);
-  void createComputePipeline(const VkSpecializationInfo& specialization);
-  void createShaderBindingTable();
-  void destroyPipeline();
   void destroy();
 
-  // One built pipeline: its features, handle, shader binding table and the table's regions.
-  struct Built
-  {
-    ShaderFeatures features;
-    VkPipeline handle = VK_NULL_HANDLE;
-    Buffer table;
-    VkStridedDeviceAddressRegionKHR raygen{}, miss{}, hit{}, callable{};
-  };
-  // Moves the pipeline in use out (leaving none in use), or in.
-  Built release();
-  void use(Built&& built);
-
   Context& Ctx;
-  Backend Kind;
-  ShaderFeatures Features;
-  uint64_t Builds = 0;
-  VkDescriptorSetLayout SetLayout = VK_NULL_HANDLE;
-  VkPipelineLayout Layout = VK_NULL_HANDLE;
+  PipelineLibrary& Library;
+  const PipelineLibrary::Program* Current = nullptr;
+  std::vector<ShaderFeatures> Used;
   VkDescriptorPool Pool = VK_NULL_HANDLE;
   VkDescriptorSet Set = VK_NULL_HANDLE;
-  VkPipeline Handle = VK_NULL_HANDLE;
-  Buffer Table;
-  VkStridedDeviceAddressRegionKHR Raygen{}, Miss{}, Hit{}, Callable{};
-  std::vector<Built> Kept; // the pipelines of other feature sets, built before
 };
 
 } // namespace render

@@ -120,7 +120,9 @@ struct RenderSettings
   // Most blocks per bottom-level acceleration structure; 0: the device's limit.
   uint32_t maximumBlocksPerBlas = 0;
   // Most bytes of device memory the renderer may hold (0: the device's memory heaps), for a GPU
-  // shared with other programs. What does not fit fails with a DeviceMemoryError naming the
+  // shared with other programs. Per renderer: the renderers of a process share one device, and
+  // each one's own bytes (Renderer::deviceBytes) count against its own limit; the heaps cap all
+  // of them together. What does not fit fails with a DeviceMemoryError naming the
   // bytes needed and available, before anything is allocated for it.
   uint64_t deviceMemoryLimit = 0;
   // Voxel face normals or smooth normals for shading (path tracer and the Normal output).

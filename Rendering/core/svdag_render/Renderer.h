@@ -83,8 +83,10 @@ struct Image
 class Renderer
 {
 public:
-  // Creates the Vulkan context. Throws std::runtime_error (no usable device: the message names
-  // every device found and what it lacks).
+  // Takes the process's Vulkan device (Context.h's Device: one per process, created by the first
+  // renderer, released with the last; its pipelines are shared, everything else here is this
+  // renderer's own). Throws std::runtime_error (no usable device: the message names every device
+  // found and what it lacks), for each renderer that tries.
   Renderer();
   ~Renderer();
   Renderer(const Renderer&) = delete;
@@ -92,6 +94,18 @@ public:
 
   const std::string& deviceName() const;
   bool hasRayTracing() const;
+  // Renderers (and other Context holders) sharing the process's device now; 0 when none exists.
+  static size_t deviceUsers();
+  // Which device this renderer uses: 1 for the process's first, 2 for the one created after the
+  // first was released...
+  uint64_t deviceSerial() const;
+  // Device memory every user of the device holds, and the part the device holds for all of them
+  // (the shared pipelines' shader binding tables; not in any renderer's deviceBytes()).
+  uint64_t deviceAllocatedBytes() const;
+  uint64_t sharedDeviceBytes() const;
+  // Pipelines the device compiled so far, for every renderer (pipelineBuilds() counts this
+  // renderer's feature sets, compiled by it or before it).
+  uint64_t pipelineCompilations() const;
 
   // The backend (RenderSettings::backend; also part of setSettings). A change rebuilds what the
   // backends find blocks with (setupSeconds measures it) and restarts the accumulation. Throws
@@ -120,7 +134,9 @@ public:
   // and maximum Scene::MaxBlockChunkShift). Smaller chunks exist to exercise the chunked path
   // on small volumes (tests).
   void setBlockChunkShift(uint32_t shift);
-  // Bytes of device memory the renderer holds now (streams, BVH or grid, materials, images).
+  // Bytes of device memory the renderer holds now (streams, BVH or grid, materials, images),
+  // without what it shares with other renderers (sharedDeviceBytes()). deviceMemoryLimit caps
+  // these bytes: the limit is per renderer.
   uint64_t deviceBytes() const;
   DeviceBytes deviceBytesByPart() const;
   size_t blockChunkCount() const;

@@ -1,0 +1,189 @@
+// One Vulkan device per process (Context.h's Device): renderers share it and its pipelines, keep
+// their own scenes, images, byte counts and memory limits, and the device goes with its last
+// user. References: each renderer's frames against the same renderer's frames alone (made while
+// no other renderer exists), and the byte counts it has alone.
+#include <svdag/Builder.h>
+#include <svdag_render/Camera.h>
+#include <svdag_render/Context.h>
+#include <svdag_render/Renderer.h>
+
+#include <gtest/gtest.h>
+
+#include <memory>
+#include <random>
+#include <vector>
+
+namespace
+{
+std::shared_ptr<const svdag::Volume> randomVolume(uint32_t seed)
+{
+  svdag::Geometry g;
+  g.dims = { { 23 + int(seed % 5), 19, 17 } };
+  std::mt19937 rng(seed);
+  std::vector<uint16_t> labels(g.voxelCount());
+  for (auto& l : labels)
+    l = (rng() % 4 == 0) ? uint16_t(1 + rng() % 5) : 0;
+  return std::make_shared<const svdag::Volume>(
+    svdag::Builder::build(g, svdag::ScalarType::UInt16, labels.data()));
+}
+
+std::unique_ptr<svdag::render::Renderer> makeRenderer(
+  const std::shared_ptr<const svdag::Volume>& volume, svdag::render::Backend backend)
+{
+  auto r = std::make_unique<svdag::render::Renderer>();
+  r->setBackend(backend);
+  r->setVolume(volume);
+  r->setImageSize(40, 30);
+  r->setCamera(svdag::render::frameVolume(volume->geometry, 30, 20));
+  r->setSamplesPerPixel(2);
+  return r;
+}
+
+struct Frame
+{
+  svdag::render::Image image;
+  uint64_t bytes = 0;
+};
+
+Frame renderTwice(svdag::render::Renderer& r)
+{
+  r.render();
+  Frame f;
+  f.image = r.render();
+  f.bytes = r.deviceBytes();
+  return f;
+}
+
+void expectSameImage(const svdag::render::Image& a, const svdag::render::Image& b, size_t which)
+{
+  EXPECT_EQ(a.label, b.label) << "renderer " << which;
+  EXPECT_EQ(a.depth, b.depth) << "renderer " << which;
+  EXPECT_EQ(a.hdr, b.hdr) << "renderer " << which;
+  EXPECT_EQ(a.color, b.color) << "renderer " << which;
+}
+
+const svdag::render::Backend Backends[] = { svdag::render::Backend::Compute,
+  svdag::render::Backend::RayTracing };
+} // namespace
+
+TEST(DeviceSharing, RenderersShareOneDeviceAndRenderWhatTheyRenderAlone)
+{
+  ASSERT_EQ(svdag::render::Renderer::deviceUsers(), 0u);
+  std::vector<std::shared_ptr<const svdag::Volume>> volumes;
+  for (uint32_t i = 0; i < 4; ++i)
+    volumes.push_back(randomVolume(11 + i));
+
+  // Alone: one renderer at a time (the device is created and released for each).
+  std::vector<Frame> alone;
+  uint64_t lastSerial = 0;
+  for (size_t i = 0; i < volumes.size(); ++i)
+  {
+    auto r = makeRenderer(volumes[i], Backends[i % 2]);
+    EXPECT_EQ(svdag::render::Renderer::deviceUsers(), 1u);
+    EXPECT_GT(r->deviceSerial(), lastSerial) << "the last user's device was kept";
+    lastSerial = r->deviceSerial();
+    alone.push_back(renderTwice(*r));
+  }
+  EXPECT_EQ(svdag::render::Renderer::deviceUsers(), 0u);
+
+  // Together: one device, frames interleaved (each renderer submits after the others).
+  std::vector<std::unique_ptr<svdag::render::Renderer>> together;
+  for (size_t i = 0; i < volumes.size(); ++i)
+    together.push_back(makeRenderer(volumes[i], Backends[i % 2]));
+  EXPECT_EQ(svdag::render::Renderer::deviceUsers(), volumes.size());
+  for (const auto& r : together)
+  {
+    EXPECT_EQ(r->deviceSerial(), together[0]->deviceSerial());
+    EXPECT_EQ(r->deviceSerial(), lastSerial + 1);
+  }
+  std::vector<Frame> frames(volumes.size());
+  for (int pass = 0; pass < 2; ++pass)
+  {
+    for (size_t i = 0; i < together.size(); ++i)
+      frames[i].image = together[i]->render();
+  }
+  uint64_t sum = 0;
+  for (size_t i = 0; i < together.size(); ++i)
+  {
+    frames[i].bytes = together[i]->deviceBytes();
+    expectSameImage(frames[i].image, alone[i].image, i);
+    EXPECT_EQ(frames[i].bytes, alone[i].bytes) << "renderer " << i << "'s own bytes";
+    EXPECT_EQ(together[i]->pipelineBuilds(), 1u);
+    sum += frames[i].bytes;
+  }
+  // Every byte on the device is one renderer's or the shared pipelines' (none is counted twice).
+  EXPECT_EQ(together[0]->deviceAllocatedBytes(), sum + together[0]->sharedDeviceBytes());
+  // One pipeline per backend for all four renderers.
+  EXPECT_EQ(together[0]->pipelineCompilations(), 2u);
+
+  // The device goes with its last user; the next one creates a new device.
+  together.clear();
+  EXPECT_EQ(svdag::render::Renderer::deviceUsers(), 0u);
+  auto again = makeRenderer(volumes[0], Backends[0]);
+  EXPECT_EQ(again->deviceSerial(), lastSerial + 2);
+  expectSameImage(renderTwice(*again).image, alone[0].image, 0);
+}
+
+TEST(DeviceSharing, MemoryLimitIsPerRenderer)
+{
+  const auto volume = randomVolume(5);
+  auto unlimited = makeRenderer(volume, svdag::render::Backend::Compute);
+  unlimited->render();
+  const uint64_t held = unlimited->deviceBytes();
+  const svdag::render::DeviceBytes parts = unlimited->deviceBytesByPart();
+  const uint64_t half = (parts.encoding + parts.acceleration) / 2;
+  // A second renderer limited to fewer bytes than the volume needs fails, naming its own limit
+  // and bytes; the first one, without a limit, keeps rendering, and its bytes do not count
+  // against the second one's limit.
+  svdag::render::Renderer limited;
+  svdag::render::RenderSettings settings;
+  settings.backend = svdag::render::Backend::Compute;
+  settings.deviceMemoryLimit = half;
+  limited.setSettings(settings);
+  try
+  {
+    limited.setVolume(volume);
+    FAIL() << "the volume fit under half the bytes of its streams and grid";
+  }
+  catch (const svdag::render::DeviceMemoryError& e)
+  {
+    const std::string message = e.what();
+    EXPECT_NE(message.find("a limit of " + std::to_string(half) + " bytes"),
+      std::string::npos) << message;
+  }
+  EXPECT_LE(limited.deviceBytes(), half);
+  EXPECT_EQ(unlimited->render().label.size(), 40u * 30u);
+  EXPECT_EQ(unlimited->deviceBytes(), held);
+  // A limit above what it needs alone (with room for the transient staging buffers) is enough,
+  // although the device holds more than that limit for both renderers together.
+  settings.deviceMemoryLimit = held + held / 2;
+  limited.setSettings(settings);
+  limited.setVolume(volume);
+  limited.setImageSize(40, 30);
+  limited.setCamera(svdag::render::frameVolume(volume->geometry, 30, 20));
+  EXPECT_NO_THROW(limited.render());
+  EXPECT_EQ(limited.deviceBytes(), held);
+  EXPECT_GE(limited.deviceAllocatedBytes(), 2 * held);
+  EXPECT_GT(limited.deviceAllocatedBytes(), settings.deviceMemoryLimit);
+}
+
+TEST(DeviceSharing, AFailedDeviceIsReportedToEveryUserAndNotKept)
+{
+  {
+    // Each user that asks while no device qualifies gets the error (nothing is remembered).
+    setenv("SVDAG_VK_DEVICE", "no-such-device-xyz", 1);
+    for (int user = 0; user < 2; ++user)
+      EXPECT_THROW(svdag::render::Renderer(), std::runtime_error) << "user " << user;
+    unsetenv("SVDAG_VK_DEVICE");
+  }
+  EXPECT_EQ(svdag::render::Renderer::deviceUsers(), 0u);
+  // The variable is read when the device is created: a renderer made now gets a device.
+  svdag::render::Renderer renderer;
+  EXPECT_EQ(svdag::render::Renderer::deviceUsers(), 1u);
+  // ... and while it exists, a second one shares it whatever the variable says now.
+  setenv("SVDAG_VK_DEVICE", "no-such-device-xyz", 1);
+  svdag::render::Renderer second;
+  unsetenv("SVDAG_VK_DEVICE");
+  EXPECT_EQ(second.deviceSerial(), renderer.deviceSerial());
+  EXPECT_EQ(svdag::render::Renderer::deviceUsers(), 2u);
+}
