@@ -944,6 +944,20 @@ bool vtkSegmentationSVDAGVolumeMapper::Pick(vtkRenderer* renderer, double x, dou
   return true;
 }
 
+vtkTypeInt64 vtkSegmentationSVDAGVolumeMapper::GetLabelForCompositeIndex(unsigned int index)
+{
+  vtkSegmentationSVDAG* input = this->GetInput();
+  const auto volume = input && input->HasVolume() ? input->GetVolume() : nullptr;
+  if (!volume || index == 0 || index > volume->labels.size() || index >= 0xffffffu)
+  {
+    vtkErrorMacro("GetLabelForCompositeIndex: " << index << " names no label (composite indices "
+                                                << "are label table indices from 1 to "
+                                                << (volume ? volume->labels.size() : 0) << ")");
+    return 0;
+  }
+  return vtkTypeInt64(volume->labels[index - 1].value);
+}
+
 vtkTypeInt64 vtkSegmentationSVDAGVolumeMapper::GetPickedLabel()
 {
   return this->Internal->PickedLabel;
