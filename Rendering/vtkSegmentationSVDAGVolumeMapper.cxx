@@ -1,10 +1,13 @@
 #include "vtkSegmentationSVDAGVolumeMapper.h"
 
 #include "vtkCommand.h"
+#include "vtkCallbackCommand.h"
+#include "vtkHardwareSelector.h"
 #include "vtkInformation.h"
 #include "vtkMath.h"
 #include "vtkMatrix3x3.h"
 #include "vtkMatrix4x4.h"
+#include "vtkNew.h"
 #include "vtkObjectFactory.h"
 #include "vtkOpenGLCamera.h"
 #include "vtkOpenGLRenderWindow.h"
@@ -18,9 +21,11 @@
 #include "vtkSmartPointer.h"
 #include "vtkTimerLog.h"
 #include "vtkVolume.h"
+#include "vtkWeakPointer.h"
 
 #include "svdagGLCompositor.h"
 #include "svdagRenderSession.h"
+#include "svdagSelectionDraw.h"
 
 #include <svdag_render/FrameBudget.h>
 #include <svdag_render/Material.h>
@@ -213,9 +218,51 @@ struct FrameKey
 
   bool matches(const FrameKey& o) const
   {
-    if (ids.empty() || ids != o.ids || !core::tracesSameImage(settings, o.settings) ||
-      bool(sceneDepth) != bool(o.sceneDepth) ||
+    if (!this->sameView(o) || bool(sceneDepth) != bool(o.sceneDepth) ||
       (sceneDepth && sceneDepth->size() != o.sceneDepth->size()))
+      return false;
+    return !sceneDepth || sameSceneDepth(*sceneDepth, *o.sceneDepth, size_t(ids[0]));
+  }
+
+  // Whether the image traced for `traced` can stand for this frame in a selection render: the
+  // same view, and what is drawn before the volume now is nowhere farther than it was then (the
+  // selection's depth test removes the traced hits that something nearer covers now). A
+  // selection render draws without multisampling, so its depth is that of the pixel center where
+  // the traced frame's may be that of a sample elsewhere in the pixel: a pixel may be as far as
+  // the farthest of its 3x3 neighbours then.
+  bool coveredBy(const FrameKey& traced) const
+  {
+    if (!this->sameView(traced))
+      return false;
+    const std::vector<float>* now = sceneDepth.get();
+    const std::vector<float>* then = traced.sceneDepth.get();
+    if (!then)
+      return true; // nothing was drawn before the volume: no ray was shortened
+    const size_t w = size_t(ids[0]), h = size_t(ids[1]);
+    if ((now && now->size() != w * h) || then->size() != w * h)
+      return false;
+    for (size_t y = 0; y < h; ++y)
+    {
+      for (size_t x = 0; x < w; ++x)
+      {
+        const float a = now ? (*now)[x + w * y] : 1.0f;
+        float farthest = 0;
+        for (size_t ny = (y > 0 ? y - 1 : y); ny <= std::min(y + 1, h - 1); ++ny)
+        {
+          for (size_t nx = (x > 0 ? x - 1 : x); nx <= std::min(x + 1, w - 1); ++nx)
+            farthest = std::max(farthest, (*then)[nx + w * ny]);
+        }
+        if (a > farthest + 1e-6f)
+          return false;
+      }
+    }
+    return true;
+  }
+
+  // The same rays, settings, viewport, labels and volume (the matrix to 1e-6 relative).
+  bool sameView(const FrameKey& o) const
+  {
+    if (ids.empty() || ids != o.ids || !core::tracesSameImage(settings, o.settings))
       return false;
     for (size_t i = 0; i < matrix.size(); ++i)
     {
@@ -223,7 +270,7 @@ struct FrameKey
       if (!(std::abs(a - b) <= 1e-6 * std::max({ 1.0, std::abs(a), std::abs(b) })))
         return false;
     }
-    return !sceneDepth || sameSceneDepth(*sceneDepth, *o.sceneDepth, size_t(ids[0]));
+    return true;
   }
 
 private:
@@ -310,12 +357,89 @@ void addMapperClipping(core::RenderSettings& settings, vtkPlaneCollection* plane
     settings.crop = box;
   }
 }
+
+// What a selection render draws in vtkHardwareSelector's current pass, per pixel of `image`
+// (traced at the viewport's size): the prop's color in the actor and process passes (set by
+// BeginRenderProp), the hit label's index + 1 in the composite index pass (indices from 0xffffff
+// on share 0xffffff), and the low or high 24 bits of the hit voxel's index i + nx (j + ny k) (the
+// input image's point id) in the point and cell id passes. Background pixels get 0 (not drawn).
+std::vector<uint32_t> selectionIds(vtkHardwareSelector* selector, const core::Image& image,
+  const core::ViewRays& rays, const svdag::Geometry& geometry)
+{
+  const int pass = selector->GetCurrentPass();
+  const int width = int(image.width), height = int(image.height);
+  std::vector<uint32_t> ids(size_t(width) * size_t(height), 0);
+  uint32_t propColor = 0;
+  float color[3];
+  selector->GetPropColorValue(color);
+  for (int c = 0; c < 3; ++c)
+    propColor |= uint32_t(std::lround(std::min(std::max(color[c], 0.0f), 1.0f) * 255)) << (8 * c);
+  const bool voxelPass = pass == vtkHardwareSelector::POINT_ID_LOW24 ||
+    pass == vtkHardwareSelector::POINT_ID_HIGH24 || pass == vtkHardwareSelector::CELL_ID_LOW24 ||
+    pass == vtkHardwareSelector::CELL_ID_HIGH24;
+  const bool highBits =
+    pass == vtkHardwareSelector::POINT_ID_HIGH24 || pass == vtkHardwareSelector::CELL_ID_HIGH24;
+  Matrix worldToIndex{};
+  if (voxelPass)
+  {
+    const auto m = core::indexToWorld(geometry);
+    Matrix indexToWorld{};
+    std::copy(m.begin(), m.end(), indexToWorld.begin());
+    indexToWorld[15] = 1;
+    worldToIndex = inverse(indexToWorld);
+  }
+  for (int y = 0; y < height; ++y)
+  {
+    for (int x = 0; x < width; ++x)
+    {
+      const size_t i = size_t(x) + size_t(width) * size_t(y);
+      const uint32_t label = image.label[i];
+      if (label == 0)
+        continue;
+      if (pass == vtkHardwareSelector::COMPOSITE_INDEX_PASS)
+      {
+        ids[i] = std::min(label, 0xffffffu);
+        continue;
+      }
+      if (!voxelPass)
+      {
+        ids[i] = propColor;
+        continue;
+      }
+      // The voxel the hit point enters: a thousandth of a voxel past it along the ray.
+      const Ray ray = rayAt(rays, imageCoordinate(x, width), imageCoordinate(y, height));
+      double q[3], step[3], length = 0;
+      for (int r = 0; r < 3; ++r)
+      {
+        q[r] = worldToIndex[4 * r + 3];
+        step[r] = 0;
+        for (int c = 0; c < 3; ++c)
+        {
+          q[r] += worldToIndex[4 * r + c] * (ray.origin[c] + double(image.depth[i]) * ray.direction[c]);
+          step[r] += worldToIndex[4 * r + c] * ray.direction[c];
+        }
+        length += step[r] * step[r];
+      }
+      uint64_t voxel = 0;
+      for (int r = 2; r >= 0; --r)
+      {
+        const double p = q[r] + 1e-3 * step[r] / std::sqrt(length);
+        const int64_t v = std::min<int64_t>(
+          std::max<int64_t>(int64_t(std::floor(p)), 0), int64_t(geometry.dims[r]) - 1);
+        voxel = voxel * uint64_t(geometry.dims[r]) + uint64_t(v);
+      }
+      ids[i] = uint32_t((highBits ? voxel >> 24 : voxel) & 0xffffffu);
+    }
+  }
+  return ids;
+}
 } // namespace
 
 struct vtkSegmentationSVDAGVolumeMapper::Internals
 {
   svdag::vtkglue::RenderSession Session;
   svdag::gl::Compositor Compositor;
+  svdag::gl::SelectionDraw Selection;
   core::FrameBudget Budget;
 
   // The frame the accumulation belongs to: a different one restarts it.
@@ -337,6 +461,28 @@ struct vtkSegmentationSVDAGVolumeMapper::Internals
   Vec3 PickedPosition{ { 0, 0, 0 } };
   Vec3 PickedNormal{ { 0, 0, 0 } };
   Vec3 PickedShadingNormal{ { 0, 0, 0 } };
+
+  // The selection capture (vtkHardwareSelector::CaptureBuffers) being drawn, until its EndEvent.
+  vtkWeakPointer<vtkHardwareSelector> CaptureSelector;
+  unsigned long CaptureObserver = 0;
+  vtkNew<vtkCallbackCommand> CaptureEnded;
+
+  Internals()
+  {
+    this->CaptureEnded->SetClientData(this);
+    this->CaptureEnded->SetCallback([](vtkObject*, unsigned long, void* self, void*) {
+      static_cast<Internals*>(self)->CaptureSelector = nullptr;
+    });
+  }
+  ~Internals() { this->watchCapture(nullptr); }
+  void watchCapture(vtkHardwareSelector* selector)
+  {
+    if (this->CaptureSelector)
+      this->CaptureSelector->RemoveObserver(this->CaptureObserver);
+    this->CaptureSelector = selector;
+    if (selector)
+      this->CaptureObserver = selector->AddObserver(vtkCommand::EndEvent, this->CaptureEnded);
+  }
 };
 
 vtkSegmentationSVDAGVolumeMapper::vtkSegmentationSVDAGVolumeMapper()
@@ -421,6 +567,19 @@ void vtkSegmentationSVDAGVolumeMapper::Render(vtkRenderer* renderer, vtkVolume* 
   this->InvokeEvent(vtkCommand::VolumeMapperRenderStartEvent, nullptr);
   const auto start = Clock::now();
   in.Converged = false;
+  auto finish = [&]() {
+    in.FrameMilliseconds = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+    this->TimeToDraw = in.FrameMilliseconds / 1000;
+    this->InvokeEvent(vtkCommand::VolumeMapperRenderEndEvent, nullptr);
+  };
+  // What Pick reads: the frame traced last, for this renderer.
+  auto rememberPick = [&](const core::ViewRays& rays, const Matrix& modelToWorld) {
+    in.PickRenderer = renderer;
+    renderer->GetTiledSizeAndOrigin(
+      &in.PickViewport.width, &in.PickViewport.height, &in.PickViewport.x, &in.PickViewport.y);
+    in.PickRays = rays;
+    in.ModelToWorld = modelToWorld;
+  };
   try
   {
     const core::Renderer* before = in.Session.renderer();
@@ -484,6 +643,54 @@ void vtkSegmentationSVDAGVolumeMapper::Render(vtkRenderer* renderer, vtkVolume* 
       return f.key.matches(in.Frame) && r.accumulatedSamples() > 0 &&
         r.image().width == uint32_t(f.width) && r.image().height == uint32_t(f.height);
     };
+    auto refined = [&]() {
+      return r.accumulatedSamples() >= uint32_t(this->TargetSamplesPerPixel) ||
+        (this->ErrorTarget > 0 && r.accumulatedSamples() >= 2 &&
+          r.errorEstimate() <= this->ErrorTarget);
+    };
+    if (vtkHardwareSelector* selector = renderer->GetSelector())
+    {
+      // A selection render (vtkHardwareSelector; vtkPropPicker and vtkRenderer::PickProp use
+      // one): the full-quality frame's hits drawn as the selector's ids. The last traced image
+      // stands for it when it can (no trace, so picking leaves the refinement as it was); else
+      // one pass is traced and the refinement continues from it.
+      // The selector renders several times (passes, and a second round with only the props
+      // hit, so what is drawn before the volume changes): the first render of a capture checks
+      // or traces the image, the others draw it again.
+      const bool sameCapture = in.CaptureSelector == selector;
+      if (!sameCapture)
+        in.watchCapture(selector);
+      const bool reuse = r.accumulatedSamples() > 0 && r.image().width == uint32_t(frame.width) &&
+        r.image().height == uint32_t(frame.height) &&
+        (sameCapture ? frame.key.sameView(in.Frame) : frame.key.coveredBy(in.Frame));
+      if (!reuse)
+      {
+        r.setSettings(frame.settings);
+        r.resetAccumulation();
+        r.setImageSize(uint32_t(frame.width), uint32_t(frame.height));
+        r.setViewRays(rays);
+        r.setRayLimits(rayLimits(sceneDepth, vp, frame.width, frame.height, clipToModel, rays));
+        r.render();
+        in.TraceMilliseconds = r.lastFrameMilliseconds();
+        in.Frame = std::move(frame.key);
+        in.Level = fullLevel;
+        in.FullQuality = true;
+      }
+      in.Converged = in.FullQuality && refined();
+      selector->BeginRenderProp();
+      const auto& geometry = input->GetVolume()->geometry;
+      const vtkIdType largestVoxel = vtkIdType(geometry.voxelCount()) - 1;
+      selector->UpdateMaximumPointId(largestVoxel);
+      selector->UpdateMaximumCellId(largestVoxel);
+      // The hits' own window depth; the depth test takes the nearer of it and the scene's.
+      const std::vector<float> noScene(sceneDepth.size(), 1.0f);
+      in.Selection.draw(window, vp, selectionIds(selector, r.image(), rays, geometry),
+        compositedDepth(r.image(), rays, modelToClip, noScene, vp));
+      selector->EndRenderProp();
+      rememberPick(rays, modelToWorld);
+      finish();
+      return;
+    }
     // The level: full quality unless the allocated time is too short for it. A still view whose
     // full-quality image is already accumulating keeps it even then: showing it costs nothing,
     // and a coarse frame would replace a refined image by a noisier one (a capture or a render
@@ -501,11 +708,6 @@ void vtkSegmentationSVDAGVolumeMapper::Render(vtkRenderer* renderer, vtkVolume* 
     const int width = frame.width;
     const int height = frame.height;
     const bool sameFrame = accumulating(frame);
-    auto refined = [&]() {
-      return r.accumulatedSamples() >= uint32_t(this->TargetSamplesPerPixel) ||
-        (this->ErrorTarget > 0 && r.accumulatedSamples() >= 2 &&
-          r.errorEstimate() <= this->ErrorTarget);
-    };
     // A tile of a tiled capture (vtkWindowToImageFilter scale, pyvista screenshot(scale=)) is
     // drawn once: it is refined to the targets within this render.
     const int* tiles = window->GetTileScale();
@@ -538,11 +740,7 @@ void vtkSegmentationSVDAGVolumeMapper::Render(vtkRenderer* renderer, vtkVolume* 
     in.Compositor.draw(
       window, vp, image.hdr.data(), width, height, depth, float(base.exposure));
 
-    in.PickRenderer = renderer;
-    renderer->GetTiledSizeAndOrigin(
-      &in.PickViewport.width, &in.PickViewport.height, &in.PickViewport.x, &in.PickViewport.y);
-    in.PickRays = rays;
-    in.ModelToWorld = modelToWorld;
+    rememberPick(rays, modelToWorld);
     const double total = std::chrono::duration<double>(Clock::now() - start).count();
     // A frame that built the BVH or the pipeline (uploads, shader compilation) overestimates what
     // the next one costs: provisional. A tile traced several passes: no measure at all.
@@ -555,9 +753,7 @@ void vtkSegmentationSVDAGVolumeMapper::Render(vtkRenderer* renderer, vtkVolume* 
   {
     vtkErrorMacro("Render failed: " << e.what());
   }
-  in.FrameMilliseconds = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-  this->TimeToDraw = in.FrameMilliseconds / 1000;
-  this->InvokeEvent(vtkCommand::VolumeMapperRenderEndEvent, nullptr);
+  finish();
 }
 
 void vtkSegmentationSVDAGVolumeMapper::SetCroppingRegionPlanes(
@@ -758,6 +954,20 @@ bool vtkSegmentationSVDAGVolumeMapper::Pick(vtkRenderer* renderer, double x, dou
   return true;
 }
 
+vtkTypeInt64 vtkSegmentationSVDAGVolumeMapper::GetLabelForCompositeIndex(unsigned int index)
+{
+  vtkSegmentationSVDAG* input = this->GetInput();
+  const auto volume = input && input->HasVolume() ? input->GetVolume() : nullptr;
+  if (!volume || index == 0 || index > volume->labels.size() || index >= 0xffffffu)
+  {
+    vtkErrorMacro("GetLabelForCompositeIndex: " << index << " names no label (composite indices "
+                                                << "are label table indices from 1 to "
+                                                << (volume ? volume->labels.size() : 0) << ")");
+    return 0;
+  }
+  return vtkTypeInt64(volume->labels[index - 1].value);
+}
+
 vtkTypeInt64 vtkSegmentationSVDAGVolumeMapper::GetPickedLabel()
 {
   return this->Internal->PickedLabel;
@@ -782,6 +992,7 @@ void vtkSegmentationSVDAGVolumeMapper::GetPickedShadingNormal(double normal[3])
 void vtkSegmentationSVDAGVolumeMapper::ReleaseGraphicsResources(vtkWindow* window)
 {
   this->Internal->Compositor.releaseGraphicsResources(window);
+  this->Internal->Selection.releaseGraphicsResources(window);
   this->Internal->Frame = FrameKey();
   this->Internal->PickRenderer = nullptr;
 }

@@ -30,6 +30,28 @@
  *   rebuild only the acceleration structure.
  * - Picking: Pick(renderer, x, y) reads the label, position and normal under a display pixel
  *   from the last frame traced for that renderer.
+ * - Selection: VTK's own pickers see the volume. During a vtkHardwareSelector render (which
+ *   vtkPropPicker, vtkRenderer::PickProp and area selections use) the mapper draws, where the
+ *   volume is hit and not farther than what the depth buffer holds, the selector's ids instead
+ *   of the shaded image, and writes the hit's depth: the prop (and process) color, as
+ *   COMPOSITE_INDEX the hit label's index in the volume's label table + 1 (1 .. 0xfffffe; later
+ *   indices all give 0xffffff), and as the point or cell id of either field association the hit
+ *   voxel's index i + nx (j + ny k), the input image's point id (at LOD voxel the voxel hit; at
+ *   coarser LODs the voxel where the ray enters the block or leaf box). The hits are those of
+ *   the full-quality frame; the last traced image is used when the view and what is drawn
+ *   before the volume are the same (else one pass is traced and refinement goes on from it), so
+ *   picking does not disturb what the next render shows. The label is one call away:
+ *
+ *     picker->PickProp(x, y, renderer);                  // vtkPropPicker
+ *     if (picker->GetViewProp() == volume && mapper->Pick(renderer, x, y))
+ *       label = mapper->GetPickedLabel();                // (x, y): the pixel's center
+ *     // vtkHardwareSelector: one node per label, PROP() == volume:
+ *     label = mapper->GetLabelForCompositeIndex(node->GetProperties()->Get(
+ *       vtkSelectionNode::COMPOSITE_INDEX()));
+ *
+ *   vtkPropPicker's GetPickPosition (vtkWorldPointPicker reading the depth buffer) is the hit
+ *   point to the depth buffer's precision. Pickers that intersect a prop's vtkDataSet
+ *   (vtkCellPicker, vtkPointPicker, vtkVolumePicker) cannot see the compressed input.
  *
  * Errors (no usable Vulkan device: the message names every device found and what it lacks; the
  * rt backend on a device without ray tracing; a render window that is not OpenGL) are reported with vtkErrorMacro, and the volume is
@@ -182,6 +204,11 @@ public:
    * background, outside the viewport or before a frame.
    */
   bool Pick(vtkRenderer* renderer, double x, double y);
+  /** The original label value (as GetPickedLabel's) that a selection node's COMPOSITE_INDEX
+   * names (see Selection above): index i is the i-th label of the volume's label table,
+   * counting from 1. Reports an error and returns 0 for an index outside 1 .. labels (or no
+   * input). */
+  vtkTypeInt64 GetLabelForCompositeIndex(unsigned int compositeIndex);
   vtkTypeInt64 GetPickedLabel();
   void GetPickedPosition(double position[3]);
   void GetPickedNormal(double normal[3]);
