@@ -9,6 +9,7 @@ import time
 
 import numpy as np
 
+from ._colors import to_rgb as _rgb
 from ._labels import label_pattern, numpy_dtype_of_vtk_type
 from ._vtkrun import vtk_errors_raised
 from .build import from_image, from_numpy
@@ -43,19 +44,6 @@ def _segmentation_volume(data):
         "data must be a SegmentationVolume, a file path, a numpy label array or a "
         f"pyvista.ImageData / vtkImageData, not {type(data).__name__}"
     )
-
-
-def _rgb(color):
-    """A color pyvista understands (name, hex, 0-1 floats or 0-255 ints) as 0-1 floats."""
-    import pyvista as pv
-
-    values = np.asarray(color) if isinstance(color, (tuple, list, np.ndarray)) else None
-    if values is not None and values.dtype.kind == "f" and values.shape in ((3,), (4,)):
-        # Floats are kept as given: pyvista.Color would round them to 8 bits.
-        if not np.all((values >= 0) & (values <= 1)):
-            raise ValueError(f"float colors must be in [0, 1], got {color!r}")
-        return tuple(float(c) for c in values[:3])
-    return tuple(float(c) for c in pv.Color(color).float_rgb)
 
 
 def _check_fraction(value, what):
