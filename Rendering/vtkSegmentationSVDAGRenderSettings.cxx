@@ -8,7 +8,6 @@
 #include <array>
 #include <cmath>
 #include <stdexcept>
-#include <vector>
 
 vtkStandardNewMacro(vtkSegmentationSVDAGRenderSettings);
 
@@ -36,6 +35,13 @@ void assign(vtkObject* owner, T& member, const T& value)
     member = value;
     owner->Modified();
   }
+}
+
+// The name of value i of an enumeration's list; nullptr outside it.
+template <typename E, size_t N>
+const char* nameOf(const std::array<E, N>& values, int i, const char* (*name)(E))
+{
+  return i >= 0 && size_t(i) < N ? name(values[size_t(i)]) : nullptr;
 }
 
 // An enumeration set by number, clamped to [first, last] like VTK's clamped setters ...
@@ -82,12 +88,32 @@ vtkSegmentationSVDAGRenderSettings::~vtkSegmentationSVDAGRenderSettings() = defa
 
 void vtkSegmentationSVDAGRenderSettings::SetLOD(int lod)
 {
-  assignClamped(this, this->Settings->lod, lod, core::Lod::Block, core::Lod::Auto);
+  assignClamped(this, this->Settings->lod, lod, core::Lods.front(), core::Lods.back());
+}
+
+void vtkSegmentationSVDAGRenderSettings::SetLOD(const char* name)
+{
+  assignNamed(this, this->Settings->lod, name, core::parseLod, "SetLOD");
 }
 
 int vtkSegmentationSVDAGRenderSettings::GetLOD() const
 {
   return int(this->Settings->lod);
+}
+
+const char* vtkSegmentationSVDAGRenderSettings::GetLODAsString() const
+{
+  return core::lodName(this->Settings->lod);
+}
+
+int vtkSegmentationSVDAGRenderSettings::GetNumberOfLODs()
+{
+  return int(core::Lods.size());
+}
+
+const char* vtkSegmentationSVDAGRenderSettings::GetLODName(int lod)
+{
+  return nameOf(core::Lods, lod, core::lodName);
 }
 
 void vtkSegmentationSVDAGRenderSettings::SetAutoLODPixels(double pixels)
@@ -255,93 +281,9 @@ vtkTypeInt64 vtkSegmentationSVDAGRenderSettings::GetDeviceMemoryLimit() const
   return vtkTypeInt64(this->Settings->deviceMemoryLimit);
 }
 
-int vtkSegmentationSVDAGRenderSettings::GetMaximumNumberOfClippingPlanes()
-{
-  return int(core::MaximumClipPlanes);
-}
-
-int vtkSegmentationSVDAGRenderSettings::AddClippingPlane(
-  double ox, double oy, double oz, double nx, double ny, double nz)
-{
-  std::vector<core::ClipPlane> planes = this->Settings->clipPlanes;
-  core::ClipPlane plane;
-  plane.origin = { { ox, oy, oz } };
-  plane.normal = { { nx, ny, nz } };
-  planes.push_back(plane);
-  try
-  {
-    core::validateClipping(planes, this->Settings->crop);
-  }
-  catch (const std::exception& e)
-  {
-    vtkErrorMacro("AddClippingPlane: " << e.what());
-    return -1;
-  }
-  this->Settings->clipPlanes = std::move(planes);
-  this->Modified();
-  return int(this->Settings->clipPlanes.size()) - 1;
-}
-
-void vtkSegmentationSVDAGRenderSettings::RemoveAllClippingPlanes()
-{
-  if (!this->Settings->clipPlanes.empty())
-  {
-    this->Settings->clipPlanes.clear();
-    this->Modified();
-  }
-}
-
-int vtkSegmentationSVDAGRenderSettings::GetNumberOfClippingPlanes() const
-{
-  return int(this->Settings->clipPlanes.size());
-}
-
-void vtkSegmentationSVDAGRenderSettings::GetClippingPlane(
-  int i, double origin[3], double normal[3]) const
-{
-  const auto& planes = this->Settings->clipPlanes;
-  const bool valid = i >= 0 && size_t(i) < planes.size();
-  for (int a = 0; a < 3; ++a)
-  {
-    origin[a] = valid ? planes[size_t(i)].origin[size_t(a)] : 0.0;
-    normal[a] = valid ? planes[size_t(i)].normal[size_t(a)] : 0.0;
-  }
-}
-
-void vtkSegmentationSVDAGRenderSettings::SetCropping(bool on)
-{
-  assign(this, this->Settings->crop.on, on);
-}
-
-bool vtkSegmentationSVDAGRenderSettings::GetCropping() const
-{
-  return this->Settings->crop.on;
-}
-
-void vtkSegmentationSVDAGRenderSettings::SetCroppingRegionPlanes(
-  double xmin, double xmax, double ymin, double ymax, double zmin, double zmax)
-{
-  core::CropBox box;
-  try
-  {
-    box = core::validCropBox({ { xmin, xmax, ymin, ymax, zmin, zmax } });
-  }
-  catch (const std::exception& e)
-  {
-    vtkErrorMacro("SetCroppingRegionPlanes: " << e.what());
-    return;
-  }
-  assign(this, this->Settings->crop.bounds, box.bounds);
-}
-
-void vtkSegmentationSVDAGRenderSettings::GetCroppingRegionPlanes(double bounds[6]) const
-{
-  std::copy(this->Settings->crop.bounds.begin(), this->Settings->crop.bounds.end(), bounds);
-}
-
 void vtkSegmentationSVDAGRenderSettings::SetShading(int shading)
 {
-  assignClamped(this, this->Settings->shading, shading, core::Shading::Voxel, core::Shading::Smooth);
+  assignClamped(this, this->Settings->shading, shading, core::Shadings.front(), core::Shadings.back());
 }
 
 void vtkSegmentationSVDAGRenderSettings::SetShading(const char* name)
@@ -359,9 +301,20 @@ const char* vtkSegmentationSVDAGRenderSettings::GetShadingAsString() const
   return core::shadingName(this->Settings->shading);
 }
 
+int vtkSegmentationSVDAGRenderSettings::GetNumberOfShadings()
+{
+  return int(core::Shadings.size());
+}
+
+const char* vtkSegmentationSVDAGRenderSettings::GetShadingName(int shading)
+{
+  return nameOf(core::Shadings, shading, core::shadingName);
+}
+
 void vtkSegmentationSVDAGRenderSettings::SetBackend(int backend)
 {
-  assignClamped(this, this->Settings->backend, backend, core::Backend::Auto, core::Backend::Compute);
+  assignClamped(
+    this, this->Settings->backend, backend, core::Backends.front(), core::Backends.back());
 }
 
 void vtkSegmentationSVDAGRenderSettings::SetBackend(const char* name)
@@ -377,6 +330,16 @@ int vtkSegmentationSVDAGRenderSettings::GetBackend() const
 const char* vtkSegmentationSVDAGRenderSettings::GetBackendAsString() const
 {
   return core::backendName(this->Settings->backend);
+}
+
+int vtkSegmentationSVDAGRenderSettings::GetNumberOfBackends()
+{
+  return int(core::Backends.size());
+}
+
+const char* vtkSegmentationSVDAGRenderSettings::GetBackendName(int backend)
+{
+  return nameOf(core::Backends, backend, core::backendName);
 }
 
 void vtkSegmentationSVDAGRenderSettings::DeepCopy(vtkSegmentationSVDAGRenderSettings* other)
@@ -416,17 +379,4 @@ void vtkSegmentationSVDAGRenderSettings::PrintSelf(ostream& os, vtkIndent indent
   os << indent << "DeviceMemoryLimit: " << s.deviceMemoryLimit << "\n";
   os << indent << "Shading: " << core::shadingName(s.shading) << "\n";
   os << indent << "Backend: " << core::backendName(s.backend) << "\n";
-  os << indent << "ClippingPlanes: " << s.clipPlanes.size() << "\n";
-  for (const auto& p : s.clipPlanes)
-  {
-    os << indent.GetNextIndent() << "origin ";
-    triple(p.origin);
-    os << ", normal ";
-    triple(p.normal);
-    os << "\n";
-  }
-  os << indent << "Cropping: " << s.crop.on << "\n" << indent << "CroppingRegionPlanes:";
-  for (double b : s.crop.bounds)
-    os << " " << b;
-  os << "\n";
 }

@@ -7,12 +7,22 @@
  * Setters clamp to the core's ranges, like vtkSetClampMacro; each change bumps the MTime, which
  * the owning mapper or renderer includes in its own.
  *
- * Defaults: LOD voxel, AutoLODPixels 1, SamplesPerPixel 1 (added per render pass), MaximumBounces
- * 4, Seed 0, NextEventEstimation on, Exposure 1, Background (0.1, 0.1, 0.12, 1) linear RGBA
- * (the volume mapper draws misses transparent instead), EnvironmentColor (1, 1, 1), no
- * EnvironmentMap, Sun off with direction (0.3, 0.4, 0.866), irradiance (3, 3, 3) and angular
- * radius 0.27 degrees, MaximumBlocksPerBLAS 0 (the device's limit), DeviceMemoryLimit 0 (the
- * device's memory), no clipping planes, Cropping off, Shading voxel, Backend auto.
+ * Defaults (the core struct's member initializers, the one definition; a new object reports
+ * them, e.g. GetLODAsString()): LOD auto, AutoLODPixels 1, SamplesPerPixel 1 (added per render
+ * pass), MaximumBounces 4, Seed 0, NextEventEstimation on, Exposure 1, Background (0.1, 0.1,
+ * 0.12, 1) linear RGBA (the volume mapper draws misses transparent instead), EnvironmentColor
+ * (1, 1, 1), no EnvironmentMap, Sun off with direction (0.3, 0.4, 0.866), irradiance (3, 3, 3)
+ * and angular radius 0.27 degrees, MaximumBlocksPerBLAS 0 (the device's limit),
+ * DeviceMemoryLimit 0 (the device's memory), Shading voxel, Backend auto.
+ *
+ * The names of the LOD, shading and backend values (GetLODName(i) for i < GetNumberOfLODs(),
+ * and so on) are the core's one list (svdag::render::Lods, lodName): the Python glue and the
+ * command line read them from here.
+ *
+ * Clipping planes and cropping are not settings: the volume mapper (vtkAbstractMapper's
+ * clipping planes, Cropping / CroppingRegionPlanes) and the image renderer
+ * (vtkSegmentationSVDAGRenderer, the same names) own them and pass them to the core renderer
+ * per frame.
  */
 #ifndef vtkSegmentationSVDAGRenderSettings_h
 #define vtkSegmentationSVDAGRenderSettings_h
@@ -50,9 +60,16 @@ public:
   };
 
   ///@{
-  /** Level of detail, LOD_BLOCK .. LOD_AUTO. */
+  /** Level of detail, LOD_BLOCK .. LOD_AUTO (default LOD_AUTO); by name "block", "leaf",
+   * "voxel" or "auto" (another name is reported as an error and changes nothing). An int outside
+   * the range is clamped. */
   void SetLOD(int lod);
+  void SetLOD(const char* name);
   int GetLOD() const;
+  const char* GetLODAsString() const;
+  /** The number of LOD values and the name of value `lod` (nullptr outside 0 .. count - 1). */
+  static int GetNumberOfLODs();
+  static const char* GetLODName(int lod);
   void SetLODToBlock() { this->SetLOD(LOD_BLOCK); }
   void SetLODToLeaf() { this->SetLOD(LOD_LEAF); }
   void SetLODToVoxel() { this->SetLOD(LOD_VOXEL); }
@@ -131,50 +148,6 @@ public:
   vtkTypeInt64 GetDeviceMemoryLimit() const;
   ///@}
 
-  ///@{
-  /**
-   * Clipping planes in world coordinates (the image renderer's world; the volume mapper's data
-   * world before the vtkVolume's matrix, its own vtkAbstractMapper clipping planes are in VTK's
-   * world): each keeps the half-space its normal points to (VTK's convention), at most 6 in all.
-   * Every ray (camera, shadow, bounce) is clipped, so a cut-away part is neither seen nor casts a
-   * shadow; where the kept region cuts a labelled voxel the cut face is drawn (at block / leaf LOD
-   * the block / leaf box's cross-section) with the plane's normal facing the viewer.
-   * AddClippingPlane returns the plane's index, or -1 with an error for a 7th plane, a zero or
-   * non-finite normal or a non-finite origin. A change restarts the accumulation (no BVH
-   * rebuild).
-   */
-  int AddClippingPlane(double ox, double oy, double oz, double nx, double ny, double nz);
-  int AddClippingPlane(const double origin[3], const double normal[3])
-  {
-    return this->AddClippingPlane(origin[0], origin[1], origin[2], normal[0], normal[1], normal[2]);
-  }
-  void RemoveAllClippingPlanes();
-  int GetNumberOfClippingPlanes() const;
-  /** The most clipping planes a renderer takes (6). */
-  static int GetMaximumNumberOfClippingPlanes();
-  /** Plane i's origin and normal (as given); zeros for an index out of range. */
-  void GetClippingPlane(int i, double origin[3], double normal[3]) const;
-  ///@}
-
-  ///@{
-  /**
-   * An axis-aligned crop box (world: xmin, xmax, ymin, ymax, zmin, zmax), used while Cropping is
-   * on (default off): only what lies inside is drawn, with cut faces like clipping planes.
-   * SetCroppingRegionPlanes reports an error for an inverted (min > max) or non-finite box and
-   * keeps the previous one.
-   */
-  void SetCropping(bool on);
-  bool GetCropping() const;
-  vtkBooleanMacro(Cropping, bool);
-  void SetCroppingRegionPlanes(
-    double xmin, double xmax, double ymin, double ymax, double zmin, double zmax);
-  void SetCroppingRegionPlanes(const double bounds[6])
-  {
-    this->SetCroppingRegionPlanes(bounds[0], bounds[1], bounds[2], bounds[3], bounds[4], bounds[5]);
-  }
-  void GetCroppingRegionPlanes(double bounds[6]) const;
-  ///@}
-
   /** Shading normal: SHADING_VOXEL (the entry face's, blocky) or SHADING_SMOOTH (estimated from
    * the hit label's occupancy around the hit point, svdag/SmoothNormal.h). The hit itself
    * (position, label, depth) stays the lossless voxel surface either way. */
@@ -191,6 +164,8 @@ public:
   void SetShading(const char* name);
   int GetShading() const;
   const char* GetShadingAsString() const;
+  static int GetNumberOfShadings();
+  static const char* GetShadingName(int shading);
   void SetShadingToVoxel() { this->SetShading(SHADING_VOXEL); }
   void SetShadingToSmooth() { this->SetShading(SHADING_SMOOTH); }
   ///@}
@@ -215,6 +190,8 @@ public:
   void SetBackend(const char* name);
   int GetBackend() const;
   const char* GetBackendAsString() const;
+  static int GetNumberOfBackends();
+  static const char* GetBackendName(int backend);
   void SetBackendToAuto() { this->SetBackend(BACKEND_AUTO); }
   void SetBackendToRT() { this->SetBackend(BACKEND_RT); }
   void SetBackendToCompute() { this->SetBackend(BACKEND_COMPUTE); }

@@ -9,6 +9,8 @@
 #include "vtkIntArray.h"
 #include "vtkNew.h"
 #include "vtkObjectFactory.h"
+#include "vtkPlane.h"
+#include "vtkPlaneCollection.h"
 #include "vtkPointData.h"
 #include "vtkSegmentationSVDAG.h"
 #include "vtkSegmentationSVDAGLabelProperties.h"
@@ -20,9 +22,11 @@
 #include <svdag_render/ImageFiles.h>
 #include <svdag_render/Renderer.h>
 
+#include "svdagClipping.h"
 #include "svdagRenderSession.h"
 
 #include <algorithm>
+#include <array>
 #include <cstring>
 #include <exception>
 #include <string>
@@ -31,6 +35,7 @@
 struct vtkSegmentationSVDAGRenderer::Internals
 {
   svdag::vtkglue::RenderSession Session;
+  vtkSmartPointer<vtkPlaneCollection> ClippingPlanes;
   bool CameraSet = false;
   // Whether the last execution succeeded (Render()'s result).
   bool Succeeded = false;
@@ -60,7 +65,85 @@ vtkSegmentationSVDAG* vtkSegmentationSVDAGRenderer::GetInput()
 
 vtkMTimeType vtkSegmentationSVDAGRenderer::GetMTime()
 {
-  return std::max(this->Superclass::GetMTime(), this->Internal->Session.mtime());
+  vtkMTimeType t = std::max(this->Superclass::GetMTime(), this->Internal->Session.mtime());
+  // A plane moved after it was added re-executes the pass, like any other change.
+  if (vtkPlaneCollection* planes = this->Internal->ClippingPlanes)
+  {
+    t = std::max(t, planes->GetMTime());
+    vtkCollectionSimpleIterator it;
+    planes->InitTraversal(it);
+    while (vtkPlane* plane = planes->GetNextPlane(it))
+      t = std::max(t, plane->GetMTime());
+  }
+  return t;
+}
+
+void vtkSegmentationSVDAGRenderer::AddClippingPlane(vtkPlane* plane)
+{
+  if (!plane)
+    return;
+  if (!this->Internal->ClippingPlanes)
+    this->Internal->ClippingPlanes = vtkSmartPointer<vtkPlaneCollection>::New();
+  this->Internal->ClippingPlanes->AddItem(plane);
+  this->Modified();
+}
+
+void vtkSegmentationSVDAGRenderer::RemoveClippingPlane(vtkPlane* plane)
+{
+  if (plane && this->Internal->ClippingPlanes &&
+    this->Internal->ClippingPlanes->IsItemPresent(plane))
+  {
+    this->Internal->ClippingPlanes->RemoveItem(plane);
+    this->Modified();
+  }
+}
+
+void vtkSegmentationSVDAGRenderer::RemoveAllClippingPlanes()
+{
+  if (this->Internal->ClippingPlanes && this->Internal->ClippingPlanes->GetNumberOfItems() > 0)
+  {
+    this->Internal->ClippingPlanes->RemoveAllItems();
+    this->Modified();
+  }
+}
+
+void vtkSegmentationSVDAGRenderer::SetClippingPlanes(vtkPlaneCollection* planes)
+{
+  if (this->Internal->ClippingPlanes != planes)
+  {
+    this->Internal->ClippingPlanes = planes;
+    this->Modified();
+  }
+}
+
+vtkPlaneCollection* vtkSegmentationSVDAGRenderer::GetClippingPlanes()
+{
+  return this->Internal->ClippingPlanes;
+}
+
+int vtkSegmentationSVDAGRenderer::GetMaximumNumberOfClippingPlanes()
+{
+  return int(svdag::render::MaximumClipPlanes);
+}
+
+void vtkSegmentationSVDAGRenderer::SetCroppingRegionPlanes(
+  double xmin, double xmax, double ymin, double ymax, double zmin, double zmax)
+{
+  svdag::render::CropBox box;
+  try
+  {
+    box = svdag::render::validCropBox({ { xmin, xmax, ymin, ymax, zmin, zmax } });
+  }
+  catch (const std::exception& e)
+  {
+    vtkErrorMacro("SetCroppingRegionPlanes: " << e.what());
+    return;
+  }
+  if (!std::equal(box.bounds.begin(), box.bounds.end(), this->CroppingRegionPlanes))
+  {
+    std::copy(box.bounds.begin(), box.bounds.end(), this->CroppingRegionPlanes);
+    this->Modified();
+  }
 }
 
 vtkSegmentationSVDAGRenderSettings* vtkSegmentationSVDAGRenderer::GetSettings()
@@ -276,7 +359,11 @@ int vtkSegmentationSVDAGRenderer::RequestData(
     camera.viewAngle = this->CameraViewAngle;
     r.setCamera(camera);
     r.setImageSize(uint32_t(this->Width), uint32_t(this->Height));
-    r.setSettings(in.Session.settings()->GetCoreSettings());
+    svdag::render::RenderSettings settings = in.Session.settings()->GetCoreSettings();
+    const std::array<double, 16> identity = svdag::vtkglue::identityMatrix();
+    svdag::vtkglue::setClipping(settings, this->Internal->ClippingPlanes, identity, identity,
+      this->Cropping != 0, this->CroppingRegionPlanes);
+    r.setSettings(settings);
     r.render();
   }
   catch (const std::exception& e)
@@ -401,6 +488,13 @@ void vtkSegmentationSVDAGRenderer::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "CameraViewUp: ";
   triple(this->CameraViewUp);
   os << indent << "CameraViewAngle: " << this->CameraViewAngle << "\n";
+  os << indent << "ClippingPlanes: "
+     << (this->Internal->ClippingPlanes ? this->Internal->ClippingPlanes->GetNumberOfItems() : 0)
+     << "\n";
+  os << indent << "Cropping: " << this->Cropping << "\n" << indent << "CroppingRegionPlanes:";
+  for (double b : this->CroppingRegionPlanes)
+    os << " " << b;
+  os << "\n";
   os << indent << "Settings:\n";
   this->Internal->Session.settings()->PrintSelf(os, indent.GetNextIndent());
   os << indent << "LabelProperties:\n";

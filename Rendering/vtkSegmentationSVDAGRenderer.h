@@ -57,6 +57,17 @@
  * thin-walled (a transmitted ray continues straight through the label, Shading.h), and where a
  * label continues into the next 16^3 cell the ray meets one more surface event at the cell face.
  *
+ * Clipping and cropping, owned here (not by the settings), with vtkSegmentationSVDAGVolumeMapper's
+ * names: clipping planes (vtkPlane objects in world coordinates, each keeping the half-space its
+ * normal points to, at most GetMaximumNumberOfClippingPlanes(), 6) and an axis-aligned crop box
+ * (Cropping, CroppingRegionPlanes xmin, xmax, ymin, ymax, zmin, zmax; world). Every ray (camera,
+ * shadow, bounce) is clipped, so a cut-away part is neither seen nor casts a shadow; where the
+ * kept region cuts a labelled voxel the cut face is drawn (at block / leaf LOD the block / leaf
+ * box's cross-section) with the plane's normal facing the viewer, "Label" and "Depth" those of
+ * the cut face. A change restarts the accumulation (no BVH rebuild); moving a plane (vtkPlane::
+ * SetOrigin) counts as a change. Bad planes (a 7th, a zero or non-finite normal, a non-finite
+ * origin) are an error of the next pass.
+ *
  * The camera is set with SetCameraPosition/FocalPoint/ViewUp/ViewAngle, or framed around the
  * whole volume with ResetCamera(azimuth, elevation, zoom); a camera never set is framed on the
  * first pass.
@@ -77,6 +88,8 @@
 
 #include <memory> // for std::unique_ptr
 
+class vtkPlane;
+class vtkPlaneCollection;
 class vtkSegmentationSVDAG;
 class vtkSegmentationSVDAGLabelProperties;
 class vtkSegmentationSVDAGRenderSettings;
@@ -125,6 +138,39 @@ public:
   vtkGetVector3Macro(CameraViewUp, double);
   void SetCameraViewAngle(double degrees);
   vtkGetMacro(CameraViewAngle, double);
+  ///@}
+
+  ///@{
+  /**
+   * Clipping planes (world), as vtkAbstractMapper's: AddClippingPlane and RemoveClippingPlane
+   * (nullptr is ignored), RemoveAllClippingPlanes, SetClippingPlanes (shares a collection;
+   * nullptr for none) and GetClippingPlanes (nullptr before a plane is added).
+   */
+  void AddClippingPlane(vtkPlane* plane);
+  void RemoveClippingPlane(vtkPlane* plane);
+  void RemoveAllClippingPlanes();
+  void SetClippingPlanes(vtkPlaneCollection* planes);
+  vtkPlaneCollection* GetClippingPlanes();
+  /** The most clipping planes a pass takes (6). */
+  static int GetMaximumNumberOfClippingPlanes();
+  ///@}
+
+  ///@{
+  /**
+   * The crop box (world), used while Cropping is on (default off): only what lies inside is
+   * drawn, with cut faces like clipping planes. SetCroppingRegionPlanes reports an error for an
+   * inverted (min > max) or non-finite box and keeps the previous one (default 0, 1, 0, 1, 0, 1).
+   */
+  vtkSetMacro(Cropping, vtkTypeBool);
+  vtkGetMacro(Cropping, vtkTypeBool);
+  vtkBooleanMacro(Cropping, vtkTypeBool);
+  void SetCroppingRegionPlanes(
+    double xmin, double xmax, double ymin, double ymax, double zmin, double zmax);
+  void SetCroppingRegionPlanes(const double bounds[6])
+  {
+    this->SetCroppingRegionPlanes(bounds[0], bounds[1], bounds[2], bounds[3], bounds[4], bounds[5]);
+  }
+  vtkGetVector6Macro(CroppingRegionPlanes, double);
   ///@}
 
   /**
@@ -213,6 +259,8 @@ protected:
   double CameraFocalPoint[3] = { 0, 0, 0 };
   double CameraViewUp[3] = { 0, 1, 0 };
   double CameraViewAngle = 30;
+  vtkTypeBool Cropping = 0;
+  double CroppingRegionPlanes[6] = { 0.0, 1.0, 0.0, 1.0, 0.0, 1.0 };
 
 private:
   vtkSegmentationSVDAGRenderer(const vtkSegmentationSVDAGRenderer&) = delete;

@@ -11,8 +11,6 @@
 #include "vtkObjectFactory.h"
 #include "vtkOpenGLCamera.h"
 #include "vtkOpenGLRenderWindow.h"
-#include "vtkPlane.h"
-#include "vtkPlaneCollection.h"
 #include "vtkRenderWindow.h"
 #include "vtkRenderer.h"
 #include "vtkSegmentationSVDAG.h"
@@ -23,6 +21,7 @@
 #include "vtkVolume.h"
 #include "vtkWeakPointer.h"
 
+#include "svdagClipping.h"
 #include "svdagGLCompositor.h"
 #include "svdagRenderSession.h"
 #include "svdagSelectionDraw.h"
@@ -308,56 +307,6 @@ private:
   }
 };
 
-// Appends a mapper's clipping planes (VTK world) to the settings' (the data's world, the
-// vtkVolume's model coordinates): x_world = V x_model, so a plane dot(n, x - o) keeps
-// dot(V^T n, x_model - V^-1 o) >= 0. Applies the mapper's cropping (the data's world) too,
-// intersected with the settings' own box.
-void addMapperClipping(core::RenderSettings& settings, vtkPlaneCollection* planes,
-  const Matrix& modelToWorld, bool cropping, const double* cropBounds)
-{
-  if (planes && planes->GetNumberOfItems() > 0)
-  {
-    const Matrix worldToModel = inverse(modelToWorld);
-    vtkCollectionSimpleIterator it;
-    planes->InitTraversal(it);
-    while (vtkPlane* plane = planes->GetNextPlane(it))
-    {
-      double o[3], n[3];
-      plane->GetOrigin(o);
-      plane->GetNormal(n);
-      core::ClipPlane p;
-      for (int r = 0; r < 3; ++r)
-      {
-        p.origin[r] = worldToModel[4 * r + 3];
-        p.normal[r] = 0;
-        for (int c = 0; c < 3; ++c)
-        {
-          p.origin[r] += worldToModel[4 * r + c] * o[c];
-          p.normal[r] += modelToWorld[4 * c + r] * n[c];
-        }
-      }
-      settings.clipPlanes.push_back(p);
-    }
-  }
-  if (cropping)
-  {
-    core::CropBox box;
-    box.on = true;
-    std::copy(cropBounds, cropBounds + 6, box.bounds.begin());
-    if (settings.crop.on)
-    {
-      for (int a = 0; a < 3; ++a)
-      {
-        box.bounds[2 * a] = std::max(box.bounds[2 * a], settings.crop.bounds[2 * a]);
-        // Disjoint boxes keep nothing: an empty box (min == max) clips every ray away.
-        const double hi = std::min(box.bounds[2 * a + 1], settings.crop.bounds[2 * a + 1]);
-        box.bounds[2 * a + 1] = std::max(box.bounds[2 * a], hi);
-      }
-    }
-    settings.crop = box;
-  }
-}
-
 // What a selection render draws in vtkHardwareSelector's current pass, per pixel of `image`
 // (traced at the viewport's size): the prop's color in the actor and process passes (set by
 // BeginRenderProp), the hit label's index + 1 in the composite index pass (indices from 0xffffff
@@ -595,6 +544,7 @@ void vtkSegmentationSVDAGVolumeMapper::Render(vtkRenderer* renderer, vtkVolume* 
     vtkMatrix3x3* normals;
     camera->GetKeyMatrices(renderer, worldToView, normals, viewToDevice, worldToDevice);
     const Matrix modelToWorld = fromVTK(volume->GetMatrix(), false);
+    const Matrix worldToModel = inverse(modelToWorld);
     const Matrix modelToClip = multiply(fromVTK(worldToDevice, true), modelToWorld);
     const Matrix clipToModel = inverse(modelToClip);
     const core::ViewRays rays = core::viewRaysFromClipToWorld(clipToModel);
@@ -622,8 +572,9 @@ void vtkSegmentationSVDAGVolumeMapper::Render(vtkRenderer* renderer, vtkVolume* 
       f.settings.background = { { 0, 0, 0, 0 } }; // misses are transparent over the scene
       if (!full)
         f.settings.samplesPerPixel = 1;
-      addMapperClipping(
-        f.settings, this->ClippingPlanes, modelToWorld, this->Cropping, this->CroppingRegionPlanes);
+      // The mapper's planes (VTK world) into the data's world; its cropping is there already.
+      svdag::vtkglue::setClipping(f.settings, this->ClippingPlanes, modelToWorld, worldToModel,
+        this->Cropping, this->CroppingRegionPlanes);
       f.width = int((vp.width + level.reduction - 1) / level.reduction);
       f.height = int((vp.height + level.reduction - 1) / level.reduction);
       f.key.matrix = modelToClip;
@@ -754,6 +705,11 @@ void vtkSegmentationSVDAGVolumeMapper::Render(vtkRenderer* renderer, vtkVolume* 
     vtkErrorMacro("Render failed: " << e.what());
   }
   finish();
+}
+
+int vtkSegmentationSVDAGVolumeMapper::GetMaximumNumberOfClippingPlanes()
+{
+  return int(core::MaximumClipPlanes);
 }
 
 void vtkSegmentationSVDAGVolumeMapper::SetCroppingRegionPlanes(

@@ -123,8 +123,9 @@ public:
    *
    * Clipping planes: vtkAbstractMapper's (AddClippingPlane, SetClippingPlanes,
    * RemoveAllClippingPlanes), in VTK's world coordinates (after the vtkVolume's matrix, like
-   * vtkGPUVolumeRayCastMapper's), each keeping the side its vtkPlane normal points to; together
-   * with the settings' own planes at most 6. Every ray is clipped (cut-away parts cast no
+   * vtkGPUVolumeRayCastMapper's), each keeping the side its vtkPlane normal points to, at most
+   * GetMaximumNumberOfClippingPlanes() (6). The mapper owns them (the settings hold none), like
+   * vtkSegmentationSVDAGRenderer, which has the same names. Every ray is clipped (cut-away parts cast no
    * shadow) and a cut through a label shows its cut face with the plane's normal (at block and
    * leaf LOD the cross-section of the block or leaf box). Bad planes (more than 6, a zero or
    * non-finite normal) are reported by Render with vtkErrorMacro and nothing is drawn. A change
@@ -140,6 +141,7 @@ public:
     this->SetCroppingRegionPlanes(planes[0], planes[1], planes[2], planes[3], planes[4], planes[5]);
   }
   vtkGetVector6Macro(CroppingRegionPlanes, double);
+  static int GetMaximumNumberOfClippingPlanes();
   ///@}
 
   /** Creates the Vulkan renderer now (else on the first render): returns false and reports the

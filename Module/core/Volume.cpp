@@ -436,52 +436,65 @@ inline uint32_t fullAs(uint32_t header, bool p)
   return p ? (~(mixed | full) & 0xFFu) : full;
 }
 
-} // namespace
-
-void Volume::validate() const
+// Volume::validate, check by check. Each check throws std::runtime_error("invalid SVDAG: ...")
+// naming the first inconsistency it finds; later checks rely on what earlier ones established
+// (widths before any field is read, node starts before any reference is followed).
+[[noreturn]] void fail(const std::string& what)
 {
-  auto fail = [](const std::string& what) { throw std::runtime_error("invalid SVDAG: " + what); };
-  auto str = [](uint64_t v) { return std::to_string(v); };
+  throw std::runtime_error("invalid SVDAG: " + what);
+}
+
+std::string str(uint64_t v)
+{
+  return std::to_string(v);
+}
+
+// Dimensions, field widths, stream sizes and the scalar type: what every later check indexes with.
+void checkHeader(const Volume& v)
+{
   for (int a = 0; a < 3; ++a)
   {
-    if (geometry.dims[a] < 0)
+    if (v.geometry.dims[a] < 0)
       fail("negative dimension");
   }
-  const uint64_t cells = geometry.cellCount();
+  const uint64_t cells = v.geometry.cellCount();
   if (cells > (uint64_t(1) << 32))
     fail("more than 2^32 cells");
-  const FieldWidths& w = widths;
+  const FieldWidths& w = v.widths;
   if (w.cellBits > 32 || w.labelBits > 32 || w.rootRefBits > 32 || w.midRefBits > 32 ||
     w.leafRefBits > 32)
     fail("field width above 32 bits");
   if (cells > 0 && (cells - 1) >> w.cellBits)
     fail("cell field too narrow for the grid");
-  if (!labels.empty() && (uint64_t(labels.size() - 1) >> w.labelBits))
+  if (!v.labels.empty() && (uint64_t(v.labels.size() - 1) >> w.labelBits))
     fail("label field too narrow for the label table");
   uint64_t blockBitsTotal = 0; // a huge count must not wrap around to a small stream
-  if (__builtin_mul_overflow(blockCount, uint64_t(w.blockBits()), &blockBitsTotal) ||
-    blocks.size() != blockBitsTotal / 32 + (blockBitsTotal % 32 ? 1 : 0) + 1)
+  if (__builtin_mul_overflow(v.blockCount, uint64_t(w.blockBits()), &blockBitsTotal) ||
+    v.blocks.size() != blockBitsTotal / 32 + (blockBitsTotal % 32 ? 1 : 0) + 1)
     fail("block stream size does not match the block count");
-  if (roots.empty() || mids.empty())
+  if (v.roots.empty() || v.mids.empty())
     fail("missing stream padding");
-  if (int(scalarType) >= ScalarTypeCount)
+  if (int(v.scalarType) >= ScalarTypeCount)
     fail("unknown scalar type");
+}
 
-  // Label table: values of the type, sorted, unique, not the background, bounds in the volume.
-  const auto& d = geometry.dims;
-  auto validValue = [this](uint64_t v) {
+// The label table: values of the type, sorted, unique, not the background, bounds in the volume.
+void checkLabelTable(const Volume& v)
+{
+  const auto& d = v.geometry.dims;
+  auto validValue = [&v](uint64_t value) {
     uint64_t tmp = 0;
-    scalarStore(scalarType, &tmp, 0, v);
-    return scalarLoad(scalarType, &tmp, 0) == v;
+    scalarStore(v.scalarType, &tmp, 0, value);
+    return scalarLoad(v.scalarType, &tmp, 0) == value;
   };
-  for (size_t l = 0; l < labels.size(); ++l)
+  for (size_t l = 0; l < v.labels.size(); ++l)
   {
-    const LabelInfo& info = labels[l];
+    const LabelInfo& info = v.labels[l];
     if (!validValue(info.value))
-      fail("label " + str(l) + ": value outside the range of " + scalarName(scalarType));
-    if (info.value == background)
+      fail("label " + str(l) + ": value outside the range of " + scalarName(v.scalarType));
+    if (info.value == v.background)
       fail("the label table holds the background value");
-    if (l > 0 && !scalarLess(scalarType, labels[l - 1].value, info.value))
+    if (l > 0 && !scalarLess(v.scalarType, v.labels[l - 1].value, info.value))
       fail("label table not sorted by value or not unique (label " + str(l) + ")");
     for (int a = 0; a < 3; ++a)
     {
@@ -490,83 +503,97 @@ void Volume::validate() const
         fail("label " + str(l) + ": bounds outside the volume");
     }
   }
+}
 
-  // Node streams, walked in order (nodes are contiguous): every node well formed and every child
-  // reference at a node start (a reference into the middle of a node would read its references
-  // as a header and run past the checked nodes) or an existing leaf. The same walk summarises
-  // each node's occupancy in both polarities (voxel count and projections, hence tight bounds),
-  // once per distinct node: blocks share nodes, so checking a block against its bounds and the
-  // label table against the blocks costs no expansion of any voxel.
-  const uint32_t* rootWords = roots.data();
-  const uint32_t* midWords = mids.data();
-  const uint64_t rootBitsTotal = uint64_t(roots.size() - 1) * 32;
-  const uint64_t midBitsTotal = uint64_t(mids.size() - 1) * 32;
-  // Per leaf and polarity: projection lanes (x bits 0-3, y 8-11, z 16-19) and voxel count (24-30).
-  std::vector<uint32_t> leafInfo(leaves.size() * 2);
+// A node pool once walked: where its nodes start, and each node's occupancy summary in both
+// polarities (entries 2 n and 2 n + 1 for node n, the second as read complemented).
+struct NodePool
+{
+  NodeIndex index;
+  std::unique_ptr<uint64_t[]> summaries;
+};
+
+// Per leaf and polarity: projection lanes (x bits 0-3, y 8-11, z 16-19) and voxel count (24-30).
+std::vector<uint32_t> leafSummaries(const std::vector<uint64_t>& leaves)
+{
+  std::vector<uint32_t> info(leaves.size() * 2);
   for (size_t l = 0; l < leaves.size(); ++l)
   {
     const uint64_t m = leaves[l];
     const uint32_t count = popcount64(m);
-    leafInfo[2 * l] = leafLanes(m) | (count << 24);
-    leafInfo[2 * l + 1] = leafLanes(~m) | ((64 - count) << 24);
+    info[2 * l] = leafLanes(m) | (count << 24);
+    info[2 * l + 1] = leafLanes(~m) | ((64 - count) << 24);
   }
-  // Walks one stream; child(n, c, ref, acc0, acc1) checks the reference of child c and stores
-  // the child's summary in both polarities; combine(acc) summarises a node from its children.
-  auto walk = [&](const uint32_t* words, uint64_t count, uint64_t total, uint32_t refBits,
-                const char* what, NodeIndex& index, std::unique_ptr<uint64_t[]>& summaries,
-                uint64_t solid, const auto& child, const auto& combine) {
-    const uint64_t expected = std::min<uint64_t>(count, total / layout::NODE_HEADER_BITS + 1);
-    index.reset(total, expected);
-    summaries.reset(new uint64_t[size_t(2 * expected)]); // nodes take 16 bits at least
-    uint64_t* summary = summaries.get();
-    uint64_t offset = 0;
-    for (uint64_t n = 0; n < count; ++n)
+  return info;
+}
+
+// Walks one node stream in order (nodes are contiguous): every node well formed and every child
+// reference at a node start (a reference into the middle of a node would read its references as
+// a header and run past the checked nodes) or an existing leaf. child(ref, acc0, acc1) checks
+// the reference of a mixed child and stores the child's summary in both polarities (a solid
+// child is `solid`); combine(acc) summarises a node from its 8 children. Summarising once per
+// distinct node lets the block checks bound and count voxels without expanding any.
+template <typename Child, typename Combine>
+NodePool walkNodeStream(const std::vector<uint32_t>& stream, uint64_t count, uint32_t refBits,
+  const char* what, uint64_t solid, const Child& child, const Combine& combine)
+{
+  const uint32_t* words = stream.data();
+  const uint64_t total = uint64_t(stream.size() - 1) * 32;
+  const uint64_t expected = std::min<uint64_t>(count, total / layout::NODE_HEADER_BITS + 1);
+  NodePool pool;
+  pool.index.reset(total, expected);
+  pool.summaries.reset(new uint64_t[size_t(2 * expected)]); // nodes take 16 bits at least
+  uint64_t* summary = pool.summaries.get();
+  uint64_t offset = 0;
+  for (uint64_t n = 0; n < count; ++n)
+  {
+    if (offset + layout::NODE_HEADER_BITS > total)
+      fail(std::string(what) + " stream shorter than its node count");
+    const uint32_t header = fieldAt(words, offset, layout::NODE_HEADER_BITS);
+    const uint32_t mixed = layout::nodeMixedMask(header), full = layout::nodeFullMask(header);
+    if (mixed & full)
+      fail(std::string(what) + " node at bit " + str(offset) + ": child both mixed and full");
+    const uint64_t end = offset + layout::NODE_HEADER_BITS + uint64_t(popcount8(mixed)) * refBits;
+    if (end > total)
+      fail(std::string(what) + " node runs past the end of its stream");
+    uint64_t acc0[8], acc1[8];
+    uint64_t refAt = offset + layout::NODE_HEADER_BITS;
+    for (uint32_t c = 0; c < 8; ++c)
     {
-      if (offset + layout::NODE_HEADER_BITS > total)
-        fail(std::string(what) + " stream shorter than its node count");
-      const uint32_t header = fieldAt(words, offset, layout::NODE_HEADER_BITS);
-      const uint32_t mixed = layout::nodeMixedMask(header), full = layout::nodeFullMask(header);
-      if (mixed & full)
-        fail(std::string(what) + " node at bit " + str(offset) + ": child both mixed and full");
-      const uint64_t end =
-        offset + layout::NODE_HEADER_BITS + uint64_t(popcount8(mixed)) * refBits;
-      if (end > total)
-        fail(std::string(what) + " node runs past the end of its stream");
-      uint64_t acc0[8], acc1[8];
-      uint64_t refAt = offset + layout::NODE_HEADER_BITS;
-      for (uint32_t c = 0; c < 8; ++c)
+      const uint32_t bit = 1u << c;
+      if (mixed & bit)
       {
-        const uint32_t bit = 1u << c;
-        if (mixed & bit)
-        {
-          if (!child(offset, fieldAt(words, refAt, refBits), acc0[c], acc1[c]))
-            fail(std::string(what) + " node at bit " + str(offset) +
-              ": child reference does not point at a node");
-          refAt += refBits;
-        }
-        else
-        {
-          acc0[c] = (full & bit) ? solid : 0;
-          acc1[c] = (full & bit) ? 0 : solid;
-        }
+        if (!child(fieldAt(words, refAt, refBits), acc0[c], acc1[c]))
+          fail(std::string(what) + " node at bit " + str(offset) +
+            ": child reference does not point at a node");
+        refAt += refBits;
       }
-      summary[2 * n] = combine(acc0);
-      summary[2 * n + 1] = combine(acc1);
-      index.add(offset);
-      offset = end;
+      else
+      {
+        acc0[c] = (full & bit) ? solid : 0;
+        acc1[c] = (full & bit) ? 0 : solid;
+      }
     }
-    if (total - offset >= 32)
-      fail(std::string(what) + " stream longer than its nodes");
-    index.finish();
-  };
-  // Mid summary: lanes x bits 0-7, y 8-15, z 16-23; voxels from bit 32.
-  NodeIndex midIndex, rootIndex;
-  std::unique_ptr<uint64_t[]> midSummaries, rootSummaries;
-  walk(midWords, midCount, midBitsTotal, w.leafRefBits, "mid", midIndex, midSummaries,
+    summary[2 * n] = combine(acc0);
+    summary[2 * n + 1] = combine(acc1);
+    pool.index.add(offset);
+    offset = end;
+  }
+  if (total - offset >= 32)
+    fail(std::string(what) + " stream longer than its nodes");
+  pool.index.finish();
+  return pool;
+}
+
+// The mid pool: references to existing leaves. Summary: lanes x bits 0-7, y 8-15, z 16-23;
+// voxels from bit 32.
+NodePool checkMidPool(const Volume& v, const std::vector<uint32_t>& leafInfo)
+{
+  return walkNodeStream(v.mids, v.midCount, v.widths.leafRefBits, "mid",
     uint64_t(0x0F0F0Fu | (64u << 24)),
-    [&](uint64_t, uint32_t ref, uint64_t& a0, uint64_t& a1) {
+    [&](uint32_t ref, uint64_t& a0, uint64_t& a1) {
       const uint64_t leaf = layout::refTarget(ref);
-      if (leaf >= leaves.size())
+      if (leaf >= v.leaves.size())
         return false;
       const size_t at = 2 * size_t(leaf) + (ref & 1u);
       a0 = leafInfo[at];
@@ -582,16 +609,21 @@ void Volume::validate() const
       return (xlo & 0xFu) | ((xhi & 0xFu) << 4) | (ylo & 0xF00u) | ((yhi & 0xF00u) << 4) |
         (zlo & 0xF0000u) | ((zhi & 0xF0000u) << 4) | (voxels << 32);
     });
-  // Root summary: lanes x bits 0-15, y 16-31, z 32-47; voxels from bit 48.
-  walk(rootWords, rootCount, rootBitsTotal, w.midRefBits, "root", rootIndex, rootSummaries,
+}
+
+// The root pool: references at mid node starts. Summary: lanes x bits 0-15, y 16-31, z 32-47;
+// voxels from bit 48.
+NodePool checkRootPool(const Volume& v, const NodePool& mids)
+{
+  return walkNodeStream(v.roots, v.rootCount, v.widths.midRefBits, "root",
     uint64_t(0xFFFFFFu) | (uint64_t(512) << 32),
-    [&](uint64_t, uint32_t ref, uint64_t& a0, uint64_t& a1) {
-      const int64_t mid = midIndex.find(layout::refTarget(ref));
+    [&](uint32_t ref, uint64_t& a0, uint64_t& a1) {
+      const int64_t mid = mids.index.find(layout::refTarget(ref));
       if (mid < 0)
         return false;
       const size_t at = 2 * size_t(mid) + (ref & 1u);
-      a0 = midSummaries[at];
-      a1 = midSummaries[at ^ 1u];
+      a0 = mids.summaries[at];
+      a1 = mids.summaries[at ^ 1u];
       return true;
     },
     [](const uint64_t* a) {
@@ -604,16 +636,35 @@ void Volume::validate() const
         ((yhi & 0xFF00u) << 16) | ((zlo & 0xFF0000u) << 16) | ((zhi & 0xFF0000u) << 24) |
         (voxels << 48);
     });
+}
 
-  // Blocks: sorted by (cell, label), inside the grid and the volume, each occupancy non-empty
-  // and inside its bounds (decoders write only inside the bounds, the traversal reads the whole
-  // cell: both must agree), blocks of a cell disjoint, and the label table's voxel counts and
-  // bounds exactly what the blocks hold.
-  const auto n = geometry.cellCounts();
-  std::vector<uint64_t> labelVoxels(labels.size(), 0);
-  std::vector<std::array<int32_t, 6>> labelBounds(labels.size(),
-    std::array<int32_t, 6>{ { INT32_MAX, INT32_MIN, INT32_MAX, INT32_MIN, INT32_MAX, INT32_MIN } });
-  struct CellEntry
+// The blocks of one cell, gathered while the blocks are checked in order: no label twice, and
+// no voxel in two blocks (a voxel has one label).
+class CellBlocks
+{
+public:
+  explicit CellBlocks(const Volume& v)
+    : V(v)
+  {
+  }
+
+  void add(uint64_t index, uint32_t label, uint32_t rootRef)
+  {
+    this->Labels.push_back(label);
+    this->Entries.push_back(
+      { index, rootRef, fieldAt(this->V.roots.data(), layout::refTarget(rootRef), 16) });
+  }
+
+  // Checks the cell's blocks added since the last call, then forgets them.
+  void check(uint32_t cell)
+  {
+    this->checkDisjoint(cell);
+    this->checkLabelsUnique(cell);
+    this->Entries.clear();
+  }
+
+private:
+  struct Entry
   {
     uint64_t index;  // block
     uint32_t root;   // its root reference
@@ -621,54 +672,72 @@ void Volume::validate() const
   };
   struct MidEntry
   {
-    size_t entry; // in cellEntries
+    size_t entry; // in Entries
     uint64_t offset;
     bool inverted;
     uint32_t mixed, full; // full as read with `inverted`
   };
-  std::vector<CellEntry> cellEntries;
-  std::vector<MidEntry> octantEntries[8];
-  std::vector<uint32_t> cellLabels; // the labels of the current cell's blocks
-  auto checkCellLabels = [&](uint32_t cell) {
-    if (cellLabels.size() > 1) // a cell of one block has nothing to sort
+
+  void checkLabelsUnique(uint32_t cell)
+  {
+    if (this->Labels.size() > 1) // a cell of one block has nothing to sort
     {
-      std::sort(cellLabels.begin(), cellLabels.end());
-      if (std::adjacent_find(cellLabels.begin(), cellLabels.end()) != cellLabels.end())
+      std::sort(this->Labels.begin(), this->Labels.end());
+      if (std::adjacent_find(this->Labels.begin(), this->Labels.end()) != this->Labels.end())
         fail("cell " + str(cell) + " holds two blocks of one label");
     }
-    cellLabels.clear();
-  };
-  auto checkCellDisjoint = [&](uint32_t cell) {
-    if (cellEntries.size() < 2)
+    this->Labels.clear();
+  }
+
+  [[noreturn]] void overlap(size_t a, size_t b, uint32_t cell) const
+  {
+    fail("blocks " + str(this->Entries[a].index) + " and " + str(this->Entries[b].index) +
+      " of cell " + str(cell) + " overlap (a voxel has one label)");
+  }
+
+  // Level by level: a solid child may meet no other non-empty one; children mixed in two or
+  // more blocks are compared one level down, and leaves voxel by voxel.
+  void checkDisjoint(uint32_t cell)
+  {
+    if (this->Entries.size() < 2)
       return;
     // Two blocks whose roots are each other's complement split the cell between them.
-    if (cellEntries.size() == 2 && (cellEntries[0].root ^ cellEntries[1].root) == 1u)
+    if (this->Entries.size() == 2 && (this->Entries[0].root ^ this->Entries[1].root) == 1u)
       return;
-    auto overlap = [&](size_t a, size_t b) {
-      fail("blocks " + str(cellEntries[a].index) + " and " + str(cellEntries[b].index) +
-        " of cell " + str(cell) + " overlap (a voxel has one label)");
-    };
-    // Level by level: a solid child may meet no other non-empty one; children mixed in two or
-    // more blocks are compared one level down, and leaves voxel by voxel.
+    const uint32_t shared = this->checkRootLevel(cell);
+    this->gatherSharedOctants(shared);
+    for (std::vector<MidEntry>& list : this->Octants)
+      this->checkOctant(list, cell);
+  }
+
+  // The root nodes' children; returns the octants mixed in two or more blocks.
+  uint32_t checkRootLevel(uint32_t cell) const
+  {
     uint32_t accNonEmpty = 0, accFull = 0, accMixed = 0, shared = 0;
-    for (size_t e = 0; e < cellEntries.size(); ++e)
+    for (size_t e = 0; e < this->Entries.size(); ++e)
     {
-      const CellEntry& ce = cellEntries[e];
+      const Entry& ce = this->Entries[e];
       const uint32_t mixed = layout::nodeMixedMask(ce.header);
       const uint32_t full = fullAs(ce.header, layout::refComplement(ce.root));
       if ((accNonEmpty & full) | (accFull & (mixed | full)))
-        overlap(e - 1, e);
+        this->overlap(e - 1, e, cell);
       shared |= accMixed & mixed;
       accNonEmpty |= mixed | full;
       accFull |= full;
       accMixed |= mixed;
     }
-    // The mid references of the shared octants, read in one sequential pass per block.
-    for (std::vector<MidEntry>& list : octantEntries)
+    return shared;
+  }
+
+  // The mid references of the shared octants, read in one sequential pass per block.
+  void gatherSharedOctants(uint32_t shared)
+  {
+    const uint32_t refBits = this->V.widths.midRefBits;
+    for (std::vector<MidEntry>& list : this->Octants)
       list.clear();
-    for (size_t e = 0; e < cellEntries.size(); ++e)
+    for (size_t e = 0; e < this->Entries.size(); ++e)
     {
-      const CellEntry& ce = cellEntries[e];
+      const Entry& ce = this->Entries[e];
       const uint32_t mixed = layout::nodeMixedMask(ce.header);
       if (!(mixed & shared))
         continue;
@@ -679,77 +748,106 @@ void Volume::validate() const
           continue;
         if (shared & (1u << o))
         {
-          const uint32_t midRef = fieldAt(rootWords, refAt, w.midRefBits);
+          const uint32_t midRef = fieldAt(this->V.roots.data(), refAt, refBits);
           MidEntry me;
           me.entry = e;
           me.offset = layout::refTarget(midRef);
           me.inverted = layout::refComplement(ce.root) != layout::refComplement(midRef);
-          octantEntries[o].push_back(me);
+          this->Octants[o].push_back(me);
         }
-        refAt += w.midRefBits;
+        refAt += refBits;
       }
     }
-    for (uint32_t o = 0; o < 8; ++o)
-    {
-      std::vector<MidEntry>& list = octantEntries[o];
-      // Two blocks splitting the octant between them refer to one node with opposite polarity
-      // (the common case: the two sides of a boundary share their node, complemented).
-      if (list.size() < 2 ||
-        (list.size() == 2 && list[0].offset == list[1].offset &&
-          list[0].inverted != list[1].inverted))
-        continue;
-      uint32_t midNonEmpty = 0, midFullAcc = 0, midMixedAcc = 0, midShared = 0;
-      for (size_t k = 0; k < list.size(); ++k)
-      {
-        MidEntry& me = list[k];
-        const uint32_t header = fieldAt(midWords, me.offset, layout::NODE_HEADER_BITS);
-        me.mixed = layout::nodeMixedMask(header);
-        me.full = fullAs(header, me.inverted);
-        if ((midNonEmpty & me.full) | (midFullAcc & (me.mixed | me.full)))
-          overlap(k > 0 ? list[k - 1].entry : me.entry, me.entry);
-        midShared |= midMixedAcc & me.mixed;
-        midNonEmpty |= me.mixed | me.full;
-        midFullAcc |= me.full;
-        midMixedAcc |= me.mixed;
-      }
-      if (!midShared)
-        continue;
-      // Leaves mixed in two or more blocks: voxel by voxel.
-      uint64_t acc[8] = {};
-      size_t owner[8] = {};
-      for (const MidEntry& me : list)
-      {
-        if (!(me.mixed & midShared))
-          continue;
-        uint64_t refAt = me.offset + layout::NODE_HEADER_BITS;
-        for (uint32_t c = 0; c < 8; ++c)
-        {
-          if (!(me.mixed & (1u << c)))
-            continue;
-          if (midShared & (1u << c))
-          {
-            const uint32_t leafRef = fieldAt(midWords, refAt, w.leafRefBits);
-            uint64_t m = leaves[layout::refTarget(leafRef)];
-            if (me.inverted != layout::refComplement(leafRef))
-              m = ~m;
-            if (acc[c] & m)
-              overlap(owner[c], me.entry);
-            acc[c] |= m;
-            owner[c] = me.entry;
-          }
-          refAt += w.leafRefBits;
-        }
-      }
-    }
-  };
+  }
 
-  const uint32_t* blockWords = blocks.data();
+  // One octant's mid nodes, then the leaves mixed in two or more of them voxel by voxel.
+  void checkOctant(std::vector<MidEntry>& list, uint32_t cell) const
+  {
+    // Two blocks splitting the octant between them refer to one node with opposite polarity
+    // (the common case: the two sides of a boundary share their node, complemented).
+    if (list.size() < 2 ||
+      (list.size() == 2 && list[0].offset == list[1].offset && list[0].inverted != list[1].inverted))
+      return;
+    const uint32_t* midWords = this->V.mids.data();
+    uint32_t midNonEmpty = 0, midFullAcc = 0, midMixedAcc = 0, midShared = 0;
+    for (size_t k = 0; k < list.size(); ++k)
+    {
+      MidEntry& me = list[k];
+      const uint32_t header = fieldAt(midWords, me.offset, layout::NODE_HEADER_BITS);
+      me.mixed = layout::nodeMixedMask(header);
+      me.full = fullAs(header, me.inverted);
+      if ((midNonEmpty & me.full) | (midFullAcc & (me.mixed | me.full)))
+        this->overlap(k > 0 ? list[k - 1].entry : me.entry, me.entry, cell);
+      midShared |= midMixedAcc & me.mixed;
+      midNonEmpty |= me.mixed | me.full;
+      midFullAcc |= me.full;
+      midMixedAcc |= me.mixed;
+    }
+    if (!midShared)
+      return;
+    const uint32_t refBits = this->V.widths.leafRefBits;
+    uint64_t acc[8] = {};
+    size_t owner[8] = {};
+    for (const MidEntry& me : list)
+    {
+      if (!(me.mixed & midShared))
+        continue;
+      uint64_t refAt = me.offset + layout::NODE_HEADER_BITS;
+      for (uint32_t c = 0; c < 8; ++c)
+      {
+        if (!(me.mixed & (1u << c)))
+          continue;
+        if (midShared & (1u << c))
+        {
+          const uint32_t leafRef = fieldAt(midWords, refAt, refBits);
+          uint64_t m = this->V.leaves[layout::refTarget(leafRef)];
+          if (me.inverted != layout::refComplement(leafRef))
+            m = ~m;
+          if (acc[c] & m)
+            this->overlap(owner[c], me.entry, cell);
+          acc[c] |= m;
+          owner[c] = me.entry;
+        }
+        refAt += refBits;
+      }
+    }
+  }
+
+  const Volume& V;
+  std::vector<Entry> Entries;
+  std::vector<MidEntry> Octants[8];
+  std::vector<uint32_t> Labels; // the labels of the current cell's blocks
+};
+
+// What the blocks hold per label, for the label table to match.
+struct LabelTotals
+{
+  std::vector<uint64_t> voxels;
+  std::vector<std::array<int32_t, 6>> bounds;
+};
+
+// Blocks: sorted by cell, inside the grid and the volume, each occupancy non-empty and inside
+// its bounds (decoders write only inside the bounds, the traversal reads the whole cell: both
+// must agree), the blocks of a cell disjoint (CellBlocks); returns each label's voxel count and
+// bounds as the blocks hold them.
+LabelTotals checkBlocks(const Volume& v, const NodePool& roots)
+{
+  const FieldWidths& w = v.widths;
+  const auto& d = v.geometry.dims;
+  const uint64_t cells = v.geometry.cellCount();
+  const auto n = v.geometry.cellCounts();
+  LabelTotals totals;
+  totals.voxels.assign(v.labels.size(), 0);
+  totals.bounds.assign(v.labels.size(),
+    std::array<int32_t, 6>{ { INT32_MAX, INT32_MIN, INT32_MAX, INT32_MIN, INT32_MAX, INT32_MIN } });
+  CellBlocks cellBlocks(v);
+  const uint32_t* blockWords = v.blocks.data();
   const uint32_t recordBits = w.blockBits();
   const uint32_t boundsAt = layout::blockBoundsOffset(w.cellBits);
   const uint32_t labelFieldAt = layout::blockLabelOffset(w.cellBits);
   const uint32_t rootAt = layout::blockRootOffset(w.cellBits, w.labelBits);
   uint32_t previousCell = 0;
-  for (uint64_t i = 0; i < blockCount; ++i)
+  for (uint64_t i = 0; i < v.blockCount; ++i)
   {
     const uint64_t base = i * recordBits;
     const uint32_t cell = fieldAt(blockWords, base, w.cellBits);
@@ -759,24 +857,19 @@ void Volume::validate() const
     auto name = [&]() { return "block " + str(i); };
     if (cell >= cells)
       fail(name() + ": cell outside the grid");
-    if (label >= labels.size())
+    if (label >= v.labels.size())
       fail(name() + ": label index out of range");
     // Blocks are sorted by cell; within a cell, files written before version 0.1's builder
     // sorted them by label come in scan order: only a label twice in one cell is refused.
     if (i > 0 && cell < previousCell)
       fail("blocks not sorted by cell (" + name() + ")");
     if (i > 0 && cell != previousCell)
-    {
-      checkCellDisjoint(previousCell);
-      checkCellLabels(previousCell);
-      cellEntries.clear();
-    }
-    cellLabels.push_back(label);
+      cellBlocks.check(previousCell);
     previousCell = cell;
-    const int64_t root = rootIndex.find(layout::refTarget(rootRef));
+    const int64_t root = roots.index.find(layout::refTarget(rootRef));
     if (root < 0)
       fail(name() + ": root reference does not point at a root node");
-    const uint64_t summary = rootSummaries[2 * size_t(root) + (rootRef & 1u)];
+    const uint64_t summary = roots.summaries[2 * size_t(root) + (rootRef & 1u)];
     const uint32_t voxels = uint32_t(summary >> 48);
     if (voxels == 0)
       fail(name() + ": empty occupancy");
@@ -785,7 +878,7 @@ void Volume::validate() const
     const uint64_t cellOrigin[3] = { uint64_t(cell % uint32_t(n[0])) * layout::CELL_SIZE,
       uint64_t(cell / uint32_t(n[0]) % uint32_t(n[1])) * layout::CELL_SIZE,
       uint64_t(cell / (uint64_t(n[0]) * uint64_t(n[1]))) * layout::CELL_SIZE };
-    std::array<int32_t, 6>& lb = labelBounds[label];
+    std::array<int32_t, 6>& lb = totals.bounds[label];
     for (int a = 0; a < 3; ++a)
     {
       const uint32_t blo = (box >> (4 * a)) & 15u, bhi = (box >> (12 + 4 * a)) & 15u;
@@ -800,24 +893,39 @@ void Volume::validate() const
       lb[2 * a] = std::min(lb[2 * a], int32_t(cellOrigin[a] + lo));
       lb[2 * a + 1] = std::max(lb[2 * a + 1], int32_t(cellOrigin[a] + hi));
     }
-    labelVoxels[label] += voxels;
-    cellEntries.push_back({ i, rootRef, fieldAt(rootWords, layout::refTarget(rootRef), 16) });
+    totals.voxels[label] += voxels;
+    cellBlocks.add(i, label, rootRef);
   }
-  checkCellDisjoint(previousCell);
-  checkCellLabels(previousCell);
+  cellBlocks.check(previousCell);
+  return totals;
+}
 
-  for (size_t l = 0; l < labels.size(); ++l)
+// The label table's voxel counts and bounds are exactly what the blocks hold.
+void checkLabelTotals(const Volume& v, const LabelTotals& totals)
+{
+  for (size_t l = 0; l < v.labels.size(); ++l)
   {
     const std::string what = "label " + str(l) + " (value " +
-      (scalarSigned(scalarType) ? std::to_string(int64_t(labels[l].value))
-                                : std::to_string(labels[l].value)) +
+      (scalarSigned(v.scalarType) ? std::to_string(int64_t(v.labels[l].value))
+                                  : std::to_string(v.labels[l].value)) +
       ")";
-    if (labels[l].voxels != labelVoxels[l])
-      fail(what + ": voxel count " + str(labels[l].voxels) + " in the label table, " +
-        str(labelVoxels[l]) + " in its blocks");
-    if (labels[l].bounds != labelBounds[l])
+    if (v.labels[l].voxels != totals.voxels[l])
+      fail(what + ": voxel count " + str(v.labels[l].voxels) + " in the label table, " +
+        str(totals.voxels[l]) + " in its blocks");
+    if (v.labels[l].bounds != totals.bounds[l])
       fail(what + ": bounds in the label table differ from its blocks'");
   }
+}
+
+} // namespace
+
+void Volume::validate() const
+{
+  checkHeader(*this);
+  checkLabelTable(*this);
+  const NodePool mids = checkMidPool(*this, leafSummaries(this->leaves));
+  const NodePool roots = checkRootPool(*this, mids);
+  checkLabelTotals(*this, checkBlocks(*this, roots));
 }
 
 bool Volume::operator==(const Volume& o) const

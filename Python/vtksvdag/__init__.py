@@ -21,10 +21,9 @@ __path__ = extend_path(__path__, __name__)
 
 __version__ = "0.1.0"
 
-from ._svdagfile import from_bytes  # noqa: E402 (needs the extended __path__)
-from .build import from_image, from_numpy  # noqa: E402
+from .build import from_image, from_numpy  # noqa: E402 (needs the extended __path__)
 from .distributed import build_distributed  # noqa: E402
-from .fileio import read  # noqa: E402
+from .fileio import from_bytes, read  # noqa: E402
 from .plotting import add_segmentation, pick, refine  # noqa: E402
 from .slicing import add_segmentation_slice  # noqa: E402
 from .streaming import Builder  # noqa: E402

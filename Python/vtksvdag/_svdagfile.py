@@ -1,8 +1,8 @@
 """The ``.svdag`` format as files and bytes (what :meth:`SegmentationVolume.save`,
 :meth:`SegmentationVolume.to_bytes` and :func:`vtksvdag.from_bytes` call).
 
-Kept apart from ``fileio`` (which builds SegmentationVolumes) so that ``volume`` imports it at
-the top without an import cycle.
+Works on VTK data objects only, never on SegmentationVolume (which imports this module): the
+package's imports form no cycle (Testing/Python/test_imports.py).
 """
 import contextlib
 import numbers
@@ -94,39 +94,15 @@ def svdag_bytes(volume, compression_level=3):
     return vtk_to_numpy(writer.GetOutputBytes()).tobytes()
 
 
-def from_bytes(data):
-    """Load a volume from the bytes of a ``.svdag`` file.
+def dataobject_from_bytes(data):
+    """The vtkSegmentationSVDAG of the bytes of a ``.svdag`` file (:func:`vtksvdag.from_bytes`
+    wraps it in a SegmentationVolume).
 
-    The inverse of :meth:`SegmentationVolume.to_bytes`: the bytes are checked as a file is
-    (checksums, structure), so corrupt or truncated data raises rather than loading.
-
-    Parameters
-    ----------
-    data : bytes-like
-        The bytes of a ``.svdag`` file (bytes, bytearray, memoryview or a uint8 array).
-
-    Returns
-    -------
-    SegmentationVolume
-
-    Raises
-    ------
-    TypeError
-        ``data`` is not bytes-like.
-    OSError
-        The bytes are not a valid ``.svdag`` file (the message says which part is wrong).
-
-    Examples
-    --------
-    >>> import numpy as np, vtksvdag
-    >>> volume = vtksvdag.from_numpy(np.eye(8, dtype=np.uint8)[:, :, None])
-    >>> copy = vtksvdag.from_bytes(volume.to_bytes())
-    >>> np.array_equal(copy.to_numpy(), volume.to_numpy())
-    True
+    Raises TypeError when ``data`` is not bytes-like, OSError when the bytes are not a valid
+    ``.svdag`` file (the message says which part is wrong).
     """
     from vtkmodules.util.numpy_support import numpy_to_vtk
 
-    from .volume import SegmentationVolume
     from .vtkSVDAGIO import vtkSegmentationVolumeReader
 
     try:
@@ -149,6 +125,5 @@ def from_bytes(data):
     output = reader.GetOutput()
     if output is None or not output.HasVolume():
         raise OSError("from_bytes: the reader produced no volume")
-    volume = SegmentationVolume(output)
     del array  # the VTK array borrowed it until the reader was done
-    return volume
+    return output

@@ -5,6 +5,7 @@ Imported by add_segmentation (it needs pyvista, which the rest of the package do
 import pyvista as pv
 
 from ._attributes import NAN_COLOR
+from ._colors import to_rgb as _rgb
 
 
 class SegmentationActor(pv.Volume):
@@ -82,8 +83,6 @@ class SegmentationActor(pv.Volume):
         """Color the labels by a column of :attr:`label_table` (see add_segmentation's
         ``color_by``); ``None`` returns to the colors given when adding. Colors given as
         ``colors={label: color}`` win over the column. ValueError for an unknown column."""
-        from .plotting import _rgb
-
         nan = NAN_COLOR if nan_color is None else _rgb(nan_color)
         self._vtksvdag_style.set_color_by(column, cmap=cmap, clim=clim, nan_color=nan)
 
@@ -107,8 +106,6 @@ class SegmentationActor(pv.Volume):
 
         Returns the highlighted values. A change is a material upload: no geometry rebuild.
         """
-        from .plotting import _rgb
-
         rgb = None if color is None else _rgb(color)
         return self._vtksvdag_style.set_highlight(labels, dim=dim, color=rgb, intensity=intensity,
                                                   others_opacity=others_opacity)

@@ -7,8 +7,43 @@ import numpy as np
 from ._labels import (
     LabelRangeError, label_list, label_pattern, label_patterns, numpy_dtype_of_vtk_type,
 )
+from ._svdagfile import dataobject_from_bytes
 from ._vtkrun import run_algorithm
 from .volume import SegmentationVolume
+
+
+def from_bytes(data):
+    """Load a volume from the bytes of a ``.svdag`` file.
+
+    The inverse of :meth:`SegmentationVolume.to_bytes`: the bytes are checked as a file is
+    (checksums, structure), so corrupt or truncated data raises rather than loading.
+
+    Parameters
+    ----------
+    data : bytes-like
+        The bytes of a ``.svdag`` file (bytes, bytearray, memoryview or a uint8 array).
+
+    Returns
+    -------
+    SegmentationVolume
+
+    Raises
+    ------
+    TypeError
+        ``data`` is not bytes-like.
+    OSError
+        The bytes are not a valid ``.svdag`` file (the message says which part is wrong).
+
+    Examples
+    --------
+    >>> import numpy as np, vtksvdag
+    >>> volume = vtksvdag.from_numpy(np.eye(8, dtype=np.uint8)[:, :, None])
+    >>> copy = vtksvdag.from_bytes(volume.to_bytes())
+    >>> np.array_equal(copy.to_numpy(), volume.to_numpy())
+    True
+    """
+    return SegmentationVolume(dataobject_from_bytes(data))
+
 
 def _check_input_file(path):
     try:

@@ -3,13 +3,18 @@
 The volume is drawn by ``vtkSegmentationSVDAGVolumeMapper`` inside the plotter's own render
 window, depth-composited with every mesh in the scene.
 """
+import difflib
+import functools
+import inspect
 import numbers
 import os
 import time
 
 import numpy as np
 
+from ._colors import to_rgb as _rgb
 from ._labels import label_pattern, numpy_dtype_of_vtk_type
+from ._settingnames import set_by_name
 from ._vtkrun import vtk_errors_raised
 from .build import from_image, from_numpy
 from .fileio import read
@@ -18,15 +23,25 @@ from .volume import SegmentationVolume
 # pyvista and the rendering module are imported where they are used: the rest of the package
 # works without them (a machine without Vulkan, a script that only compresses).
 
-_LODS = {"block": 0, "leaf": 1, "voxel": 2, "auto": 3}
-_SHADINGS = {"voxel": 0, "smooth": 1}  # vtkSegmentationSVDAGRenderSettings.SHADING_*
-_BACKENDS = {"auto": 0, "rt": 1, "compute": 2}  # vtkSegmentationSVDAGRenderSettings.BACKEND_*
 
-# Keyword arguments of add_segmentation beyond the named ones (documented there).
-_EXTRA_OPTIONS = ("exposure", "seed", "next_event_estimation", "write_depth", "error_target",
-                  "auto_adjust", "samples_per_pass")
-# Label attribute and highlight options beyond the named ones (documented there too).
-_EXTRA_OPTIONS += ("clim", "nan_color", "highlight_color", "highlight_intensity", "others_opacity")
+def _keywords_checked(function):
+    """Makes an unknown keyword argument of ``function`` a TypeError that suggests the closest
+    option names (difflib), instead of Python's bare "unexpected keyword argument"."""
+    parameters = inspect.signature(function).parameters
+
+    @functools.wraps(function)
+    def checked(*args, **kwargs):
+        unknown = sorted(set(kwargs) - set(parameters))
+        if unknown:
+            hints = []
+            for option in unknown:
+                close = difflib.get_close_matches(option, parameters, n=3)
+                hints.append(f"{option!r}" + (f" (did you mean {' or '.join(map(repr, close))}?)"
+                                              if close else ""))
+            raise TypeError(f"{function.__name__}() got unknown options: {', '.join(hints)}")
+        return function(*args, **kwargs)
+
+    return checked
 
 
 def _segmentation_volume(data):
@@ -43,19 +58,6 @@ def _segmentation_volume(data):
         "data must be a SegmentationVolume, a file path, a numpy label array or a "
         f"pyvista.ImageData / vtkImageData, not {type(data).__name__}"
     )
-
-
-def _rgb(color):
-    """A color pyvista understands (name, hex, 0-1 floats or 0-255 ints) as 0-1 floats."""
-    import pyvista as pv
-
-    values = np.asarray(color) if isinstance(color, (tuple, list, np.ndarray)) else None
-    if values is not None and values.dtype.kind == "f" and values.shape in ((3,), (4,)):
-        # Floats are kept as given: pyvista.Color would round them to 8 bits.
-        if not np.all((values >= 0) & (values <= 1)):
-            raise ValueError(f"float colors must be in [0, 1], got {color!r}")
-        return tuple(float(c) for c in values[:3])
-    return tuple(float(c) for c in pv.Color(color).float_rgb)
 
 
 def _check_fraction(value, what):
@@ -182,7 +184,7 @@ def _crop_box(crop):
 def _apply_clipping(mapper, clipping_planes, crop):
     if clipping_planes is not None:
         planes = [_clipping_plane(p) for p in clipping_planes]
-        most = mapper.GetSettings().GetMaximumNumberOfClippingPlanes()
+        most = mapper.GetMaximumNumberOfClippingPlanes()
         if len(planes) > most:
             raise ValueError(f"at most {most} clipping planes are supported, got {len(planes)}")
         for plane in planes:
@@ -192,6 +194,7 @@ def _apply_clipping(mapper, clipping_planes, crop):
         mapper.CroppingOn()
 
 
+@_keywords_checked
 def add_segmentation(
     plotter,
     data,
@@ -202,21 +205,32 @@ def add_segmentation(
     hidden_labels=None,
     attributes=None,
     color_by=None,
+    clim=None,
+    nan_color=None,
     query=None,
     highlight=None,
     dim=None,
-    lod="auto",
-    shading="voxel",
-    backend="auto",
-    spp=64,
-    bounces=4,
+    highlight_color=None,
+    highlight_intensity=None,
+    others_opacity=None,
+    lod=None,
+    shading=None,
+    backend=None,
+    spp=None,
+    samples_per_pass=None,
+    bounces=None,
+    seed=None,
+    next_event_estimation=None,
+    exposure=None,
     sun=None,
     environment=None,
     clipping_planes=None,
     crop=None,
+    write_depth=None,
+    auto_adjust=None,
+    error_target=None,
     name=None,
     reset_camera=None,
-    **kwargs,
 ):
     """Add a path-traced segmentation volume to a ``pyvista.Plotter``.
 
@@ -224,6 +238,11 @@ def add_segmentation(
     composited with the plotter's meshes by depth. While the view is still, each render adds
     samples until ``spp`` samples per pixel (see :func:`refine`); while the user interacts,
     frames keep to the plotter's update rate with a coarser LOD and resolution.
+
+    Options left at ``None`` keep the default of the VTK object they set
+    (``vtkSegmentationSVDAGRenderSettings`` for the path tracer, whose defaults are the C++ core's,
+    or ``vtkSegmentationSVDAGVolumeMapper``); the defaults named below are those. An unknown
+    option is a TypeError that suggests the closest names.
 
     Parameters
     ----------
@@ -257,36 +276,60 @@ def add_segmentation(
         anything else (strings, bools, categories) one color per category in sorted order
         (default tab10, or tab20 beyond 10 categories). Labels without a value get
         ``nan_color`` (default a neutral grey, 0.5 0.5 0.5). ``colors`` wins over it.
+    clim : (float, float), optional
+        With a numeric ``color_by`` column: the values mapped to the ends of the colormap
+        (default: the column's range).
+    nan_color : color, optional
+        With ``color_by``: the color of labels without a value (default grey 0.5 0.5 0.5).
     query : str, optional
         A pandas query expression over the joined table (``"volume > 1e4 and type ==
         'pyramidal'"``): labels whose row does not satisfy it are hidden. Missing values (labels
         without a row or a value) follow pandas: a comparison with them is false, except ``!=``.
         ValueError for an expression pandas cannot evaluate (the message lists the columns).
     highlight : int or iterable of int, optional
-        Labels drawn with an emissive tint (``highlight_color``, default amber, times
-        ``highlight_intensity``, default 1).
+        Labels drawn with an emissive tint (``highlight_color`` times ``highlight_intensity``).
     dim : float, optional
         While labels are highlighted, the other labels' base color is multiplied by ``dim``
-        (in [0, 1]; default 1: not dimmed); ``others_opacity`` (default 1) makes them
-        see-through.
-    lod : {"auto", "block", "leaf", "voxel"}, default: "auto"
-        Level of detail of still frames: ``"voxel"`` is lossless, ``"auto"`` draws coarser
-        levels where a voxel is smaller than a pixel.
-    shading : {"voxel", "smooth"}, default: "voxel"
+        (in [0, 1]; default 1: not dimmed).
+    highlight_color : color, optional
+        The highlight's tint, any color pyvista accepts (default amber).
+    highlight_intensity : float, optional
+        The tint's radiance scale (default 1).
+    others_opacity : float, optional
+        While labels are highlighted, the other labels' opacity factor in [0, 1] (default 1;
+        below 1 they are see-through, 0 hides them).
+    lod : {"auto", "block", "leaf", "voxel"}, optional
+        Level of detail of still frames (default ``"auto"``): ``"voxel"`` is lossless,
+        ``"auto"`` is lossless too wherever a voxel covers more than a quarter of a pixel and
+        draws leaf or block boxes only where they are below a pixel (faster on huge volumes).
+        The names are ``vtkSegmentationSVDAGRenderSettings.GetLODName(i)``.
+    shading : {"voxel", "smooth"}, optional
+        Default ``"voxel"``.
         The normal surfaces are lit with: the voxel faces' (blocky), or ``"smooth"``, estimated
         from each label's occupancy around the hit point (no mesh; the hit stays the lossless
         voxel surface). Smooth uploads a neighbour table of 108 bytes per block.
-    backend : {"auto", "rt", "compute"}, default: "auto"
+    backend : {"auto", "rt", "compute"}, optional
+        Default ``"auto"``.
         How rays find the label blocks: ``"rt"``, the ray tracing pipeline over a BVH of block
         boxes (needs a device with ray tracing); ``"compute"``, a compute shader walking the
         volume's grid of 16^3 cells (any Vulkan 1.2 device; no BVH, hiding labels rebuilds
         nothing); ``"auto"`` picks per device (compute on lavapipe, where it is several times
         faster, and on devices without ray tracing). The images are the same.
         ``actor.GetMapper().GetBackendInUse()`` tells which one runs.
-    spp : int, default: 64
-        Samples per pixel a still view refines to.
-    bounces : int, default: 4
-        Scattering events per path (0 .. 64).
+    spp : int, optional
+        Samples per pixel a still view refines to (1 .. 2**24; default 64, the mapper's
+        ``TargetSamplesPerPixel``).
+    samples_per_pass : int, optional
+        Samples per pixel each render adds (1 .. 65536; default 1).
+    bounces : int, optional
+        Scattering events per path (0 .. 64; default 4).
+    seed : int, optional
+        Random seed (0 .. 2**32 - 1; default 0): the same seed and options give the same image.
+    next_event_estimation : bool, optional
+        Next-event estimation with multiple importance sampling (default True); False: light
+        is found only where paths escape (same mean, slower to converge).
+    exposure : float, optional
+        Scale of the linear color before the tone curve (1e-6 .. 1e6; default 1).
     sun : bool, sequence of 3 floats or dict, optional
         A sun light: ``True`` for the default one, a direction towards the sun, or a dict with
         ``direction``, ``irradiance`` and ``angular_radius`` (degrees).
@@ -300,18 +343,21 @@ def add_segmentation(
         ``AddClippingPlane`` / ``RemoveAllClippingPlanes`` (``examples/clipping.py``).
     crop : sequence of 6 floats, optional
         ``(xmin, xmax, ymin, ymax, zmin, zmax)``: only what lies inside this axis-aligned box (the
-        data's world coordinates, like ``vtkVolumeMapper``'s cropping planes) is drawn.
+        data's world coordinates, like ``vtkVolumeMapper``'s cropping planes) is drawn. Later
+        changes: the mapper's ``SetCroppingRegionPlanes`` / ``SetCropping``.
+    write_depth : bool, optional
+        Write the volume's first opaque hit into the depth buffer (default True), so that
+        meshes drawn later, picking and depth readers see the volume.
+    auto_adjust : bool, optional
+        Keep interactive frames within the plotter's update rate with a coarser LOD and
+        resolution (default True).
+    error_target : float, optional
+        Stop refining a still view once its error estimate falls to this value (>= 0; default
+        0: refine to ``spp``).
     name : str, optional
         Actor name (replaces an actor of the same name).
     reset_camera : bool, optional
         Reset the camera after adding; by default only when it is the first actor.
-    **kwargs
-        ``exposure`` (float), ``seed`` (int), ``next_event_estimation`` (bool),
-        ``write_depth`` (bool), ``error_target`` (float: stop refining at this error estimate),
-        ``auto_adjust`` (bool: keep interactive frames within the time budget),
-        ``samples_per_pass`` (int: samples each render adds); ``clim`` (low, high) and
-        ``nan_color`` for ``color_by``; ``highlight_color``, ``highlight_intensity`` and
-        ``others_opacity`` for ``highlight``.
 
     Returns
     -------
@@ -328,7 +374,7 @@ def add_segmentation(
         No usable Vulkan device (the message lists the devices found), or ``backend="rt"`` on
         a device without ray tracing.
     ValueError, TypeError
-        An option is out of range or of the wrong type.
+        An option is out of range or of the wrong type; TypeError for an unknown option.
 
     Examples
     --------
@@ -339,59 +385,56 @@ def add_segmentation(
     >>> vtksvdag.refine(plotter)  # doctest: +SKIP
     >>> image = plotter.screenshot()  # doctest: +SKIP
     """
-    import pyvista as pv
+    import pyvista as pv  # noqa: F401 (pyvista is required: fail before any work without it)
 
     from .vtkSVDAGRendering import vtkSegmentationSVDAGVolumeMapper
 
-    unknown = set(kwargs) - set(_EXTRA_OPTIONS)
-    if unknown:
-        raise TypeError(f"add_segmentation got unknown options {sorted(unknown)}")
-    if lod not in _LODS:
-        raise ValueError(f"lod must be one of {sorted(_LODS)}, got {lod!r}")
-    if shading not in _SHADINGS:
-        raise ValueError(f"shading must be one of {sorted(_SHADINGS)}, got {shading!r}")
-    if backend not in _BACKENDS:
-        raise ValueError(f"backend must be one of {sorted(_BACKENDS)}, got {backend!r}")
     for value, what, lo, hi in ((spp, "spp", 1, 1 << 24), (bounces, "bounces", 0, 64),
-                                (kwargs.get("samples_per_pass", 1), "samples_per_pass", 1, 65536)):
+                                (samples_per_pass, "samples_per_pass", 1, 65536),
+                                (seed, "seed", 0, 2**32 - 1)):
+        if value is None:
+            continue
         if isinstance(value, bool) or not isinstance(value, numbers.Integral) or not lo <= value <= hi:
             raise ValueError(f"{what} must be an integer in {lo} .. {hi}, got {value!r}")
 
-    volume = _segmentation_volume(data)
     mapper = vtkSegmentationSVDAGVolumeMapper()
-    mapper.SetInputData(volume.dataobject)
     settings = mapper.GetSettings()
-    settings.SetLOD(_LODS[lod])
-    settings.SetShading(_SHADINGS[shading])
-    settings.SetBackend(_BACKENDS[backend])
-    settings.SetMaximumBounces(int(bounces))
-    settings.SetSamplesPerPixel(int(kwargs.get("samples_per_pass", 1)))
-    mapper.SetTargetSamplesPerPixel(int(spp))
-    if "exposure" in kwargs:
-        exposure = float(kwargs["exposure"])
-        if not (np.isfinite(exposure) and 1e-6 <= exposure <= 1e6):
-            raise ValueError(f"exposure must be in [1e-6, 1e6], got {kwargs['exposure']!r}")
-        settings.SetExposure(exposure)
-    if "seed" in kwargs:
-        seed = kwargs["seed"]
-        if not isinstance(seed, numbers.Integral) or not 0 <= seed < 2**32:
-            raise ValueError(f"seed must be an integer in 0 .. 2**32 - 1, got {seed!r}")
+    # The names are checked against the C++ class's list and set through its string setters.
+    for value, setting, option in ((lod, "LOD", "lod"), (shading, "Shading", "shading"),
+                                   (backend, "Backend", "backend")):
+        if value is not None:
+            set_by_name(settings, setting, value, option)
+    if bounces is not None:
+        settings.SetMaximumBounces(int(bounces))
+    if samples_per_pass is not None:
+        settings.SetSamplesPerPixel(int(samples_per_pass))
+    if seed is not None:
         settings.SetSeed(int(seed))
-    if "next_event_estimation" in kwargs:
-        settings.SetNextEventEstimation(bool(kwargs["next_event_estimation"]))
-    if "write_depth" in kwargs:
-        mapper.SetWriteDepth(bool(kwargs["write_depth"]))
-    if "auto_adjust" in kwargs:
-        mapper.SetAutoAdjustToRenderTime(bool(kwargs["auto_adjust"]))
-    if "error_target" in kwargs:
-        target = float(kwargs["error_target"])
+    if spp is not None:
+        mapper.SetTargetSamplesPerPixel(int(spp))
+    if exposure is not None:
+        value = float(exposure)
+        if not (np.isfinite(value) and 1e-6 <= value <= 1e6):
+            raise ValueError(f"exposure must be in [1e-6, 1e6], got {exposure!r}")
+        settings.SetExposure(value)
+    if next_event_estimation is not None:
+        settings.SetNextEventEstimation(bool(next_event_estimation))
+    if write_depth is not None:
+        mapper.SetWriteDepth(bool(write_depth))
+    if auto_adjust is not None:
+        mapper.SetAutoAdjustToRenderTime(bool(auto_adjust))
+    if error_target is not None:
+        target = float(error_target)
         if not (target >= 0 and np.isfinite(target)):
-            raise ValueError(f"error_target must be a finite number >= 0, got {kwargs['error_target']!r}")
+            raise ValueError(f"error_target must be a finite number >= 0, got {error_target!r}")
         mapper.SetErrorTarget(target)
     _apply_sun(settings, sun)
     _apply_environment(settings, environment)
     _apply_clipping(mapper, clipping_planes, crop)
 
+    # The options are checked before the volume is built or read (the costly part).
+    volume = _segmentation_volume(data)
+    mapper.SetInputData(volume.dataobject)
     props = mapper.GetLabelProperties()
     # With color_by, cmap colors the column (below), not the labels in order.
     _apply_colors(props, volume, colors, None if color_by is not None else cmap)
@@ -407,8 +450,9 @@ def add_segmentation(
     if hidden_labels is not None:
         for key in _label_keys(volume, list(hidden_labels), "hidden label"):
             props.SetVisibility(key, False)
-    style = _label_style(volume, props, attributes, colors, hidden_labels, color_by, cmap, query,
-                         highlight, dim, kwargs)
+    style = _label_style(volume, props, attributes, colors, hidden_labels, color_by, cmap, clim,
+                         nan_color, query, highlight, dim, highlight_color, highlight_intensity,
+                         others_opacity)
 
     with vtk_errors_raised(mapper, RuntimeError):
         mapper.InitializeDevice()
@@ -428,8 +472,8 @@ def add_segmentation(
     return actor
 
 
-def _label_style(volume, props, attributes, colors, hidden_labels, color_by, cmap, query,
-                 highlight, dim, kwargs):
+def _label_style(volume, props, attributes, colors, hidden_labels, color_by, cmap, clim, nan_color,
+                 query, highlight, dim, highlight_color, highlight_intensity, others_opacity):
     """The attribute table, color column, query and highlight of add_segmentation, applied."""
     from ._attributes import NAN_COLOR, LabelStyle
 
@@ -440,16 +484,15 @@ def _label_style(volume, props, attributes, colors, hidden_labels, color_by, cma
     hidden = _label_keys(volume, list(hidden_labels), "hidden label") if hidden_labels is not None else []
     style = LabelStyle(volume, props, attributes=attributes, colors=explicit, hidden=hidden)
     if color_by is not None:
-        nan = _rgb(kwargs["nan_color"]) if "nan_color" in kwargs else NAN_COLOR
-        style.set_color_by(color_by, cmap=cmap, clim=kwargs.get("clim"), nan_color=nan)
+        nan = _rgb(nan_color) if nan_color is not None else NAN_COLOR
+        style.set_color_by(color_by, cmap=cmap, clim=clim, nan_color=nan)
     if query is not None:
         style.set_query(query)
-    if any(v is not None for v in (highlight, dim, kwargs.get("highlight_color"),
-                                   kwargs.get("highlight_intensity"), kwargs.get("others_opacity"))):
-        color = kwargs.get("highlight_color")
-        style.set_highlight(highlight, dim=dim, color=None if color is None else _rgb(color),
-                            intensity=kwargs.get("highlight_intensity"),
-                            others_opacity=kwargs.get("others_opacity"))
+    if any(v is not None for v in (highlight, dim, highlight_color, highlight_intensity,
+                                   others_opacity)):
+        style.set_highlight(highlight, dim=dim,
+                            color=None if highlight_color is None else _rgb(highlight_color),
+                            intensity=highlight_intensity, others_opacity=others_opacity)
     return style
 
 

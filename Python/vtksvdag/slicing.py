@@ -148,7 +148,7 @@ def add_segmentation_slice(plotter, data, *, normal="z", origin=None, index=None
     >>> actor.mapper.dataset.n_cells
     256
     """
-    from .plotting import _rgb
+    from ._colors import to_rgb as _rgb
 
     volume = _segmentation_volume(data)
     image = _slice_image(volume, normal, origin, index, shape, spacing)

@@ -8,7 +8,7 @@ from vtkmodules.vtkCommonDataModel import vtkImageData
 from vtkmodules.vtkCommonCore import vtkDoubleArray, vtkIdTypeArray
 
 from ._labels import label_pattern, numpy_dtype_of_vtk_type
-from ._svdagfile import from_bytes, svdag_bytes, write_svdag
+from ._svdagfile import dataobject_from_bytes, svdag_bytes, write_svdag
 from ._vtkrun import run_algorithm, vtk_errors_raised
 from .vtkSVDAGCore import (
     vtkSegmentationSVDAG,
@@ -770,7 +770,7 @@ class SegmentationVolume:
 
 
 def _unpickle(data, build_seconds, load_seconds):
-    volume = from_bytes(data)
+    volume = SegmentationVolume(dataobject_from_bytes(data))
     volume.build_seconds = build_seconds
     volume.load_seconds = load_seconds
     return volume

@@ -1,5 +1,10 @@
 #include "svdag_render/RenderSettings.h"
 
+// The shaders' constants (headers shared by C++ and GLSL) are the enumerations' values.
+#include "svdag/RayCaster.h"
+#include "svdag/Traversal.h"
+#include "svdag_render/GpuLayout.h"
+
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -8,6 +13,68 @@ namespace svdag
 {
 namespace render
 {
+
+static_assert(uint32_t(Lod::Block) == gpu::SVDAG_RENDER_LOD_BLOCK && uint32_t(Lod::Leaf) == gpu::SVDAG_RENDER_LOD_LEAF &&
+    uint32_t(Lod::Voxel) == gpu::SVDAG_RENDER_LOD_VOXEL && uint32_t(Lod::Auto) == gpu::SVDAG_RENDER_LOD_AUTO,
+  "GpuLayout.h's LOD constants");
+static_assert(uint32_t(Lod::Block) == traversal::SVDAG_LOD_BLOCK && uint32_t(Lod::Leaf) == traversal::SVDAG_LOD_LEAF &&
+    uint32_t(Lod::Voxel) == traversal::SVDAG_LOD_VOXEL,
+  "Traversal.h's LOD constants (the traversal takes Lod values below Auto as they are)");
+static_assert(uint32_t(Lod::Block) == uint32_t(svdag::Lod::Block) &&
+    uint32_t(Lod::Leaf) == uint32_t(svdag::Lod::Leaf) &&
+    uint32_t(Lod::Voxel) == uint32_t(svdag::Lod::Voxel),
+  "the CPU ray caster's LODs");
+static_assert(uint32_t(Shading::Voxel) == gpu::SVDAG_SHADING_VOXEL &&
+    uint32_t(Shading::Smooth) == gpu::SVDAG_SHADING_SMOOTH,
+  "GpuLayout.h's shading constants");
+// Each list holds every value once, in order: value i at index i (validate relies on it).
+template <typename E, size_t N>
+constexpr bool inOrder(const std::array<E, N>& values)
+{
+  for (size_t i = 0; i < N; ++i)
+  {
+    if (uint32_t(values[i]) != i)
+      return false;
+  }
+  return true;
+}
+static_assert(inOrder(Lods) && inOrder(Backends) && inOrder(Shadings), "the value lists");
+
+namespace
+{
+// "a, b, c or d": the names of `values`, for error messages.
+template <typename E, size_t N>
+std::string spokenList(const std::array<E, N>& values, const char* (*name)(E))
+{
+  std::string list;
+  for (size_t i = 0; i < N; ++i)
+    list += (i == 0 ? "" : (i + 1 == N ? " or " : ", ")) + std::string(name(values[i]));
+  return list;
+}
+
+template <typename E, size_t N>
+std::string joined(const std::array<E, N>& values, const char* (*name)(E), const std::string& sep)
+{
+  std::string list;
+  for (size_t i = 0; i < N; ++i)
+    list += (i == 0 ? "" : sep) + std::string(name(values[i]));
+  return list;
+}
+
+// The value named `name`; otherwise std::invalid_argument "unknown <what> '<name>' (a, b or c)".
+template <typename E, size_t N>
+E parse(const std::array<E, N>& values, const char* (*name)(E), const std::string& text,
+  const char* what)
+{
+  for (E value : values)
+  {
+    if (text == name(value))
+      return value;
+  }
+  throw std::invalid_argument(
+    "unknown " + std::string(what) + " '" + text + "' (" + spokenList(values, name) + ")");
+}
+} // namespace
 
 const char* lodName(Lod lod)
 {
@@ -23,12 +90,12 @@ const char* lodName(Lod lod)
 
 Lod parseLod(const std::string& name)
 {
-  for (Lod lod : { Lod::Block, Lod::Leaf, Lod::Voxel, Lod::Auto })
-  {
-    if (name == lodName(lod))
-      return lod;
-  }
-  throw std::invalid_argument("unknown LOD '" + name + "' (block, leaf, voxel or auto)");
+  return parse(Lods, lodName, name, "LOD");
+}
+
+std::string lodNames(const std::string& separator)
+{
+  return joined(Lods, lodName, separator);
 }
 
 const char* backendName(Backend backend)
@@ -44,12 +111,12 @@ const char* backendName(Backend backend)
 
 Backend parseBackend(const std::string& name)
 {
-  for (Backend backend : { Backend::Auto, Backend::RayTracing, Backend::Compute })
-  {
-    if (name == backendName(backend))
-      return backend;
-  }
-  throw std::invalid_argument("unknown backend '" + name + "' (auto, rt or compute)");
+  return parse(Backends, backendName, name, "backend");
+}
+
+std::string backendNames(const std::string& separator)
+{
+  return joined(Backends, backendName, separator);
 }
 
 const char* shadingName(Shading shading)
@@ -64,12 +131,12 @@ const char* shadingName(Shading shading)
 
 Shading parseShading(const std::string& name)
 {
-  for (Shading s : { Shading::Voxel, Shading::Smooth })
-  {
-    if (name == shadingName(s))
-      return s;
-  }
-  throw std::invalid_argument("unknown shading '" + name + "' (voxel or smooth)");
+  return parse(Shadings, shadingName, name, "shading");
+}
+
+std::string shadingNames(const std::string& separator)
+{
+  return joined(Shadings, shadingName, separator);
 }
 
 namespace
@@ -107,9 +174,9 @@ bool tracesSameImage(const RenderSettings& a, const RenderSettings& b)
 
 void validate(const RenderSettings& s)
 {
-  require(uint32_t(s.lod) <= uint32_t(Lod::Auto), "LOD must be block, leaf, voxel or auto");
-  require(uint32_t(s.shading) <= uint32_t(Shading::Smooth), "shading must be voxel or smooth");
-  require(uint32_t(s.backend) <= uint32_t(Backend::Compute), "backend must be auto, rt or compute");
+  require(uint32_t(s.lod) < Lods.size(), "LOD must be block, leaf, voxel or auto");
+  require(uint32_t(s.shading) < Shadings.size(), "shading must be voxel or smooth");
+  require(uint32_t(s.backend) < Backends.size(), "backend must be auto, rt or compute");
   require(s.autoLodPixels > 0 && std::isfinite(s.autoLodPixels),
     "auto LOD pixels must be a finite value > 0");
   require(s.samplesPerPixel >= 1 && s.samplesPerPixel <= MaximumSamplesPerPixel,

@@ -3,11 +3,12 @@
 // a GPU machine that has no VTK.
 //
 //   vtksvdag-render INPUT.svdag OUTPUT.png|OUTPUT.exr [--width 512] [--height 512]
-//     [--lod block|leaf|voxel|auto] [--azimuth 30] [--elevation 20] [--zoom 1]
+//     [--lod block|leaf|voxel|auto (default auto)] [--azimuth 30] [--elevation 20] [--zoom 1]
 //     [--view-angle 30] [--hide 0,5,7] [--frames 1] [--spp 1] [--bounces 4] [--seed 0]
 //     [--no-nee] [--environment MAP.exr] [--sun AZ,EL] [--backend auto|rt|compute] [--restart]
 //
-// --backend picks how rays find the blocks (RenderSettings.h; auto: per device). --restart makes
+// Unset options take svdag::render::RenderSettings' defaults (LOD auto, bounces 4, seed 0, NEE
+// on, backend auto). --backend picks how rays find the blocks (RenderSettings.h; auto: per device). --restart makes
 // every frame start a new accumulation (what a frame costs while the camera moves).
 // Every frame adds --spp path-traced samples per pixel to the accumulated image. --sun places a
 // disk sun (the renderer's default size and irradiance) at azimuth AZ (degrees from +x towards
@@ -36,20 +37,23 @@
 
 namespace
 {
+// The renderer's own defaults (RenderSettings.h) for what the tool does not set.
+const svdag::render::RenderSettings defaults;
+
 struct Options
 {
   std::string input, output;
   uint32_t width = 512, height = 512;
-  svdag::render::Lod lod = svdag::render::Lod::Voxel;
+  svdag::render::Lod lod = defaults.lod;
   double azimuth = 30, elevation = 20, zoom = 1, viewAngle = 30;
   std::vector<uint32_t> hidden;
   int frames = 1;
-  uint32_t spp = 1, bounces = 4, seed = 0;
-  bool nee = true;
+  uint32_t spp = 1, bounces = defaults.maximumBounces, seed = defaults.seed;
+  bool nee = defaults.nextEventEstimation;
   std::string environment;
   bool sun = false;
   double sunAzimuth = 0, sunElevation = 0;
-  svdag::render::Backend backend = svdag::render::Backend::Auto;
+  svdag::render::Backend backend = defaults.backend;
   bool restart = false;
 };
 
@@ -193,10 +197,12 @@ int main(int argc, char** argv)
   catch (const std::invalid_argument& e)
   {
     std::cerr << "vtksvdag-render: " << e.what() << "\nusage: vtksvdag-render INPUT.svdag "
-              << "OUTPUT.png|OUTPUT.exr [--width N] [--height N] [--lod block|leaf|voxel|auto] "
+              << "OUTPUT.png|OUTPUT.exr [--width N] [--height N] [--lod "
+              << svdag::render::lodNames("|") << "] "
               << "[--azimuth DEG] [--elevation DEG] [--zoom F] [--view-angle DEG] "
               << "[--hide I,J,...] [--frames N] [--spp N] [--bounces N] [--seed N] [--no-nee] "
-              << "[--environment MAP.exr] [--sun AZ,EL] [--backend auto|rt|compute] [--restart]\n";
+              << "[--environment MAP.exr] [--sun AZ,EL] [--backend "
+              << svdag::render::backendNames("|") << "] [--restart]\n";
     return 1;
   }
   try

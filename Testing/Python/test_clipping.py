@@ -51,6 +51,13 @@ def world_point(volume, p):
     return origin + m @ (np.asarray(p, float) - 0.5)
 
 
+def make_plane(origin, normal):
+    plane = vtkPlane()
+    plane.SetOrigin(*origin)
+    plane.SetNormal(*normal)
+    return plane
+
+
 def make_renderer(volume, lod, planes=(), crop=None, camera=(30.0, 20.0, 1.2), backend="auto"):
     r = vtkSegmentationSVDAGRenderer()
     r.GetSettings().SetBackend(backend)
@@ -59,10 +66,10 @@ def make_renderer(volume, lod, planes=(), crop=None, camera=(30.0, 20.0, 1.2), b
     r.SetHeight(HEIGHT)
     r.GetSettings().SetLOD(lod)
     for origin, normal in planes:
-        assert r.GetSettings().AddClippingPlane(*origin, *normal) >= 0
+        r.AddClippingPlane(make_plane(origin, normal))
     if crop is not None:
-        r.GetSettings().SetCroppingRegionPlanes(*crop)
-        r.GetSettings().CroppingOn()
+        r.SetCroppingRegionPlanes(*crop)
+        r.CroppingOn()
     if callable(camera):
         camera(r)
     else:
@@ -526,30 +533,39 @@ def test_mapper_bad_planes_report_errors(boxes):
     assert mapper_pick(mapper, renderer, 100.5, 75.5) is not None
 
 
-def test_settings_and_caster_bad_input():
-    settings = vtkSegmentationSVDAGRenderSettings()
-    errors = capture_errors(settings)
-    assert settings.AddClippingPlane(0, 0, 0, float("nan"), 0, 1) == -1
-    assert settings.AddClippingPlane(0, 0, 0, 0, 0, 0) == -1
-    assert settings.AddClippingPlane(float("inf"), 0, 0, 0, 0, 1) == -1
-    assert len(errors) == 3 and all("clipping plane 0" in e for e in errors), errors
-    for i in range(6):
-        assert settings.AddClippingPlane(0, 0, i, 0, 0, 1) == i
-    assert settings.AddClippingPlane(0, 0, 9, 0, 0, 1) == -1
-    assert "at most 6 clipping planes" in errors[-1]
-    assert settings.GetNumberOfClippingPlanes() == 6
-    origin, normal = [0.0] * 3, [0.0] * 3
-    settings.GetClippingPlane(5, origin, normal)
-    assert origin == [0, 0, 5] and normal == [0, 0, 1]
-    settings.RemoveAllClippingPlanes()
-    assert settings.GetNumberOfClippingPlanes() == 0
-    settings.SetCroppingRegionPlanes(0, 1, 5, 2, 0, 1)
+def test_renderer_and_caster_bad_input(boxes):
+    """The image renderer owns its clipping planes and crop box (the settings hold none): bad
+    planes fail the pass with the core's message, a bad box is refused where it is set."""
+    labels, svdag = boxes
+    assert not hasattr(vtkSegmentationSVDAGRenderSettings(), "AddClippingPlane")
+    assert not hasattr(vtkSegmentationSVDAGRenderSettings(), "SetCroppingRegionPlanes")
+    renderer = make_renderer(svdag, S.LOD_VOXEL)
+    errors = capture_errors(renderer)
+    assert renderer.GetMaximumNumberOfClippingPlanes() == 6
+    for origin, normal, message in (((0, 0, 0), (float("nan"), 0, 1), "clipping plane 0: the normal"),
+                                    ((0, 0, 0), (0, 0, 0), "clipping plane 0: the normal"),
+                                    ((float("inf"), 0, 0), (0, 0, 1), "clipping plane 0: the origin")):
+        plane = make_plane(origin, normal)
+        renderer.AddClippingPlane(plane)
+        assert renderer.Render() == 0 and message in errors[-1], errors
+        renderer.RemoveClippingPlane(plane)
+    assert renderer.GetClippingPlanes().GetNumberOfItems() == 0
+    planes = [make_plane((0, 0, i), (0, 0, 1)) for i in range(7)]
+    for plane in planes[:6]:
+        renderer.AddClippingPlane(plane)
+    errors.clear()
+    assert renderer.Render() == 1 and not errors
+    renderer.AddClippingPlane(planes[6])
+    assert renderer.Render() == 0 and "at most 6 clipping planes" in errors[-1]
+    renderer.RemoveAllClippingPlanes()
+    assert renderer.GetClippingPlanes().GetNumberOfItems() == 0
+    renderer.SetCroppingRegionPlanes(0, 1, 5, 2, 0, 1)
     assert "inverted along y" in errors[-1]
-    settings.SetCroppingRegionPlanes(0, 1, 0, float("nan"), 0, 1)
+    renderer.SetCroppingRegionPlanes(0, 1, 0, float("nan"), 0, 1)
     assert "finite" in errors[-1]
-    bounds = [1.0] * 6
-    settings.GetCroppingRegionPlanes(bounds)
-    assert bounds == [0.0] * 6  # unchanged
+    assert renderer.GetCroppingRegionPlanes() == (0, 1, 0, 1, 0, 1)  # unchanged
+    errors.clear()
+    assert renderer.Render() == 1 and not errors
 
     caster = vtkSegmentationSVDAGRayCaster()
     errors = capture_errors(caster)

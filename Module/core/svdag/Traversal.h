@@ -111,6 +111,7 @@ struct Streams
 #define SVDAG_CEIL(x) ceil(x)
 #endif
 
+// svdag::render::Lod's and svdag::Lod's values (static_asserts in Rendering/core/RenderSettings.cpp).
 SVDAG_CONST SVDAG_LOD_BLOCK = 0u;
 SVDAG_CONST SVDAG_LOD_LEAF = 1u;
 SVDAG_CONST SVDAG_LOD_VOXEL = 2u;

@@ -13,6 +13,7 @@ import time
 
 import numpy as np
 
+from .. import _settingnames
 from .._attributes import add_render_arguments as add_attribute_arguments
 from .._attributes import apply_render_options as apply_attribute_options
 from .._vtkrun import vtk_errors_raised
@@ -24,9 +25,25 @@ from ._common import (
 NAME = "render"
 HELP = "path-trace a label volume or .svdag file to a PNG or EXR image (Vulkan)"
 
-LODS = ("block", "leaf", "voxel", "auto")
-BACKENDS = ("auto", "rt", "compute")  # vtkSegmentationSVDAGRenderSettings.BACKEND_* in order
-SHADINGS = ("voxel", "smooth")  # vtkSegmentationSVDAGRenderSettings.SHADING_* in order
+
+
+def _default_settings():
+    """A new vtkSegmentationSVDAGRenderSettings (it holds the C++ defaults), or None where the
+    rendering module cannot load (then the options take any value and only this command fails,
+    when it runs)."""
+    try:
+        from ..vtkSVDAGRendering import vtkSegmentationSVDAGRenderSettings
+    except ImportError:
+        return None
+    return vtkSegmentationSVDAGRenderSettings()
+
+
+def _named_setting(setting, defaults):
+    """argparse keywords of a named setting: the C++ class's names and default."""
+    if defaults is None:
+        return {"choices": None, "default": None}
+    return {"choices": _settingnames.names(setting),
+            "default": getattr(defaults, f"Get{setting}AsString")()}
 
 
 #: Ranges of the numeric options (the renderer would clamp the image size silently).
@@ -36,6 +53,7 @@ MAX_BOUNCES = 64
 
 
 def add_arguments(parser):
+    defaults = _default_settings()
     parser.add_argument("input", metavar="INPUT", help="label volume file or .svdag file")
     parser.add_argument("-o", "--output", required=True, type=output_path((".png", ".exr"), "render"),
                         metavar="OUT.png|OUT.exr", help="output image")
@@ -46,17 +64,22 @@ def add_arguments(parser):
                         help=f"pixels, 1-{MAX_SIZE} (default: 512)")
     parser.add_argument("--spp", type=int_in(1, MAX_SPP), default=16,
                         help=f"samples per pixel, one per pass, 1-{MAX_SPP} (default: 16)")
-    parser.add_argument("--bounces", type=int_in(0, MAX_BOUNCES), default=4,
-                        help=f"maximum bounces, 0-{MAX_BOUNCES} (default: 4)")
-    parser.add_argument("--lod", choices=LODS, default="voxel", help="level of detail (default: voxel)")
-    parser.add_argument("--backend", choices=BACKENDS, default="auto",
+    parser.add_argument("--bounces", type=int_in(0, MAX_BOUNCES),
+                        default=defaults.GetMaximumBounces() if defaults else None,
+                        help=f"maximum bounces, 0-{MAX_BOUNCES} (default: %(default)s)")
+    parser.add_argument("--lod", **_named_setting("LOD", defaults),
+                        help="level of detail (default: %(default)s)")
+    parser.add_argument("--backend", **_named_setting("Backend", defaults),
                         help="how rays find the blocks: the ray tracing pipeline (rt), a compute "
-                             "shader walking the cell grid (compute), or per device (auto, default)")
-    parser.add_argument("--shading", choices=SHADINGS, default="voxel",
+                             "shader walking the cell grid (compute), or per device (auto) "
+                             "(default: %(default)s)")
+    parser.add_argument("--shading", **_named_setting("Shading", defaults),
                         help="normals for lighting: voxel faces, or smooth ones estimated from the "
-                             "label occupancy (no mesh; the hits stay the voxels) (default: voxel)")
-    parser.add_argument("--seed", type=int_in(0, 2**32 - 1), default=0,
-                        help=f"random seed, 0-{2**32 - 1} (default: 0)")
+                             "label occupancy (no mesh; the hits stay the voxels) "
+                             "(default: %(default)s)")
+    parser.add_argument("--seed", type=int_in(0, 2**32 - 1),
+                        default=defaults.GetSeed() if defaults else None,
+                        help=f"random seed, 0-{2**32 - 1} (default: %(default)s)")
     parser.add_argument("--azimuth", type=finite_float(), default=30.0,
                         help="camera orbit, degrees (default: 30)")
     parser.add_argument("--elevation", type=finite_float(), default=20.0,
@@ -122,6 +145,7 @@ def run(args):
     # Imported here: the other commands must work where the rendering module cannot load.
     try:
         from ..vtkSVDAGRendering import vtkSegmentationSVDAGRenderer
+        from vtkmodules.vtkCommonDataModel import vtkPlane
     except ImportError as error:
         print(f"vtksvdag: error: the rendering module cannot be loaded: {_fail(str(error))}",
               file=sys.stderr)
@@ -152,9 +176,10 @@ def run(args):
     renderer.SetWidth(args.width)
     renderer.SetHeight(args.height)
     settings = renderer.GetSettings()
-    settings.SetLOD(LODS.index(args.lod))
-    settings.SetBackend(BACKENDS.index(args.backend))
-    settings.SetShading(SHADINGS.index(args.shading))
+    # The C++ string setters; argparse checked the names against the C++ class's list.
+    settings.SetLOD(args.lod)
+    settings.SetBackend(args.backend)
+    settings.SetShading(args.shading)
     settings.SetMaximumBounces(args.bounces)
     settings.SetSeed(args.seed)
     settings.SetNextEventEstimation(not args.no_nee)
@@ -167,15 +192,17 @@ def run(args):
         az, el = (math.radians(a) for a in args.sun)
         settings.SunOn()
         settings.SetSunDirection(math.cos(el) * math.cos(az), math.cos(el) * math.sin(az), math.sin(el))
-    most = settings.GetMaximumNumberOfClippingPlanes()
+    most = renderer.GetMaximumNumberOfClippingPlanes()
     if len(args.clip) > most:
         raise ValueError(f"--clip: at most {most} clipping planes, got {len(args.clip)}")
-    for plane in args.clip:
-        if settings.AddClippingPlane(*plane) < 0:
-            raise ValueError(f"--clip: rejected plane {plane}")
+    for values in args.clip:
+        plane = vtkPlane()
+        plane.SetOrigin(*values[:3])
+        plane.SetNormal(*values[3:])
+        renderer.AddClippingPlane(plane)
     if args.crop:
-        settings.SetCroppingRegionPlanes(*args.crop)
-        settings.CroppingOn()
+        renderer.SetCroppingRegionPlanes(*args.crop)
+        renderer.CroppingOn()
     for value in args.hide:
         # A uint64 label of 2^63 or more is named by the int64 with the same bits.
         renderer.GetLabelProperties().SetVisibility(value - 2 ** 64 if value >= 2 ** 63 else value, False)
@@ -202,12 +229,12 @@ def run(args):
         "width": args.width,
         "height": args.height,
         "spp": renderer.GetAccumulatedSamples(),
-        "bounces": args.bounces,
+        "bounces": settings.GetMaximumBounces(),
         "nee": not args.no_nee,
-        "seed": args.seed,
-        "lod": args.lod,
+        "seed": settings.GetSeed(),
+        "lod": settings.GetLODAsString(),
         "backend": renderer.GetBackendInUse(),
-        "shading": args.shading,
+        "shading": settings.GetShadingAsString(),
         "setup_seconds": renderer.GetSetupSeconds(),
         "render_seconds": renderer.GetRenderSeconds(),
         "wall_seconds": wall,
@@ -238,9 +265,9 @@ def run(args):
         print_table([
             ("input", args.input),
             ("device", result["device"]),
-            ("image", f"{args.width} x {args.height}, {result['spp']} spp, LOD {args.lod}, "
-                      f"{args.shading} shading, "
-                      f"{args.bounces} bounces, NEE {'on' if result['nee'] else 'off'}"),
+            ("image", f"{args.width} x {args.height}, {result['spp']} spp, LOD {result['lod']}, "
+                      f"{result['shading']} shading, "
+                      f"{result['bounces']} bounces, NEE {'on' if result['nee'] else 'off'}"),
             ("backend", result["backend"]),
             ("setup", f"{result['setup_seconds']:.3f} s (upload + "
                       f"{'BVH' if result['backend'] == 'rt' else 'cell grid'})"),

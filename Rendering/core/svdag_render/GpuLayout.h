@@ -101,14 +101,16 @@ typedef uint32_t uint;
 #define SVDAG_BINDING_TLAS 0
 #define SVDAG_BINDING_FRAME 1
 
-/* Level of detail (frame.image.z). BLOCK, LEAF, VOXEL equal Traversal.h's SVDAG_LOD_*; AUTO picks
+/* Level of detail (frame.image.z): svdag::render::Lod's values, and BLOCK, LEAF, VOXEL equal
+ * Traversal.h's SVDAG_LOD_* (static_asserts in RenderSettings.cpp); AUTO picks
  * one per ray from the projected size of a voxel at the block's entry distance. */
 SVDAG_GPU_CONST SVDAG_RENDER_LOD_BLOCK = 0u;
 SVDAG_GPU_CONST SVDAG_RENDER_LOD_LEAF = 1u;
 SVDAG_GPU_CONST SVDAG_RENDER_LOD_VOXEL = 2u;
 SVDAG_GPU_CONST SVDAG_RENDER_LOD_AUTO = 3u;
 
-/* Shading normal (frame.image.w): the entry face's, or SmoothNormal.h's estimate. */
+/* Shading normal (frame.image.w): the entry face's, or SmoothNormal.h's estimate; the values of
+ * svdag::render::Shading (static_assert in RenderSettings.cpp). */
 SVDAG_GPU_CONST SVDAG_SHADING_VOXEL = 0u;
 SVDAG_GPU_CONST SVDAG_SHADING_SMOOTH = 1u;
 

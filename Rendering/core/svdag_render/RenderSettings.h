@@ -20,10 +20,15 @@ enum class Lod : uint32_t
   Voxel = 2, // the first solid voxel (lossless)
   Auto = 3   // per ray: the coarsest level whose cells cover at most autoLodPixels pixels
 };
+// Every value in order: with lodName, the one list of LOD names (the VTK settings' GetLODName,
+// the command lines and the Python glue read it from here).
+constexpr std::array<Lod, 4> Lods{ { Lod::Block, Lod::Leaf, Lod::Voxel, Lod::Auto } };
 // "block", "leaf", "voxel", "auto".
 const char* lodName(Lod lod);
 // Parses lodName's names; throws std::invalid_argument otherwise.
 Lod parseLod(const std::string& name);
+// The names joined by `separator` ("block|leaf|voxel|auto" for "|").
+std::string lodNames(const std::string& separator);
 
 // How rays find the blocks (the same path tracer, materials, outputs and features either way):
 //   RayTracing  the ray tracing pipeline: one procedural primitive per visible block in a BVH
@@ -39,10 +44,12 @@ enum class Backend : uint32_t
   RayTracing = 1,
   Compute = 2
 };
+constexpr std::array<Backend, 3> Backends{ { Backend::Auto, Backend::RayTracing, Backend::Compute } };
 // "auto", "rt", "compute".
 const char* backendName(Backend backend);
 // Parses backendName's names; throws std::invalid_argument otherwise.
 Backend parseBackend(const std::string& name);
+std::string backendNames(const std::string& separator);
 
 // The normal that lights a voxel hit (the hit itself, position, label and depth, is always the
 // lossless voxel surface): the entry face's (axis-aligned, blocky), or a smooth estimate from the
@@ -53,10 +60,12 @@ enum class Shading : uint32_t
   Voxel = 0,
   Smooth = 1
 };
+constexpr std::array<Shading, 2> Shadings{ { Shading::Voxel, Shading::Smooth } };
 // "voxel", "smooth".
 const char* shadingName(Shading shading);
 // Parses shadingName's names; throws std::invalid_argument otherwise.
 Shading parseShading(const std::string& name);
+std::string shadingNames(const std::string& separator);
 
 // A directional light: a disk of the given angular radius (0: a delta light) in `direction`
 // (towards the light, world space), with `irradiance` at normal incidence (linear RGB).
@@ -93,10 +102,15 @@ constexpr double MaximumSunAngularRadius = 89.9;
 // Clipping planes at most (VTK's usual limit; Clipping.h's SVDAG_CLIP_MAX_PLANES).
 constexpr uint32_t MaximumClipPlanes = 6;
 
+// The member initializers are the one definition of each default: the VTK settings, the
+// command lines and the Python glue leave a setting alone unless asked, so these apply there too.
 struct RenderSettings
 {
   Backend backend = Backend::Auto;
-  Lod lod = Lod::Voxel;
+  // Auto: lossless wherever a voxel covers more than a quarter of a pixel (autoLodPixels 1), and
+  // leaf or block boxes only where the difference is below a pixel, so a still view looks the
+  // same as at Lod::Voxel and far-away or huge volumes trace faster.
+  Lod lod = Lod::Auto;
   // Lod::Auto draws a leaf (block) where a leaf (block) covers at most this many pixels.
   float autoLodPixels = 1.0f;
   // Samples per pixel each render pass adds to the progressive accumulation.
