@@ -23,7 +23,9 @@ static_assert(std::is_trivially_copyable<svdag::Geometry>::value, "Geometry cros
 namespace
 {
 // Every message from the child starts with a status byte. An error carries its vtkErrorCode
-// and message, so the parent throws what an in-process source would have thrown.
+// and message, so the parent throws what an in-process source would have thrown. An Ok is
+// followed by the source's warnings new since the last Ok (a count, then each as a length and
+// its bytes), then by what was asked for.
 enum Status : unsigned char
 {
   Ok = 1,
@@ -98,6 +100,22 @@ void sendError(int fd, unsigned long code, const std::string& message)
     sendAll(fd, &length, sizeof length) && sendAll(fd, message.data(), message.size());
 }
 
+// Sends the warnings of `source` from the `sent`-th on.
+bool sendWarnings(int fd, const svdagSlabSource& source, size_t& sent)
+{
+  const std::vector<std::string>& all = source.warnings();
+  const uint64_t count = all.size() - sent;
+  if (!sendAll(fd, &count, sizeof count))
+    return false;
+  for (; sent < all.size(); ++sent)
+  {
+    const uint64_t length = all[sent].size();
+    if (!sendAll(fd, &length, sizeof length) || !sendAll(fd, all[sent].data(), all[sent].size()))
+      return false;
+  }
+  return true;
+}
+
 // Runs `body`, reporting what it throws over `fd`. False if it threw.
 template <typename Body>
 bool reportingErrors(int fd, Body&& body)
@@ -134,8 +152,9 @@ bool reportingErrors(int fd, Body&& body)
   const unsigned char ok = Ok;
   const svdag::Geometry geometry = source->geometry();
   const svdag::ScalarType type = source->scalarType();
-  if (!sendAll(fd, &ok, 1) || !sendAll(fd, &geometry, sizeof geometry) ||
-    !sendAll(fd, &type, sizeof type))
+  size_t warningsSent = 0;
+  if (!sendAll(fd, &ok, 1) || !sendWarnings(fd, *source, warningsSent) ||
+    !sendAll(fd, &geometry, sizeof geometry) || !sendAll(fd, &type, sizeof type))
     _exit(0);
   std::vector<char> slab;
   Request request{};
@@ -146,7 +165,9 @@ bool reportingErrors(int fd, Body&& body)
         size_t(svdag::scalarSize(type)));
       source->readSlab(request.z0, request.nz, slab.data());
     });
-    if (read && !(sendAll(fd, &ok, 1) && sendAll(fd, slab.data(), slab.size())))
+    if (read &&
+      !(sendAll(fd, &ok, 1) && sendWarnings(fd, *source, warningsSent) &&
+        sendAll(fd, slab.data(), slab.size())))
       break;
   }
   _exit(0);
@@ -177,19 +198,37 @@ struct svdagIsolatedSlabSource::Impl
     return "stopped";
   }
 
-  // Reads the child's status byte and, on an error, throws what the child threw.
-  void receiveStatus(const std::string& what)
+  // Reads the child's status byte and, on an error, throws what the child threw; after an Ok,
+  // appends the warnings that follow it to `warnings`.
+  void receiveStatus(const std::string& what, std::vector<std::string>& warnings)
   {
     unsigned char status = 0;
     this->receive(&status, 1, what);
     if (status == Ok)
+    {
+      uint64_t count = 0;
+      this->receive(&count, sizeof count, what);
+      for (uint64_t i = 0; i < count; ++i)
+        warnings.push_back(this->receiveText(what));
       return;
-    uint64_t code = 0, length = 0;
+    }
+    uint64_t code = 0;
     this->receive(&code, sizeof code, what);
+    throw svdagReadError(code, this->receiveText(what));
+  }
+
+  // A length, then that many bytes (at most 1 MiB: the child's texts are messages).
+  std::string receiveText(const std::string& what)
+  {
+    uint64_t length = 0;
     this->receive(&length, sizeof length, what);
-    std::string message(size_t(length < (1u << 20) ? length : 0), '\0');
-    this->receive(&message[0], message.size(), what);
-    throw svdagReadError(code, message);
+    if (length > (1u << 20))
+      throw svdagReadError(vtkErrorCode::FileFormatError,
+        this->fileName + ": " + this->library + " sent a message of " + std::to_string(length) +
+          " bytes while " + what);
+    std::string text(size_t(length), '\0');
+    this->receive(&text[0], text.size(), what);
+    return text;
   }
 
   void receive(void* data, size_t size, const std::string& what)
@@ -254,13 +293,14 @@ svdagIsolatedSlabSource::svdagIsolatedSlabSource(
   ::close(fds[1]);
   impl->fd = fds[0];
   impl->child = child;
-  impl->receiveStatus("opening it");
+  impl->receiveStatus("opening it", this->Warnings);
   impl->receive(&this->Geometry, sizeof this->Geometry, "opening it");
   impl->receive(&this->Type, sizeof this->Type, "opening it");
 #else
   impl->source = open();
   this->Geometry = impl->source->geometry();
   this->Type = impl->source->scalarType();
+  this->Warnings = impl->source->warnings();
 #endif
 }
 
@@ -277,12 +317,13 @@ void svdagIsolatedSlabSource::readSlab(int32_t z0, int32_t nz, void* dst)
     throw svdagReadError(vtkErrorCode::FileFormatError,
       impl->fileName + ": " + impl->library + " " + impl->childFate() + " before " + what +
         " (corrupt file?)");
-  impl->receiveStatus(what);
+  impl->receiveStatus(what, this->Warnings);
   impl->receive(dst,
     size_t(nz) * size_t(this->Geometry.dims[0]) * size_t(this->Geometry.dims[1]) *
       size_t(svdag::scalarSize(this->Type)),
     what);
 #else
   impl->source->readSlab(z0, nz, dst);
+  this->Warnings = impl->source->warnings();
 #endif
 }

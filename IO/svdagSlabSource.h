@@ -13,6 +13,7 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 // A failure to read a file, with the vtkErrorCode::ErrorIds value that describes it.
 class svdagReadError : public std::runtime_error
@@ -50,6 +51,11 @@ public:
   // it through when no label needs to change; every other source returns null.
   virtual std::shared_ptr<const svdag::Volume> compressedVolume() const { return nullptr; }
 
+  // Remarks about a file that is read all the same (an HDF5 dataset whose unwritten chunks
+  // read as its fill value, a VTK reader's warning), in the order found; the list grows while
+  // the source is opened and read. vtkSegmentationVolumeReader passes each on as a VTK warning.
+  const std::vector<std::string>& warnings() const { return this->Warnings; }
+
 protected:
   svdagSlabSource() = default;
 
@@ -62,6 +68,7 @@ protected:
 
   svdag::Geometry Geometry;
   svdag::ScalarType Type = svdag::ScalarType::UInt8;
+  std::vector<std::string> Warnings;
 };
 
 // The most voxels a volume may have (2^40); checkGeometry refuses more.

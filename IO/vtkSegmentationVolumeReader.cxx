@@ -23,6 +23,8 @@ vtkStandardNewMacro(vtkSegmentationVolumeReader);
 struct vtkSegmentationVolumeReader::Internals
 {
   std::unique_ptr<svdagSlabSource> Source;
+  // How many of Source's warnings were passed on already (RequestInformation's).
+  size_t WarningsReported = 0;
 };
 
 vtkSegmentationVolumeReader::vtkSegmentationVolumeReader()
@@ -71,6 +73,15 @@ svdagSlabSourceOptions sourceOptions(const char* datasetName)
   if (datasetName)
     options.datasetName = datasetName;
   return options;
+}
+
+// Passes the source's warnings from the `reported`-th on to VTK's warning mechanism (a
+// WarningEvent, which vtksvdag turns into a Python warning).
+void reportWarnings(vtkObject* reader, const svdagSlabSource& source, const char* name, size_t& reported)
+{
+  for (; reported < source.warnings().size(); ++reported)
+    vtkWarningWithObjectMacro(
+      reader, "Reading " << name << ": " << withoutFileName(source.warnings()[reported], name));
 }
 
 // What error messages call the input.
@@ -126,6 +137,8 @@ int vtkSegmentationVolumeReader::RequestInformation(
     // Opening a source reads and checks the whole header.
     this->Internal->Source = this->OpenSource();
     this->FileFormat = this->Internal->Source->formatName();
+    this->Internal->WarningsReported = 0;
+    reportWarnings(this, *this->Internal->Source, name, this->Internal->WarningsReported);
   }
   catch (const svdagReadError& e)
   {
@@ -162,9 +175,11 @@ int vtkSegmentationVolumeReader::RequestData(
   {
     // The source RequestInformation opened, or a fresh one (streams that decompress cannot
     // rewind, so a source serves one RequestData).
+    size_t warningsReported = this->Internal->Source ? this->Internal->WarningsReported : 0;
     std::unique_ptr<svdagSlabSource> source = std::move(this->Internal->Source);
     if (!source)
       source = this->OpenSource();
+    reportWarnings(this, *source, name, warningsReported);
     this->FileFormat = source->formatName();
     const svdag::Geometry& geometry = source->geometry();
     const svdag::ScalarType type = source->scalarType();
@@ -211,6 +226,7 @@ int vtkSegmentationVolumeReader::RequestData(
       builder.addSlab(z0, nz, slab);
       this->UpdateProgress(double(z0 + nz) / geometry.dims[2]);
     }
+    reportWarnings(this, *source, name, warningsReported);
     output->SetVolume(std::make_shared<const svdag::Volume>(builder.finish()));
   }
   catch (const svdagReadError& e)

@@ -129,12 +129,13 @@ def run_algorithm(algorithm, *, action="Update", progress=None, error=ValueError
                 failures.append(e)
                 caller.SetAbortExecute(1)
 
-        warnings_seen = []
         tags.append((algorithm, algorithm.AddObserver(vtkCommand.ProgressEvent, on_progress)))
-        # The algorithm's "was aborted" warning is about the abort asked for here.
-        tags.append(
-            (algorithm, algorithm.AddObserver(vtkCommand.WarningEvent, _error_collector(warnings_seen)))
-        )
+    # The algorithm's warnings become Python warnings once it succeeded (VTK would print them);
+    # its "was aborted" warning is about an abort asked for here, which raises instead.
+    warnings_seen = []
+    tags.append(
+        (algorithm, algorithm.AddObserver(vtkCommand.WarningEvent, _error_collector(warnings_seen)))
+    )
     try:
         with _collected_errors(observed) as messages:
             getattr(algorithm, action)()
@@ -145,12 +146,11 @@ def run_algorithm(algorithm, *, action="Update", progress=None, error=ValueError
             algorithm.SetAbortExecute(0)  # the next update must run
     if failures:
         raise failures[0]
-    if progress is not None:
-        for message in warnings_seen:
-            warnings.warn(message, RuntimeWarning, stacklevel=3)
 
     code = algorithm.GetErrorCode() if hasattr(algorithm, "GetErrorCode") else 0
     if not messages and code == vtkErrorCode.NoError:
+        for message in warnings_seen:
+            warnings.warn(message, RuntimeWarning, stacklevel=3)
         return
     # The algorithm's own message explains; the executive's only says that the request failed.
     message = messages[0] if messages else vtkErrorCode.GetStringFromErrorCode(code)
