@@ -1,11 +1,13 @@
 #include "svdagClipping.h"
 
+#include "vtkObject.h"
 #include "vtkPlane.h"
 #include "vtkPlaneCollection.h"
 
 #include <svdag_render/RenderSettings.h>
 
 #include <algorithm>
+#include <exception>
 
 namespace svdag
 {
@@ -51,6 +53,25 @@ void setClipping(render::RenderSettings& settings, vtkPlaneCollection* planes,
     settings.crop.on = true;
     std::copy(cropBounds, cropBounds + 6, settings.crop.bounds.begin());
   }
+}
+
+bool setCroppingRegionPlanes(vtkObject* owner, double current[6], const double planes[6])
+{
+  render::CropBox box;
+  try
+  {
+    box = render::validCropBox({ { planes[0], planes[1], planes[2], planes[3], planes[4],
+      planes[5] } });
+  }
+  catch (const std::exception& e)
+  {
+    vtkErrorWithObjectMacro(owner, "SetCroppingRegionPlanes: " << e.what());
+    return false;
+  }
+  if (std::equal(box.bounds.begin(), box.bounds.end(), current))
+    return false;
+  std::copy(box.bounds.begin(), box.bounds.end(), current);
+  return true;
 }
 
 } // namespace vtkglue

@@ -6,6 +6,7 @@
 
 #include <array>
 
+class vtkObject;
 class vtkPlaneCollection;
 
 namespace svdag
@@ -27,6 +28,11 @@ namespace vtkglue
 void setClipping(render::RenderSettings& settings, vtkPlaneCollection* planes,
   const std::array<double, 16>& modelToWorld, const std::array<double, 16>& worldToModel,
   bool cropping, const double cropBounds[6]);
+
+// The crop box setter both owners share: validates (min <= max, finite) and copies the box into
+// `current` (6 values). Returns whether it changed; a bad box is reported by `owner`'s
+// vtkErrorMacro and changes nothing.
+bool setCroppingRegionPlanes(vtkObject* owner, double current[6], const double planes[6]);
 
 // The identity, for a class whose planes are already in the core renderer's world.
 std::array<double, 16> identityMatrix();

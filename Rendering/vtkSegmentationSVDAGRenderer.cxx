@@ -129,21 +129,9 @@ int vtkSegmentationSVDAGRenderer::GetMaximumNumberOfClippingPlanes()
 void vtkSegmentationSVDAGRenderer::SetCroppingRegionPlanes(
   double xmin, double xmax, double ymin, double ymax, double zmin, double zmax)
 {
-  svdag::render::CropBox box;
-  try
-  {
-    box = svdag::render::validCropBox({ { xmin, xmax, ymin, ymax, zmin, zmax } });
-  }
-  catch (const std::exception& e)
-  {
-    vtkErrorMacro("SetCroppingRegionPlanes: " << e.what());
-    return;
-  }
-  if (!std::equal(box.bounds.begin(), box.bounds.end(), this->CroppingRegionPlanes))
-  {
-    std::copy(box.bounds.begin(), box.bounds.end(), this->CroppingRegionPlanes);
+  const double planes[6] = { xmin, xmax, ymin, ymax, zmin, zmax };
+  if (svdag::vtkglue::setCroppingRegionPlanes(this, this->CroppingRegionPlanes, planes))
     this->Modified();
-  }
 }
 
 vtkSegmentationSVDAGRenderSettings* vtkSegmentationSVDAGRenderer::GetSettings()

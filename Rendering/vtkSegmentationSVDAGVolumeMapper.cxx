@@ -715,21 +715,9 @@ int vtkSegmentationSVDAGVolumeMapper::GetMaximumNumberOfClippingPlanes()
 void vtkSegmentationSVDAGVolumeMapper::SetCroppingRegionPlanes(
   double xmin, double xmax, double ymin, double ymax, double zmin, double zmax)
 {
-  core::CropBox box;
-  try
-  {
-    box = core::validCropBox({ { xmin, xmax, ymin, ymax, zmin, zmax } });
-  }
-  catch (const std::exception& e)
-  {
-    vtkErrorMacro("SetCroppingRegionPlanes: " << e.what());
-    return;
-  }
-  if (!std::equal(box.bounds.begin(), box.bounds.end(), this->CroppingRegionPlanes))
-  {
-    std::copy(box.bounds.begin(), box.bounds.end(), this->CroppingRegionPlanes);
+  const double planes[6] = { xmin, xmax, ymin, ymax, zmin, zmax };
+  if (svdag::vtkglue::setCroppingRegionPlanes(this, this->CroppingRegionPlanes, planes))
     this->Modified();
-  }
 }
 
 bool vtkSegmentationSVDAGVolumeMapper::InitializeDevice()
