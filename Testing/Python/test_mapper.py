@@ -326,6 +326,7 @@ def test_time_budget():
     window, renderer, volume, mapper = make_scene(
         svdag, camera_position=(130, -90, 140), focal=(32, 32, 32), clipping=(20.0, 500.0))
     assert mapper.GetAutoAdjustToRenderTime()
+    mapper.GetSettings().SetLODToVoxel()  # a fixed LOD for the budget to coarsen (default: auto)
     mapper.GetSettings().SetMaximumBounces(8)
     window.SetDesiredUpdateRate(1000.0)
     window.Render()  # a first frame measures the cost

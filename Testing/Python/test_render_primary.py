@@ -12,6 +12,7 @@ Pixels whose ray passes within float rounding of a voxel edge or corner may legi
 another label, so labels must agree on >= 99.9% of the pixels, and depths to 1e-4 (relative)
 where both hit the same label.
 """
+import gc
 import re
 
 import nrrd
@@ -376,6 +377,11 @@ def test_forced_missing_device_is_a_clear_error(real_volume, monkeypatch):
     working = make_renderer(real_volume[1])
     assert working.Render() == 1
     device = working.GetDeviceName()
+    # The process's one device is chosen when its first user comes: the variable counts once the
+    # last user is gone.
+    del working
+    gc.collect()  # renderers of earlier tests that only a cycle still holds
+    assert vtkSegmentationSVDAGRenderer.GetDeviceUsers() == 0
     monkeypatch.setenv("SVDAG_VK_DEVICE", "nonexistent")
     renderer = make_renderer(real_volume[1])
     messages = capture_errors(renderer)
