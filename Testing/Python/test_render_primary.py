@@ -13,7 +13,12 @@ another label, so labels must agree on >= 99.9% of the pixels, and depths to 1e-
 where both hit the same label.
 """
 import gc
+import json
+import os
 import re
+import subprocess
+import sys
+from pathlib import Path
 
 import nrrd
 import numpy as np
@@ -373,23 +378,41 @@ def test_hidden_labels_vanish(real_volume, backend):
     assert np.array_equal(outputs(renderer)[0], label)
 
 
-def test_forced_missing_device_is_a_clear_error(real_volume, monkeypatch):
+MISSING_DEVICE_SCRIPT = """
+import json, sys
+import numpy as np
+from conftest import capture_errors, compress_zyx
+from vtksvdag.vtkSVDAGRendering import vtkSegmentationSVDAGRenderer
+labels = np.zeros((8, 8, 8), np.uint8)
+labels[2:6, 2:6, 2:6] = 3
+renderer = vtkSegmentationSVDAGRenderer()
+renderer.SetInputData(compress_zyx(labels))
+renderer.SetWidth(8)
+renderer.SetHeight(8)
+messages = capture_errors(renderer)
+print(json.dumps({"status": renderer.Render(), "messages": messages}))
+"""
+
+
+def test_forced_missing_device_is_a_clear_error(real_volume):
     working = make_renderer(real_volume[1])
     assert working.Render() == 1
     device = working.GetDeviceName()
-    # The process's one device is chosen when its first user comes: the variable counts once the
-    # last user is gone.
-    del working
-    gc.collect()  # renderers of earlier tests that only a cycle still holds
-    assert vtkSegmentationSVDAGRenderer.GetDeviceUsers() == 0
-    monkeypatch.setenv("SVDAG_VK_DEVICE", "nonexistent")
-    renderer = make_renderer(real_volume[1])
-    messages = capture_errors(renderer)
-    assert renderer.Render() == 0
-    assert len(messages) == 1
-    assert "SVDAG_VK_DEVICE='nonexistent'" in messages[0]
+    # The process's one device is chosen when its first user comes, so the variable is forced in a
+    # fresh process (this one may still hold the device for other tests' objects).
+    env = dict(os.environ, SVDAG_VK_DEVICE="nonexistent")
+    env["PYTHONPATH"] = os.pathsep.join(filter(None, [str(Path(__file__).parent),
+                                                      env.get("PYTHONPATH")]))
+    child = subprocess.run([sys.executable, "-c", MISSING_DEVICE_SCRIPT], env=env,
+                           capture_output=True, text=True, timeout=300)
+    assert child.returncode == 0, child.stderr
+    result = json.loads(child.stdout.strip().splitlines()[-1])
+    assert result["status"] == 0
+    assert len(result["messages"]) == 1, result["messages"]
+    message = result["messages"][0]
+    assert "SVDAG_VK_DEVICE='nonexistent'" in message
     # It names every device found, so also the one a normal run picks.
-    assert "devices found" in messages[0] and device in messages[0]
+    assert "devices found" in message and device in message
 
 
 def test_a_volume_over_the_device_memory_limit_is_a_clear_error(real_volume):
@@ -457,7 +480,6 @@ def cli_path():
 
 def test_command_line_renders_a_file(real_volume, tmp_path):
     import json
-    import subprocess
 
     from PIL import Image
     from vtksvdag.vtkSVDAGIO import vtkSegmentationSVDAGWriter
