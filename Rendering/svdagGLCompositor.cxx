@@ -9,10 +9,14 @@
 #include "vtkShaderProgram.h"
 #include "vtkSmartPointer.h"
 #include "vtkTextureObject.h"
+#include "vtkTextureUnitManager.h"
 #include "vtk_glew.h"
 
+#include <cstring>
 #include <stdexcept>
 #include <string>
+
+#include <unistd.h>
 
 namespace svdag
 {
@@ -25,7 +29,9 @@ namespace
 const char* const FragmentShader = R"(//VTK::System::Dec
 //VTK::Output::Dec
 in vec2 texCoord;
-uniform sampler2D colorTexture;
+uniform samplerBuffer colorBuffer; // colorSize.x * colorSize.y texels, rows from the bottom
+uniform ivec2 colorSize;
+uniform vec4 viewport; // x, y, width, height in window pixels
 uniform sampler2D depthTexture;
 uniform float exposure;
 uniform int writeDepth;
@@ -34,9 +40,26 @@ float srgbEncode(float linear)
   float c = clamp(linear, 0.0, 1.0);
   return c <= 0.0031308 ? 12.92 * c : 1.055 * pow(c, 1.0 / 2.4) - 0.055;
 }
+vec4 texel(ivec2 p)
+{
+  p = clamp(p, ivec2(0), colorSize - ivec2(1));
+  return texelFetch(colorBuffer, p.x + colorSize.x * p.y);
+}
+// Bilinear with clamped edges (a reduced image scaled up), from the exact fragment position: at
+// full size every weight is 0 or 1, so each pixel is its traced texel exactly.
+vec4 tracedColor()
+{
+  vec2 p = (gl_FragCoord.xy - viewport.xy) * vec2(colorSize) / viewport.zw - vec2(0.5);
+  vec2 i = floor(p);
+  vec2 f = p - i;
+  ivec2 c = ivec2(i);
+  vec4 bottom = mix(texel(c), texel(c + ivec2(1, 0)), f.x);
+  vec4 top = mix(texel(c + ivec2(0, 1)), texel(c + ivec2(1, 1)), f.x);
+  return mix(bottom, top, f.y);
+}
 void main()
 {
-  vec4 hdr = texture(colorTexture, texCoord);
+  vec4 hdr = tracedColor();
   float depth = texture(depthTexture, texCoord).r;
   // A pixel whose samples all missed may still hold the center ray's hit (a silhouette): its
   // depth is written, with no color.
@@ -73,8 +96,31 @@ GLenum depthFormatOf(GLuint framebuffer)
 struct Compositor::Internals
 {
   std::unique_ptr<vtkOpenGLQuadHelper> Quad;
-  vtkSmartPointer<vtkTextureObject> Color;
   vtkSmartPointer<vtkTextureObject> Depth;
+  // The color as a texture buffer over one of two buffers: HostColor (uploaded each frame) or
+  // SharedColor (Vulkan's memory, imported as SharedMemory, allocation SharedGeneration).
+  GLuint ColorTexture = 0;
+  GLuint HostColor = 0;
+  GLuint SharedColor = 0;
+  GLuint SharedMemory = 0;
+  uint64_t SharedGeneration = 0;
+  GLsync SharedReads = nullptr;
+  // canImport's answer for the window it was asked for (-1: not asked).
+  vtkOpenGLRenderWindow* ImportWindow = nullptr;
+  int Importable = -1;
+
+  void releaseShared()
+  {
+    if (this->SharedReads)
+      glDeleteSync(this->SharedReads);
+    if (this->SharedColor)
+      glDeleteBuffers(1, &this->SharedColor);
+    if (this->SharedMemory)
+      glDeleteMemoryObjectsEXT(1, &this->SharedMemory);
+    this->SharedReads = nullptr;
+    this->SharedColor = this->SharedMemory = 0;
+    this->SharedGeneration = 0;
+  }
   // The MSAA resolve target: a framebuffer with one depth renderbuffer.
   GLuint ResolveFramebuffer = 0;
   GLuint ResolveDepth = 0;
@@ -98,6 +144,45 @@ Compositor::Compositor()
 }
 
 Compositor::~Compositor() = default;
+
+bool Compositor::canImport(vtkOpenGLRenderWindow* window, const render::DeviceUuids& uuids)
+{
+  Internals& in = *this->Internal;
+  if (in.ImportWindow == window && in.Importable >= 0)
+    return in.Importable == 1;
+  in.ImportWindow = window;
+  in.Importable = 0;
+  vtkOpenGLClearErrorMacro();
+  bool memoryObject = false, memoryObjectFd = false;
+  GLint extensions = 0;
+  glGetIntegerv(GL_NUM_EXTENSIONS, &extensions);
+  for (GLint i = 0; i < extensions; ++i)
+  {
+    const char* name = reinterpret_cast<const char*>(glGetStringi(GL_EXTENSIONS, GLuint(i)));
+    memoryObject = memoryObject || (name && std::strcmp(name, "GL_EXT_memory_object") == 0);
+    memoryObjectFd = memoryObjectFd || (name && std::strcmp(name, "GL_EXT_memory_object_fd") == 0);
+  }
+  // The entry points too: GLEW loads them only where the context listed the extensions.
+  if (!memoryObject || !memoryObjectFd || !glCreateMemoryObjectsEXT || !glImportMemoryFdEXT ||
+    !glBufferStorageMemEXT || !glDeleteMemoryObjectsEXT || !glGetUnsignedBytevEXT ||
+    !glGetUnsignedBytei_vEXT)
+    return false;
+  GLubyte uuid[GL_UUID_SIZE_EXT];
+  glGetUnsignedBytevEXT(GL_DRIVER_UUID_EXT, uuid);
+  bool sameDriver = std::memcmp(uuid, uuids.driver.data(), GL_UUID_SIZE_EXT) == 0;
+  bool sameDevice = false;
+  GLint devices = 0;
+  glGetIntegerv(GL_NUM_DEVICE_UUIDS_EXT, &devices);
+  for (GLint i = 0; i < devices; ++i)
+  {
+    glGetUnsignedBytei_vEXT(GL_DEVICE_UUID_EXT, GLuint(i), uuid);
+    sameDevice = sameDevice || std::memcmp(uuid, uuids.device.data(), GL_UUID_SIZE_EXT) == 0;
+  }
+  if (glGetError() != GL_NO_ERROR)
+    return false;
+  in.Importable = sameDriver && sameDevice ? 1 : 0;
+  return in.Importable == 1;
+}
 
 Viewport Compositor::currentViewport(vtkOpenGLRenderWindow* window)
 {
@@ -160,22 +245,91 @@ void Compositor::draw(vtkOpenGLRenderWindow* window, const Viewport& vp, const f
   int colorWidth, int colorHeight, const std::vector<float>& depth, float exposure)
 {
   Internals& in = *this->Internal;
-  vtkOpenGLState* state = window->GetState();
-  if (!in.Color)
-  {
-    in.Color = vtkSmartPointer<vtkTextureObject>::New();
-    in.Depth = vtkSmartPointer<vtkTextureObject>::New();
-  }
-  in.Color->SetContext(window);
-  in.Depth->SetContext(window);
-  // Scaled up from a reduced image: bilinear color, nearest depth (depth must not blend across
-  // silhouettes).
-  in.Color->SetMinificationFilter(vtkTextureObject::Linear);
-  in.Color->SetMagnificationFilter(vtkTextureObject::Linear);
-  in.Color->SetWrapS(vtkTextureObject::ClampToEdge);
-  in.Color->SetWrapT(vtkTextureObject::ClampToEdge);
-  if (!in.Color->Create2DFromRaw(colorWidth, colorHeight, 4, VTK_FLOAT, const_cast<float*>(rgba)))
+  vtkOpenGLClearErrorMacro();
+  if (!in.HostColor)
+    glGenBuffers(1, &in.HostColor);
+  glBindBuffer(GL_TEXTURE_BUFFER, in.HostColor);
+  glBufferData(GL_TEXTURE_BUFFER, GLsizeiptr(size_t(colorWidth) * size_t(colorHeight) * 4 * sizeof(float)),
+    rgba, GL_STREAM_DRAW);
+  glBindBuffer(GL_TEXTURE_BUFFER, 0);
+  if (glGetError() != GL_NO_ERROR)
     throw std::runtime_error("uploading the traced image to OpenGL failed");
+  this->drawColor(window, vp, in.HostColor, colorWidth, colorHeight, depth, exposure);
+}
+
+void Compositor::drawShared(vtkOpenGLRenderWindow* window, const Viewport& vp,
+  uint64_t generation, const std::function<render::ExportedMemory()>& exportMemory,
+  int colorWidth, int colorHeight, const std::vector<float>& depth, float exposure)
+{
+  Internals& in = *this->Internal;
+  if (!in.SharedColor || in.SharedGeneration != generation)
+  {
+    in.releaseShared();
+    vtkOpenGLClearErrorMacro();
+    const render::ExportedMemory memory = exportMemory();
+    glCreateMemoryObjectsEXT(1, &in.SharedMemory);
+    if (memory.dedicated)
+    {
+      const GLint yes = GL_TRUE;
+      glMemoryObjectParameterivEXT(in.SharedMemory, GL_DEDICATED_MEMORY_OBJECT_EXT, &yes);
+    }
+    // On success OpenGL owns the descriptor; on failure it is still ours to close.
+    glImportMemoryFdEXT(in.SharedMemory, GLuint64(memory.bytes), GL_HANDLE_TYPE_OPAQUE_FD_EXT, memory.fd);
+    GLenum error = glGetError();
+    if (error != GL_NO_ERROR)
+    {
+      close(memory.fd);
+      in.releaseShared();
+      throw std::runtime_error("importing the Vulkan image memory into OpenGL failed (OpenGL error " +
+        std::to_string(error) + ")");
+    }
+    glGenBuffers(1, &in.SharedColor);
+    glBindBuffer(GL_TEXTURE_BUFFER, in.SharedColor);
+    glBufferStorageMemEXT(GL_TEXTURE_BUFFER,
+      GLsizeiptr(size_t(colorWidth) * size_t(colorHeight) * 4 * sizeof(float)), in.SharedMemory, 0);
+    glBindBuffer(GL_TEXTURE_BUFFER, 0);
+    error = glGetError();
+    if (error != GL_NO_ERROR)
+    {
+      in.releaseShared();
+      throw std::runtime_error("a buffer on the imported Vulkan memory failed (OpenGL error " +
+        std::to_string(error) + ")");
+    }
+    in.SharedGeneration = generation;
+  }
+  this->waitForSharedReads(); // a fence of an earlier draw, if any, is replaced below
+  this->drawColor(window, vp, in.SharedColor, colorWidth, colorHeight, depth, exposure);
+  in.SharedReads = glFenceSync(GL_SYNC_GPU_COMMANDS_COMPLETE, 0);
+}
+
+void Compositor::waitForSharedReads()
+{
+  Internals& in = *this->Internal;
+  if (!in.SharedReads)
+    return;
+  // Flushes on the first wait, so the fence is reached; a second a round, never forever (a lost
+  // context reports failure).
+  GLbitfield flags = GL_SYNC_FLUSH_COMMANDS_BIT;
+  for (;;)
+  {
+    const GLenum result = glClientWaitSync(in.SharedReads, flags, GLuint64(1000000000));
+    flags = 0;
+    if (result != GL_TIMEOUT_EXPIRED)
+      break;
+  }
+  glDeleteSync(in.SharedReads);
+  in.SharedReads = nullptr;
+}
+
+void Compositor::drawColor(vtkOpenGLRenderWindow* window, const Viewport& vp, unsigned int buffer,
+  int colorWidth, int colorHeight, const std::vector<float>& depth, float exposure)
+{
+  Internals& in = *this->Internal;
+  vtkOpenGLState* state = window->GetState();
+  if (!in.Depth)
+    in.Depth = vtkSmartPointer<vtkTextureObject>::New();
+  in.Depth->SetContext(window);
+  // Depth nearest: it must not blend across silhouettes (the color is filtered in the shader).
   const bool writeDepth = !depth.empty();
   const float one = 1.0f;
   in.Depth->SetMinificationFilter(vtkTextureObject::Nearest);
@@ -212,15 +366,29 @@ void Compositor::draw(vtkOpenGLRenderWindow* window, const Viewport& vp, const f
   state->vtkglDepthFunc(GL_ALWAYS);
   state->vtkglDepthMask(writeDepth ? GL_TRUE : GL_FALSE);
 
-  in.Color->Activate();
+  vtkTextureUnitManager* units = window->GetTextureUnitManager();
+  const int colorUnit = units->Allocate();
+  if (colorUnit < 0)
+    throw std::runtime_error("no texture unit is free for the traced image");
+  if (!in.ColorTexture)
+    glGenTextures(1, &in.ColorTexture);
+  state->vtkglActiveTexture(GL_TEXTURE0 + colorUnit);
+  glBindTexture(GL_TEXTURE_BUFFER, in.ColorTexture);
+  glTexBuffer(GL_TEXTURE_BUFFER, GL_RGBA32F, buffer);
   in.Depth->Activate();
-  in.Quad->Program->SetUniformi("colorTexture", in.Color->GetTextureUnit());
+  in.Quad->Program->SetUniformi("colorBuffer", colorUnit);
+  const int size[2] = { colorWidth, colorHeight };
+  in.Quad->Program->SetUniform2i("colorSize", size);
+  const float viewport[4] = { float(vp.x), float(vp.y), float(vp.width), float(vp.height) };
+  in.Quad->Program->SetUniform4f("viewport", viewport);
   in.Quad->Program->SetUniformi("depthTexture", in.Depth->GetTextureUnit());
   in.Quad->Program->SetUniformf("exposure", exposure);
   in.Quad->Program->SetUniformi("writeDepth", writeDepth ? 1 : 0);
   in.Quad->Render();
   in.Depth->Deactivate();
-  in.Color->Deactivate();
+  state->vtkglActiveTexture(GL_TEXTURE0 + colorUnit);
+  glBindTexture(GL_TEXTURE_BUFFER, 0);
+  units->Free(colorUnit);
 }
 
 void Compositor::releaseGraphicsResources(vtkWindow* window)
@@ -231,8 +399,14 @@ void Compositor::releaseGraphicsResources(vtkWindow* window)
     in.Quad->ReleaseGraphicsResources(window);
     in.Quad.reset();
   }
-  if (in.Color)
-    in.Color->ReleaseGraphicsResources(window);
+  in.releaseShared();
+  if (in.HostColor)
+    glDeleteBuffers(1, &in.HostColor);
+  if (in.ColorTexture)
+    glDeleteTextures(1, &in.ColorTexture);
+  in.HostColor = in.ColorTexture = 0;
+  in.ImportWindow = nullptr;
+  in.Importable = -1;
   if (in.Depth)
     in.Depth->ReleaseGraphicsResources(window);
   in.releaseResolve();

@@ -398,6 +398,11 @@ struct vtkSegmentationSVDAGVolumeMapper::Internals
   core::FrameLevel Level;
   double TraceMilliseconds = 0;
   double FrameMilliseconds = 0;
+  double CopyMilliseconds = 0;
+  // The last frame's composite path ("" before one); set when a shared import failed, with the
+  // reason (reported once; the host path is used from then on).
+  std::string CompositePath;
+  std::string ImportFailure;
 
   // What Pick reads: the last traced frame.
   vtkRenderer* PickRenderer = nullptr;
@@ -538,6 +543,24 @@ void vtkSegmentationSVDAGVolumeMapper::Render(vtkRenderer* renderer, vtkVolume* 
     const svdag::gl::Viewport vp = svdag::gl::Compositor::currentViewport(window);
     if (vp.width <= 0 || vp.height <= 0)
       throw std::runtime_error("the renderer's viewport is empty");
+    // Vulkan writes the shared color only once OpenGL has read the last one.
+    in.Compositor.waitForSharedReads();
+    const bool share = this->SharedMemory && in.ImportFailure.empty() && r.canShareColor() &&
+      in.Compositor.canImport(window, r.deviceUuids());
+    if (share != r.colorSharing())
+    {
+      // The color moves to another buffer on the next pass: trace one, whatever the frame.
+      r.setColorSharing(share);
+      r.resetAccumulation();
+      in.Frame = FrameKey();
+    }
+    double copyMilliseconds = 0;
+    auto timed = [&copyMilliseconds](auto&& step) {
+      const auto begin = Clock::now();
+      auto result = step();
+      copyMilliseconds += std::chrono::duration<double, std::milli>(Clock::now() - begin).count();
+      return result;
+    };
 
     // Rays in the data object's world (the vtkVolume's model coordinates).
     vtkMatrix4x4 *worldToView, *viewToDevice, *worldToDevice;
@@ -550,8 +573,8 @@ void vtkSegmentationSVDAGVolumeMapper::Render(vtkRenderer* renderer, vtkVolume* 
     const core::ViewRays rays = core::viewRaysFromClipToWorld(clipToModel);
 
     // Depth in: each traced pixel's ray ends at the surface drawn there before the volume.
-    const auto sceneDepthShared =
-      std::make_shared<const std::vector<float>>(in.Compositor.readDepth(window, vp));
+    const auto sceneDepthShared = std::make_shared<const std::vector<float>>(
+      timed([&] { return in.Compositor.readDepth(window, vp); }));
     const std::vector<float>& sceneDepth = *sceneDepthShared;
     const core::RenderSettings& base = in.Session.settings()->GetCoreSettings();
     const bool drawnBefore =
@@ -674,22 +697,58 @@ void vtkSegmentationSVDAGVolumeMapper::Render(vtkRenderer* renderer, vtkVolume* 
         r.resetAccumulation();
       r.setImageSize(uint32_t(width), uint32_t(height));
       r.setViewRays(rays);
-      r.setRayLimits(rayLimits(sceneDepth, vp, width, height, clipToModel, rays));
+      r.setRayLimits(
+        timed([&] { return rayLimits(sceneDepth, vp, width, height, clipToModel, rays); }));
       do
       {
         r.render();
         in.TraceMilliseconds += r.lastFrameMilliseconds();
+        copyMilliseconds += r.lastReadbackMilliseconds();
       } while (tiled && in.FullQuality && !refined());
       in.Frame = std::move(frame.key);
     }
     const core::Image& image = r.image();
     in.Converged = in.FullQuality && refined();
 
-    const std::vector<float> depth = this->WriteDepth
-      ? compositedDepth(image, rays, modelToClip, sceneDepth, vp)
-      : std::vector<float>();
-    in.Compositor.draw(
-      window, vp, image.hdr.data(), width, height, depth, float(base.exposure));
+    const std::vector<float> depth = timed([&] {
+      return this->WriteDepth ? compositedDepth(image, rays, modelToClip, sceneDepth, vp)
+                              : std::vector<float>();
+    });
+    const float exposure = float(base.exposure);
+    const auto drawHost = [&] {
+      in.Compositor.draw(window, vp, image.hdr.data(), width, height, depth, exposure);
+      return true;
+    };
+    if (r.colorSharing())
+    {
+      try
+      {
+        timed([&] {
+          in.Compositor.drawShared(window, vp, r.sharedColor().generation,
+            [&r] { return r.exportColor(); }, width, height, depth, exposure);
+          return true;
+        });
+        in.CompositePath = "shared memory";
+      }
+      catch (const std::exception& e)
+      {
+        // Where the import fails the host path draws this frame (traced again, into host
+        // memory) and every later one.
+        in.ImportFailure = e.what();
+        vtkWarningMacro("Drawing through the host: " << e.what());
+        r.setColorSharing(false);
+        r.render();
+        in.TraceMilliseconds += r.lastFrameMilliseconds();
+        timed(drawHost);
+        in.CompositePath = "host";
+      }
+    }
+    else
+    {
+      timed(drawHost);
+      in.CompositePath = "host";
+    }
+    in.CopyMilliseconds = copyMilliseconds;
 
     rememberPick(rays, modelToWorld);
     const double total = std::chrono::duration<double>(Clock::now() - start).count();
@@ -790,6 +849,16 @@ double vtkSegmentationSVDAGVolumeMapper::GetLastTraceMilliseconds()
 double vtkSegmentationSVDAGVolumeMapper::GetLastFrameMilliseconds()
 {
   return this->Internal->FrameMilliseconds;
+}
+
+const char* vtkSegmentationSVDAGVolumeMapper::GetCompositePath()
+{
+  return this->Internal->CompositePath.c_str();
+}
+
+double vtkSegmentationSVDAGVolumeMapper::GetLastCopyMilliseconds()
+{
+  return this->Internal->CopyMilliseconds;
 }
 
 int vtkSegmentationSVDAGVolumeMapper::GetDeviceUsers()
@@ -945,6 +1014,9 @@ void vtkSegmentationSVDAGVolumeMapper::PrintSelf(ostream& os, vtkIndent indent)
 {
   this->Superclass::PrintSelf(os, indent);
   os << indent << "WriteDepth: " << this->WriteDepth << "\n";
+  os << indent << "SharedMemory: " << this->SharedMemory << "\n";
+  os << indent << "CompositePath: " << this->GetCompositePath() << "\n";
+  os << indent << "LastCopyMilliseconds: " << this->GetLastCopyMilliseconds() << "\n";
   os << indent << "AutoAdjustToRenderTime: " << this->AutoAdjustToRenderTime << "\n";
   os << indent << "TargetSamplesPerPixel: " << this->TargetSamplesPerPixel << "\n";
   os << indent << "ErrorTarget: " << this->ErrorTarget << "\n";

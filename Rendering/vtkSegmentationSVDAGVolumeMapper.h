@@ -172,6 +172,27 @@ public:
   ///@}
 
   ///@{
+  /**
+   * How the traced color reaches OpenGL. With SharedMemory on (default), where the Vulkan device
+   * exports memory that the window's OpenGL imports (VK_KHR_external_memory_fd and
+   * GL_EXT_memory_object_fd on the same device and driver, by their UUIDs: Mesa's lavapipe with
+   * llvmpipe, or one GPU's Vulkan and OpenGL drivers), the compositor reads it straight from the
+   * renderer's output buffer; otherwise (or with SharedMemory off) it is read back to the host and
+   * uploaded. Both paths draw the same pixels. The depth goes through the host on both: the mapper
+   * derives the rays' limits and the frame's identity from the scene's depth, and the depth it
+   * writes from the traced hits. GetCompositePath: the last frame's path, "shared memory" or
+   * "host" ("" before a frame). GetLastCopyMilliseconds: the part of the last frame spent moving
+   * depth and image between OpenGL, the host and Vulkan (scene depth read and turned into ray
+   * limits, outputs read back, depth composited, depth and color uploaded and drawn).
+   */
+  vtkSetMacro(SharedMemory, bool);
+  vtkGetMacro(SharedMemory, bool);
+  vtkBooleanMacro(SharedMemory, bool);
+  const char* GetCompositePath();
+  double GetLastCopyMilliseconds();
+  ///@}
+
+  ///@{
   /** The backend in use, "rt" or "compute" ("" before the first pass, or where Settings asks for
    * one the device cannot run), and the bytes of device memory held, in all (GetDeviceBytes) and
    * by part: the volume's encoding (block and DAG streams), what the backend finds blocks with
@@ -230,6 +251,7 @@ protected:
   int FillInputPortInformation(int port, vtkInformation* info) override;
 
   bool WriteDepth = true;
+  bool SharedMemory = true;
   bool AutoAdjustToRenderTime = true;
   int TargetSamplesPerPixel = 64;
   double ErrorTarget = 0.0;

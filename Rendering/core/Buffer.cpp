@@ -23,6 +23,30 @@ Buffer::Buffer(Context& context, VkDeviceSize size, VkBufferUsageFlags usage, Me
     info.usage = usage | VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT |
       VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
     info.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
+    const VkExternalMemoryHandleTypeFlagBits fdType = VK_EXTERNAL_MEMORY_HANDLE_TYPE_OPAQUE_FD_BIT;
+    VkExternalMemoryBufferCreateInfo external{
+      VK_STRUCTURE_TYPE_EXTERNAL_MEMORY_BUFFER_CREATE_INFO
+    };
+    if (use == MemoryUse::Shared)
+    {
+      if (!context.canExportMemory())
+        throw std::logic_error("a shared buffer was requested from a device that cannot export memory");
+      VkPhysicalDeviceExternalBufferInfo query{
+        VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_EXTERNAL_BUFFER_INFO
+      };
+      query.usage = info.usage;
+      query.handleType = fdType;
+      VkExternalBufferProperties properties{ VK_STRUCTURE_TYPE_EXTERNAL_BUFFER_PROPERTIES };
+      vkGetPhysicalDeviceExternalBufferProperties(context.physicalDevice(), &query, &properties);
+      const VkExternalMemoryFeatureFlags features =
+        properties.externalMemoryProperties.externalMemoryFeatures;
+      if (!(features & VK_EXTERNAL_MEMORY_FEATURE_EXPORTABLE_BIT))
+        throw std::runtime_error("the device cannot export this buffer's memory as a file descriptor");
+      this->Dedicated = (features & VK_EXTERNAL_MEMORY_FEATURE_DEDICATED_ONLY_BIT) != 0;
+      this->GetMemoryFd = context.fn().getMemoryFd;
+      external.handleTypes = fdType;
+      info.pNext = &external;
+    }
     check(vkCreateBuffer(this->Device, &info, nullptr, &this->Handle), "vkCreateBuffer");
 
     VkMemoryRequirements req;
@@ -31,6 +55,7 @@ Buffer::Buffer(Context& context, VkDeviceSize size, VkBufferUsageFlags usage, Me
     switch (use)
     {
       case MemoryUse::Device:
+      case MemoryUse::Shared:
         preferred = VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT;
         break;
       case MemoryUse::Readback:
@@ -43,6 +68,18 @@ Buffer::Buffer(Context& context, VkDeviceSize size, VkBufferUsageFlags usage, Me
     }
     VkMemoryAllocateFlagsInfo flags{ VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_FLAGS_INFO };
     flags.flags = VK_MEMORY_ALLOCATE_DEVICE_ADDRESS_BIT;
+    VkExportMemoryAllocateInfo exported{ VK_STRUCTURE_TYPE_EXPORT_MEMORY_ALLOCATE_INFO };
+    VkMemoryDedicatedAllocateInfo dedicated{ VK_STRUCTURE_TYPE_MEMORY_DEDICATED_ALLOCATE_INFO };
+    if (use == MemoryUse::Shared)
+    {
+      exported.handleTypes = fdType;
+      flags.pNext = &exported;
+      if (this->Dedicated)
+      {
+        dedicated.buffer = this->Handle;
+        exported.pNext = &dedicated;
+      }
+    }
     VkMemoryAllocateInfo alloc{ VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO };
     alloc.pNext = &flags;
     alloc.allocationSize = req.size;
@@ -61,7 +98,7 @@ Buffer::Buffer(Context& context, VkDeviceSize size, VkBufferUsageFlags usage, Me
     this->Allocated = req.size;
     context.noteAllocation(int64_t(req.size));
     check(vkBindBufferMemory(this->Device, this->Handle, this->Memory, 0), "vkBindBufferMemory");
-    if (use != MemoryUse::Device)
+    if (use == MemoryUse::Readback || use == MemoryUse::Upload)
     {
       check(vkMapMemory(this->Device, this->Memory, 0, VK_WHOLE_SIZE, 0, &this->Mapped),
         "vkMapMemory");
@@ -100,6 +137,8 @@ Buffer& Buffer::operator=(Buffer&& other) noexcept
     std::swap(this->Size, other.Size);
     std::swap(this->Address, other.Address);
     std::swap(this->Mapped, other.Mapped);
+    std::swap(this->GetMemoryFd, other.GetMemoryFd);
+    std::swap(this->Dedicated, other.Dedicated);
   }
   return *this;
 }
@@ -119,6 +158,22 @@ void Buffer::reset()
   this->Size = 0;
   this->Address = 0;
   this->Mapped = nullptr;
+  this->GetMemoryFd = nullptr;
+  this->Dedicated = false;
+}
+
+ExportedMemory Buffer::exportMemory() const
+{
+  if (!this->GetMemoryFd || !this->Memory)
+    throw std::logic_error("only a shared buffer's memory can be exported");
+  VkMemoryGetFdInfoKHR info{ VK_STRUCTURE_TYPE_MEMORY_GET_FD_INFO_KHR };
+  info.memory = this->Memory;
+  info.handleType = VK_EXTERNAL_MEMORY_HANDLE_TYPE_OPAQUE_FD_BIT;
+  ExportedMemory out;
+  check(this->GetMemoryFd(this->Device, &info, &out.fd), "vkGetMemoryFdKHR");
+  out.bytes = this->Allocated;
+  out.dedicated = this->Dedicated;
+  return out;
 }
 
 Buffer uploadBuffer(Context& context, const void* data, size_t bytes, VkBufferUsageFlags usage)

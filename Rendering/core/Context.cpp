@@ -25,6 +25,9 @@ const char* const RayTracingExtensions[] = {
   VK_KHR_RAY_TRACING_PIPELINE_EXTENSION_NAME,
   VK_KHR_DEFERRED_HOST_OPERATIONS_EXTENSION_NAME,
 };
+// Exporting device memory as a POSIX file descriptor (OpenGL imports it with
+// GL_EXT_memory_object_fd: the volume mapper's image without a host copy); enabled where present.
+const char* const MemoryExportExtension = VK_KHR_EXTERNAL_MEMORY_FD_EXTENSION_NAME;
 // Set (not "0"): every device counts as one without ray tracing (what a GPU without the
 // extensions does: the renderer uses its compute backend).
 const char* const NoRayTracingVariable = "SVDAG_VK_NO_RAY_TRACING";
@@ -85,6 +88,7 @@ struct Candidate
   VkPhysicalDeviceType type = VK_PHYSICAL_DEVICE_TYPE_OTHER;
   std::vector<std::string> missing;
   std::vector<std::string> rayTracingMissing;
+  bool memoryExport = false;
   uint32_t queueFamily = 0;
 };
 
@@ -118,6 +122,7 @@ Candidate inspect(VkPhysicalDevice device)
   }
   if (!c.missing.empty())
     return c;
+  c.memoryExport = hasExtension(extensions, MemoryExportExtension);
   for (const char* extension : RayTracingExtensions)
   {
     if (!hasExtension(extensions, extension))
@@ -506,6 +511,7 @@ void Device::pickPhysicalDevice()
   this->CpuDevice = best->type == VK_PHYSICAL_DEVICE_TYPE_CPU;
   this->QueueFamily = best->queueFamily;
   this->RayTracing = best->rayTracingMissing.empty();
+  this->MemoryExport = best->memoryExport;
   for (size_t i = 0; i < best->rayTracingMissing.size(); ++i)
     this->RayTracingMissing += (i ? ", " : "") + best->rayTracingMissing[i];
 }
@@ -523,10 +529,14 @@ void Device::createDevice()
     VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_MAINTENANCE_3_PROPERTIES
   };
   asProps.pNext = &m3Props;
+  VkPhysicalDeviceIDProperties idProps{ VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_ID_PROPERTIES };
+  m3Props.pNext = &idProps;
   VkPhysicalDeviceProperties2 props{ VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2 };
   // The ray tracing property structs only where the device has the extensions.
   props.pNext = this->RayTracing ? static_cast<void*>(&rtProps) : static_cast<void*>(&m3Props);
   vkGetPhysicalDeviceProperties2(this->PhysicalDevice, &props);
+  std::copy(std::begin(idProps.deviceUUID), std::end(idProps.deviceUUID), this->Uuids.device.begin());
+  std::copy(std::begin(idProps.driverUUID), std::end(idProps.driverUUID), this->Uuids.driver.begin());
   for (int a = 0; a < 2; ++a)
     this->Limits.maxComputeWorkGroupCount[a] = props.properties.limits.maxComputeWorkGroupCount[a];
   this->Limits.maxMemoryAllocationSize = m3Props.maxMemoryAllocationSize;
@@ -560,6 +570,8 @@ void Device::createDevice()
       extensions.end(), std::begin(RayTracingExtensions), std::end(RayTracingExtensions));
   else
     enabled.v12.pNext = nullptr;
+  if (this->MemoryExport)
+    extensions.push_back(MemoryExportExtension);
   const float priority = 1.0f;
   VkDeviceQueueCreateInfo queueInfo{ VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO };
   queueInfo.queueFamilyIndex = this->QueueFamily;
@@ -595,6 +607,8 @@ void Device::createDevice()
     load(f.getRayTracingShaderGroupHandles, "vkGetRayTracingShaderGroupHandlesKHR");
     load(f.cmdTraceRays, "vkCmdTraceRaysKHR");
   }
+  if (this->MemoryExport)
+    load(f.getMemoryFd, "vkGetMemoryFdKHR");
 
   // One cache for every pipeline any user compiles (kept in memory, for the device's life).
   VkPipelineCacheCreateInfo cacheInfo{ VK_STRUCTURE_TYPE_PIPELINE_CACHE_CREATE_INFO };

@@ -139,6 +139,9 @@ struct Renderer::Gpu
   // The per-pixel ray limits (host-visible, written before each frame that has them).
   Buffer rayLimits;
   uint32_t outputPixels = 0;
+  // Whether hdr is a Shared buffer (Renderer::setColorSharing), and how often it was allocated.
+  bool hdrShared = false;
+  uint64_t hdrGeneration = 0;
   // Per-label materials (host-visible: an edit is a memcpy) and the environment's tables.
   Buffer materials;
   Buffer envMarginal, envConditional, envTexels;
@@ -162,9 +165,9 @@ struct Renderer::Gpu
       variance.size() + accumulation.size() + squares.size() + rayLimits.size();
   }
 
-  void resizeOutputs(uint32_t pixels)
+  void resizeOutputs(uint32_t pixels, bool shareColor)
   {
-    if (pixels == outputPixels)
+    if (pixels == outputPixels && shareColor == hdrShared)
       return;
     outputPixels = 0;
     const VkBufferUsageFlags usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
@@ -172,7 +175,14 @@ struct Renderer::Gpu
     depth = Buffer(context, pixels * sizeof(float), usage, MemoryUse::Readback);
     // Shading normals, then entry face normals (GpuLayout.h).
     normal = Buffer(context, pixels * 6 * sizeof(float), usage, MemoryUse::Readback);
-    hdr = Buffer(context, pixels * 4 * sizeof(float), usage, MemoryUse::Readback);
+    hdr = Buffer();
+    // An importer may need room past the image: llvmpipe's OpenGL buffers on imported memory
+    // ask for 48 bytes more than their size.
+    const VkDeviceSize importSlack = shareColor ? 256 : 0;
+    hdr = Buffer(context, pixels * 4 * sizeof(float) + importSlack, usage,
+      shareColor ? MemoryUse::Shared : MemoryUse::Readback);
+    hdrShared = shareColor;
+    ++hdrGeneration;
     color = Buffer(context, pixels * sizeof(uint32_t), usage, MemoryUse::Readback);
     variance = Buffer(context, pixels * sizeof(float), usage, MemoryUse::Readback);
     accumulation = Buffer(context, pixels * 4 * sizeof(float), usage, MemoryUse::Device);
@@ -200,6 +210,37 @@ void Renderer::timeSetup(bool rebuilt, double seconds)
 }
 
 Renderer::~Renderer() = default;
+
+void Renderer::setColorSharing(bool on)
+{
+  if (on && !this->canShareColor())
+    throw std::runtime_error("the Vulkan device cannot export memory (" VK_KHR_EXTERNAL_MEMORY_FD_EXTENSION_NAME ")");
+  this->ShareColor = on;
+}
+
+bool Renderer::canShareColor() const
+{
+  return this->Device->context.canExportMemory();
+}
+
+const DeviceUuids& Renderer::deviceUuids() const
+{
+  return this->Device->context.uuids();
+}
+
+SharedColor Renderer::sharedColor() const
+{
+  const Gpu& g = *this->Device;
+  if (!g.hdrShared || !g.hdr)
+    throw std::logic_error("the color is not shared: setColorSharing(true), then render()");
+  return SharedColor{ g.hdrGeneration, uint64_t(g.outputPixels) * 4 * sizeof(float) };
+}
+
+ExportedMemory Renderer::exportColor() const
+{
+  this->sharedColor(); // the same checks
+  return this->Device->hdr.exportMemory();
+}
 
 const std::string& Renderer::deviceName() const
 {
@@ -665,7 +706,7 @@ const Image& Renderer::render()
   if (!this->RayLimits.empty() && this->RayLimits.size() != pixels)
     throw std::invalid_argument("the ray limits hold " + std::to_string(this->RayLimits.size()) +
       " values for an image of " + std::to_string(pixels) + " pixels");
-  g.resizeOutputs(pixels);
+  g.resizeOutputs(pixels, this->ShareColor);
 
   const FieldWidths& w = volume.widths;
   const auto cells = volume.geometry.cellCounts();
@@ -808,6 +849,7 @@ const Image& Renderer::render()
   this->Accumulated += settings.samplesPerPixel;
   this->AccumulationValid = true;
 
+  const auto readStart = Clock::now();
   Image& out = this->Output;
   out.width = this->Width;
   out.height = this->Height;
@@ -833,13 +875,18 @@ const Image& Renderer::render()
   out.faceNormal.resize(size_t(pixels) * 3);
   std::memcpy(out.faceNormal.data(), static_cast<const float*>(g.normal.mapped()) + size_t(pixels) * 3,
     size_t(pixels) * 3 * sizeof(float));
-  read(out.hdr, g.hdr, size_t(pixels) * 4);
+  if (g.hdrShared)
+    out.hdr.clear();
+  else
+    read(out.hdr, g.hdr, size_t(pixels) * 4);
   read(out.color, g.color, pixels);
   read(out.variance, g.variance, pixels);
   double sum = 0;
   for (float v : out.variance)
     sum += v;
   this->ErrorEstimate = std::sqrt(sum / pixels);
+  this->ReadbackMilliseconds =
+    std::chrono::duration<double, std::milli>(Clock::now() - readStart).count();
   return out;
 }
 

@@ -4,6 +4,8 @@
 //   Device   device-local, filled through a staging copy (uploadBuffer) or by the GPU
 //   Readback host-visible, coherent, preferably cached: the GPU writes, the host reads in place
 //   Upload   host-visible, coherent: the host writes in place (uniforms, staging)
+//   Shared   device-local preferred, exportable as a file descriptor (Device::canExportMemory):
+//            another API (OpenGL) imports it and reads what the GPU wrote, no host copy
 #pragma once
 
 #include "svdag_render/Context.h"
@@ -19,7 +21,18 @@ enum class MemoryUse
 {
   Device,
   Readback,
-  Upload
+  Upload,
+  Shared
+};
+
+// A Shared buffer's memory as another API imports it (GL_EXT_memory_object_fd): the importer
+// owns `fd` (a new one per export) and must import `bytes` (the allocation's size, not the
+// buffer's) as a dedicated allocation when `dedicated` is set.
+struct ExportedMemory
+{
+  int fd = -1;
+  uint64_t bytes = 0;
+  bool dedicated = false;
 };
 
 class Buffer
@@ -40,8 +53,11 @@ public:
   VkBuffer handle() const { return this->Handle; }
   VkDeviceSize size() const { return this->Size; }
   VkDeviceAddress address() const { return this->Address; }
-  // Host pointer for Readback and Upload buffers, nullptr for Device buffers.
+  // Host pointer for Readback and Upload buffers, nullptr for Device and Shared buffers.
   void* mapped() const { return this->Mapped; }
+  // A new file descriptor of a Shared buffer's memory. Throws std::logic_error for any other
+  // buffer, std::runtime_error when Vulkan refuses.
+  ExportedMemory exportMemory() const;
   void reset();
 
 private:
@@ -53,6 +69,8 @@ private:
   VkDeviceSize Size = 0;
   VkDeviceAddress Address = 0;
   void* Mapped = nullptr;
+  PFN_vkGetMemoryFdKHR GetMemoryFd = nullptr; // set for Shared buffers
+  bool Dedicated = false;
 };
 
 // A device-local buffer holding a copy of `bytes` bytes at `data` (through a staging buffer).

@@ -19,6 +19,7 @@
 
 #include <vulkan/vulkan.h>
 
+#include <array>
 #include <atomic>
 #include <cstdint>
 #include <functional>
@@ -51,6 +52,17 @@ struct DeviceFunctions
   PFN_vkCreateRayTracingPipelinesKHR createRayTracingPipelines = nullptr;
   PFN_vkGetRayTracingShaderGroupHandlesKHR getRayTracingShaderGroupHandles = nullptr;
   PFN_vkCmdTraceRaysKHR cmdTraceRays = nullptr;
+  // Null where the device cannot export memory (Device::canExportMemory).
+  PFN_vkGetMemoryFdKHR getMemoryFd = nullptr;
+};
+
+// Which device and driver this is, as Vulkan and OpenGL both report them
+// (VkPhysicalDeviceIDProperties, GL_EXT_memory_object's GL_DEVICE_UUID_EXT / GL_DRIVER_UUID_EXT):
+// memory one exports is importable by the other only where both match.
+struct DeviceUuids
+{
+  std::array<uint8_t, 16> device{};
+  std::array<uint8_t, 16> driver{};
 };
 
 // What does not fit the device's memory: what() names the bytes needed and the bytes available.
@@ -112,6 +124,10 @@ public:
   bool isCpuDevice() const { return this->CpuDevice; }
   bool hasRayTracing() const { return this->RayTracing; }
   const std::string& rayTracingMissing() const { return this->RayTracingMissing; }
+  // Whether buffers can be allocated in memory exported as a file descriptor
+  // (VK_KHR_external_memory_fd; Buffer's MemoryUse::Shared).
+  bool canExportMemory() const { return this->MemoryExport; }
+  const DeviceUuids& uuids() const { return this->Uuids; }
   const DeviceFunctions& fn() const { return this->Functions; }
   const RayTracingLimits& limits() const { return this->Limits; }
   const VkPhysicalDeviceMemoryProperties& memoryProperties() const { return this->MemoryProperties; }
@@ -151,6 +167,8 @@ private:
   bool CpuDevice = false;
   bool RayTracing = false;
   std::string RayTracingMissing;
+  bool MemoryExport = false;
+  DeviceUuids Uuids;
   VkPhysicalDeviceMemoryProperties MemoryProperties{};
   uint64_t HeapBytes = 0; // device-local heaps (all heaps if none is device-local)
   std::atomic<uint64_t> AllocatedBytes{ 0 };
@@ -189,6 +207,8 @@ public:
   // Whether the ray tracing backend can run; if not, what the device lacks for it.
   bool hasRayTracing() const { return this->Dev->hasRayTracing(); }
   const std::string& rayTracingMissing() const { return this->Dev->rayTracingMissing(); }
+  bool canExportMemory() const { return this->Dev->canExportMemory(); }
+  const DeviceUuids& uuids() const { return this->Dev->uuids(); }
   const DeviceFunctions& fn() const { return this->Dev->fn(); }
   const RayTracingLimits& limits() const { return this->Dev->limits(); }
 

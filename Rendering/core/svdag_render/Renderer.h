@@ -27,6 +27,7 @@
 // where a label continues into the next 16^3 cell it meets one more surface event at the face.
 #pragma once
 
+#include "svdag_render/Buffer.h"
 #include "svdag_render/Camera.h"
 #include "svdag_render/Pipeline.h"
 #include "svdag_render/Material.h"
@@ -74,10 +75,20 @@ struct Image
                                // smooth estimate with Shading::Smooth); 0 on a miss or inside
   std::vector<float> faceNormal; // 3 per pixel, world unit normal of the entry face; 0 likewise
   std::vector<float> hdr;      // 4 per pixel, linear RGBA: the mean of the accumulated samples
+                               // (empty while the color is shared: Renderer::setColorSharing)
   std::vector<uint32_t> color; // RGBA8, tone-mapped sRGB, R in the lowest byte
   // Per pixel, the variance of the accumulated mean's luminance (the sample variance over the
   // accumulated samples divided by their count; 0 before two samples).
   std::vector<float> variance;
+};
+
+// The shared HDR output (Renderer::setColorSharing): which allocation holds it now (a new
+// generation after each reallocation, which a new image size makes) and its size in bytes (4
+// floats per pixel, linear premultiplied RGBA in Image's pixel order).
+struct SharedColor
+{
+  uint64_t generation = 0;
+  uint64_t bytes = 0;
 };
 
 class Renderer
@@ -234,6 +245,21 @@ public:
   uint64_t bvhBuilds() const { return this->BvhBuilds; }
   uint64_t pipelineBuilds() const;
 
+  // The HDR output in exported device memory instead of a host copy (image().hdr stays empty),
+  // for a consumer that imports it (the volume mapper's OpenGL compositor) from the next
+  // render() on. Throws std::runtime_error where the device cannot export memory
+  // (canShareColor()).
+  void setColorSharing(bool on);
+  bool colorSharing() const { return this->ShareColor; }
+  bool canShareColor() const;
+  const DeviceUuids& deviceUuids() const;
+  // After a render() with sharing on: the allocation holding the color, and a new file
+  // descriptor of its memory for the importer to own. std::logic_error otherwise. The memory is
+  // written by render() only, which returns when the writes are complete; the importer must have
+  // finished reading before it calls render() again (there are no shared semaphores here).
+  SharedColor sharedColor() const;
+  ExportedMemory exportColor() const;
+
   // Traces one pass (samplesPerPixel samples per pixel, added to the accumulation) and reads
   // the outputs back. Throws std::runtime_error (no volume, Vulkan failure) or
   // std::invalid_argument (degenerate camera).
@@ -243,8 +269,10 @@ public:
   // Upload + BVH or grid build of the last setVolume, or rebuild of the last setHiddenLabels that
   // changed the set, seconds.
   double setupSeconds() const { return this->SetupSeconds; }
-  // Wall time of the last frame (record, trace, wait), milliseconds.
+  // Wall time of the last frame (record, trace, wait), milliseconds, and of copying its outputs
+  // to the host after it.
   double lastFrameMilliseconds() const { return this->FrameMilliseconds; }
+  double lastReadbackMilliseconds() const { return this->ReadbackMilliseconds; }
   uint64_t blasBytes() const;
   uint64_t tlasBytes() const;
   uint64_t visibleBlocks() const;
@@ -266,7 +294,9 @@ private:
   Image Output;
   double SetupSeconds = 0;
   double FrameMilliseconds = 0;
+  double ReadbackMilliseconds = 0;
   double ErrorEstimate = 0;
+  bool ShareColor = false;
 
   std::vector<uint32_t> ExplicitHidden;
   uint32_t BlockChunkShift = Scene::MaxBlockChunkShift;

@@ -1,0 +1,186 @@
+#!/usr/bin/env python3
+"""The volume mapper's two ways of getting the traced image into OpenGL, side by side.
+
+Run from the repository root, under Xvfb (VTK's OpenGL needs a display; llvmpipe here):
+
+    xvfb-run -a -s "-screen 0 1024x768x24" .venv/bin/python bench/composite.py [--quick]
+        [--volume fib25_64] [--size 512] [--frames 12] [--out DIR]
+
+Two off-screen windows of --size x --size pixels in one process, each with the same volume
+(../shared/data/<volume>.nrrd; --quick or without ../shared: a generated 64^3 volume) drawn by
+vtkSegmentationSVDAGVolumeMapper beside a mesh (a tilted slab through it, so the scene depth and
+the written depth are real work), one mapper with SharedMemory on, one with it off. Per frame: 1
+sample per pixel at voxel LOD, full resolution (AutoAdjustToRenderTime off), the camera turned by
+0.01 degrees so that every frame traces anew; the two windows take turns, frame by frame, so that
+both see the same machine. Measured per frame:
+
+  render_ms   wall time of vtkRenderWindow::Render() + WaitForCompletion() (the whole frame: the
+              mesh, the trace and the composite)
+  mapper_ms   the mapper's own time (GetLastFrameMilliseconds)
+  trace_ms    the Vulkan pass (GetLastTraceMilliseconds)
+  copy_ms     what the mapper spent moving depth and image between OpenGL, the host and Vulkan
+              (GetLastCopyMilliseconds: scene depth read and turned into ray limits, outputs read
+              back, written depth computed, depth and color uploaded and drawn)
+
+Prints the medians per path and the ratios shared / host; writes composite.csv (every frame) to
+--out (default build/bench). The two windows' final images are compared (they must be equal).
+"""
+from __future__ import annotations
+
+import argparse
+import csv
+import os
+import pathlib
+import statistics
+import sys
+import time
+
+import numpy as np
+
+REPO = pathlib.Path(__file__).resolve().parents[1]
+SHARED_DATA = pathlib.Path(os.environ.get("VTKSVDAG_SHARED_DATA") or REPO.parent / "shared" / "data")
+FIELDS = ["render_ms", "mapper_ms", "trace_ms", "copy_ms"]
+
+
+def generated_volume():
+    """64^3 uint16: nested boxes and a sphere of labels (no ../shared needed)."""
+    n = 64
+    z, y, x = np.mgrid[0:n, 0:n, 0:n]
+    labels = np.zeros((n, n, n), np.uint16)
+    labels[4:60, 6:58, 5:59] = 2
+    labels[20:40, 10:50, 20:40] = 9
+    labels[(x - 40) ** 2 + (y - 30) ** 2 + (z - 20) ** 2 < 15 ** 2] = 5
+    return labels
+
+
+def load_volume(name, quick):
+    import vtksvdag
+
+    path = SHARED_DATA / f"{name}.nrrd"
+    if quick or not path.exists():
+        return vtksvdag.from_numpy(generated_volume(), axis_order="zyx"), "generated 64^3"
+    return vtksvdag.read(str(path)), name
+
+
+def scene(volume, size, shared):
+    import vtkmodules.vtkRenderingOpenGL2  # noqa: F401 (the OpenGL factory overrides)
+    from vtkmodules.vtkFiltersSources import vtkCubeSource
+    from vtkmodules.vtkRenderingCore import (vtkActor, vtkPolyDataMapper, vtkRenderer,
+                                             vtkRenderWindow, vtkVolume)
+
+    from vtksvdag.vtkSVDAGRendering import vtkSegmentationSVDAGVolumeMapper
+
+    mapper = vtkSegmentationSVDAGVolumeMapper()
+    mapper.SetInputData(volume.dataobject)
+    mapper.SetSharedMemory(shared)
+    mapper.AutoAdjustToRenderTimeOff()
+    mapper.SetTargetSamplesPerPixel(1)
+    mapper.GetSettings().SetLODToVoxel()
+    mapper.GetSettings().SetSamplesPerPixel(1)
+    prop = vtkVolume()
+    prop.SetMapper(mapper)
+    renderer = vtkRenderer()
+    renderer.AddVolume(prop)
+    bounds = prop.GetBounds()
+    center = [(bounds[2 * a] + bounds[2 * a + 1]) / 2 for a in range(3)]
+    extent = max(bounds[2 * a + 1] - bounds[2 * a] for a in range(3))
+    slab = vtkCubeSource()
+    slab.SetXLength(1.5 * extent)
+    slab.SetYLength(0.05 * extent)
+    slab.SetZLength(1.5 * extent)
+    mesh = vtkPolyDataMapper()
+    mesh.SetInputConnection(slab.GetOutputPort())
+    actor = vtkActor()
+    actor.SetMapper(mesh)
+    actor.SetPosition(*center)
+    actor.RotateZ(30)
+    renderer.AddActor(actor)
+    window = vtkRenderWindow()
+    window.SetOffScreenRendering(1)
+    window.SetMultiSamples(0)
+    window.SetSize(size, size)
+    window.AddRenderer(renderer)
+    renderer.ResetCamera()
+    renderer.GetActiveCamera().Azimuth(30)
+    renderer.GetActiveCamera().Elevation(20)
+    renderer.ResetCameraClippingRange()
+    return window, renderer, mapper
+
+
+def frame(window, renderer, mapper):
+    renderer.GetActiveCamera().Azimuth(0.01)
+    start = time.perf_counter()
+    window.Render()
+    window.WaitForCompletion()
+    render_ms = (time.perf_counter() - start) * 1000
+    assert mapper.GetAccumulatedSamples() == 1 and mapper.GetLastReductionFactor() == 1
+    return {"render_ms": render_ms, "mapper_ms": mapper.GetLastFrameMilliseconds(),
+            "trace_ms": mapper.GetLastTraceMilliseconds(),
+            "copy_ms": mapper.GetLastCopyMilliseconds()}
+
+
+def pixels(window):
+    from vtkmodules.util.numpy_support import vtk_to_numpy
+    from vtkmodules.vtkRenderingCore import vtkWindowToImageFilter
+
+    grab = vtkWindowToImageFilter()
+    grab.SetInput(window)
+    grab.ReadFrontBufferOff()
+    grab.Update()
+    return vtk_to_numpy(grab.GetOutput().GetPointData().GetScalars()).copy()
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--quick", action="store_true", help="generated 64^3 volume, 3 frames")
+    parser.add_argument("--volume", default="fib25_64", help="a volume of ../shared/data")
+    parser.add_argument("--size", type=int, default=512, help="window width and height")
+    parser.add_argument("--frames", type=int, default=12, help="frames per path (after 2 warm-up)")
+    parser.add_argument("--out", default=str(REPO / "build" / "bench"), help="folder for the CSV")
+    args = parser.parse_args(argv)
+    frames = 3 if args.quick else args.frames
+
+    volume, name = load_volume(args.volume, args.quick)
+    paths = {}
+    for shared in (True, False):
+        window, renderer, mapper = scene(volume, args.size, shared)
+        paths["shared" if shared else "host"] = (window, renderer, mapper)
+    rows = []
+    for index in range(frames + 2):
+        for label, (window, renderer, mapper) in paths.items():
+            measured = frame(window, renderer, mapper)
+            if index >= 2:  # the first frames compile shaders and build the BVH
+                rows.append({"path": label, "composite_path": mapper.GetCompositePath(),
+                             "frame": index - 2, **measured})
+    # The same camera for both (each turned by the same angles): the same pixels.
+    same = np.array_equal(pixels(paths["shared"][0]), pixels(paths["host"][0]))
+
+    out = pathlib.Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    with open(out / "composite.csv", "w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=["path", "composite_path", "frame", *FIELDS])
+        writer.writeheader()
+        writer.writerows(rows)
+
+    medians = {label: {field: statistics.median(r[field] for r in rows if r["path"] == label)
+                       for field in FIELDS} for label in paths}
+    ran = {label: sorted({r["composite_path"] for r in rows if r["path"] == label})
+           for label in paths}
+    device = paths["host"][2].GetDeviceName()
+    print(f"volume {name}, {args.size}x{args.size}, 1 spp, voxel LOD, {frames} frames per path, "
+          f"device {device}")
+    print(f"{'path':<8} {'ran as':<16} " + " ".join(f"{f:>10}" for f in FIELDS) + "  copy share")
+    for label in paths:
+        m = medians[label]
+        print(f"{label:<8} {', '.join(ran[label]):<16} " +
+              " ".join(f"{m[f]:10.2f}" for f in FIELDS) +
+              f"  {m['copy_ms'] / m['mapper_ms']:10.1%}")
+    shared, host = medians["shared"], medians["host"]
+    print("shared / host: " + ", ".join(f"{f} {shared[f] / host[f]:.2f}x" for f in FIELDS))
+    print(f"images equal: {same}")
+    print(f"wrote {out / 'composite.csv'}")
+    return 0 if same else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
