@@ -12,6 +12,7 @@
 #include "vtkOpenGLCamera.h"
 #include "vtkOpenGLRenderWindow.h"
 #include "vtkRenderWindow.h"
+#include "vtkRenderWindowInteractor.h"
 #include "vtkRenderer.h"
 #include "vtkSegmentationSVDAG.h"
 #include "vtkSegmentationSVDAGLabelProperties.h"
@@ -686,10 +687,16 @@ void vtkSegmentationSVDAGVolumeMapper::Render(vtkRenderer* renderer, vtkVolume* 
     // drawn once: it is refined to the targets within this render.
     const int* tiles = window->GetTileScale();
     const bool tiled = tiles[0] > 1 || tiles[1] > 1;
+    // So is a still render with RefineStillRenders on (interactor styles lower the window's
+    // desired update rate to the interactor's still rate when the interaction ends).
+    vtkRenderWindowInteractor* interactor = window->GetInteractor();
+    const double stillRate = interactor ? interactor->GetStillUpdateRate() : 0.0001;
+    const bool still = window->GetDesiredUpdateRate() <= stillRate;
+    const bool finishNow = tiled || (this->RefineStillRenders && still);
     in.TraceMilliseconds = 0;
-    // A kept still view adds a pass when its time allows one (or a tile must be finished now),
-    // else shows what it has; any other frame traces unless it is refined at full quality.
-    const bool trace = keepAccumulated ? !refined() && (chosenFull || tiled)
+    // A kept still view adds a pass when its time allows one (or it must be finished now), else
+    // shows what it has; any other frame traces unless it is refined at full quality.
+    const bool trace = keepAccumulated ? !refined() && (chosenFull || finishNow)
                                        : !(sameFrame && in.FullQuality && refined());
     if (trace)
     {
@@ -704,7 +711,8 @@ void vtkSegmentationSVDAGVolumeMapper::Render(vtkRenderer* renderer, vtkVolume* 
         r.render();
         in.TraceMilliseconds += r.lastFrameMilliseconds();
         copyMilliseconds += r.lastReadbackMilliseconds();
-      } while (tiled && in.FullQuality && !refined());
+      } while (finishNow && in.FullQuality && !refined() &&
+        (tiled || std::chrono::duration<double>(Clock::now() - start).count() < this->RefineTimeLimit));
       in.Frame = std::move(frame.key);
     }
     const core::Image& image = r.image();
@@ -1019,6 +1027,8 @@ void vtkSegmentationSVDAGVolumeMapper::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "LastCopyMilliseconds: " << this->GetLastCopyMilliseconds() << "\n";
   os << indent << "AutoAdjustToRenderTime: " << this->AutoAdjustToRenderTime << "\n";
   os << indent << "TargetSamplesPerPixel: " << this->TargetSamplesPerPixel << "\n";
+  os << indent << "RefineStillRenders: " << this->RefineStillRenders << "\n";
+  os << indent << "RefineTimeLimit: " << this->RefineTimeLimit << "\n";
   os << indent << "ErrorTarget: " << this->ErrorTarget << "\n";
   os << indent << "Cropping: " << this->Cropping << "\n";
   os << indent << "CroppingRegionPlanes: " << this->CroppingRegionPlanes[0] << " "

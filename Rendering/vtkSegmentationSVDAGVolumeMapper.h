@@ -110,6 +110,20 @@ public:
    * TargetSamplesPerPixel). */
   vtkSetClampMacro(ErrorTarget, double, 0.0, VTK_DOUBLE_MAX);
   vtkGetMacro(ErrorTarget, double);
+  /** Refine a still render to the targets within that render (default off: each render adds one
+   * pass, and the application's timer or RenderUntilConverged refines, so that a window stays
+   * responsive). With it on, every still render (the window's DesiredUpdateRate at or below its
+   * interactor's StillUpdateRate, or 0.0001 without an interactor) returns the refined image, so
+   * what vtkWindowToImageFilter, vtkRegressionTestImage or a screenshot captures is refined;
+   * interactive renders still keep to their time. For off-screen windows and batch captures
+   * (vtksvdag.add_segmentation turns it on for off-screen plotters). A tile of a tiled capture
+   * (a vtkWindowToImageFilter scale above 1) is always refined within its render. */
+  vtkSetMacro(RefineStillRenders, bool);
+  vtkGetMacro(RefineStillRenders, bool);
+  vtkBooleanMacro(RefineStillRenders, bool);
+  /** Seconds a still render refines at most with RefineStillRenders (default 60). */
+  vtkSetClampMacro(RefineTimeLimit, double, 0.0, VTK_DOUBLE_MAX);
+  vtkGetMacro(RefineTimeLimit, double);
   ///@}
 
   ///@{
@@ -255,6 +269,8 @@ protected:
   bool AutoAdjustToRenderTime = true;
   int TargetSamplesPerPixel = 64;
   double ErrorTarget = 0.0;
+  bool RefineStillRenders = false;
+  double RefineTimeLimit = 60.0;
   vtkTypeBool Cropping = 0;
   double CroppingRegionPlanes[6] = { 0.0, 1.0, 0.0, 1.0, 0.0, 1.0 };
 

@@ -72,7 +72,10 @@ def scene(volume, size, shared):
 
     mapper = vtkSegmentationSVDAGVolumeMapper()
     mapper.SetInputData(volume.dataobject)
-    mapper.SetSharedMemory(shared)
+    if hasattr(mapper, "SetSharedMemory"):
+        mapper.SetSharedMemory(shared)
+    elif shared:
+        raise SystemExit("this build has no shared-memory path: run it with --paths host")
     mapper.AutoAdjustToRenderTimeOff()
     mapper.SetTargetSamplesPerPixel(1)
     mapper.GetSettings().SetLODToVoxel()
@@ -116,7 +119,8 @@ def frame(window, renderer, mapper):
     assert mapper.GetAccumulatedSamples() == 1 and mapper.GetLastReductionFactor() == 1
     return {"render_ms": render_ms, "mapper_ms": mapper.GetLastFrameMilliseconds(),
             "trace_ms": mapper.GetLastTraceMilliseconds(),
-            "copy_ms": mapper.GetLastCopyMilliseconds()}
+            # Builds before the shared path had no copy timing.
+            "copy_ms": getattr(mapper, "GetLastCopyMilliseconds", lambda: float("nan"))()}
 
 
 def pixels(window):
@@ -136,24 +140,26 @@ def main(argv=None) -> int:
     parser.add_argument("--volume", default="fib25_64", help="a volume of ../shared/data")
     parser.add_argument("--size", type=int, default=512, help="window width and height")
     parser.add_argument("--frames", type=int, default=12, help="frames per path (after 2 warm-up)")
+    parser.add_argument("--paths", nargs="+", default=["shared", "host"], choices=["shared", "host"],
+                        help="the paths to measure (an older build: host)")
     parser.add_argument("--out", default=str(REPO / "build" / "bench"), help="folder for the CSV")
     args = parser.parse_args(argv)
     frames = 3 if args.quick else args.frames
 
     volume, name = load_volume(args.volume, args.quick)
     paths = {}
-    for shared in (True, False):
-        window, renderer, mapper = scene(volume, args.size, shared)
-        paths["shared" if shared else "host"] = (window, renderer, mapper)
+    for label in args.paths:
+        paths[label] = scene(volume, args.size, label == "shared")
     rows = []
     for index in range(frames + 2):
         for label, (window, renderer, mapper) in paths.items():
             measured = frame(window, renderer, mapper)
             if index >= 2:  # the first frames compile shaders and build the BVH
-                rows.append({"path": label, "composite_path": mapper.GetCompositePath(),
+                ran_as = getattr(mapper, "GetCompositePath", lambda: "host")()
+                rows.append({"path": label, "composite_path": ran_as,
                              "frame": index - 2, **measured})
     # The same camera for both (each turned by the same angles): the same pixels.
-    same = np.array_equal(pixels(paths["shared"][0]), pixels(paths["host"][0]))
+    same = len(paths) < 2 or np.array_equal(pixels(paths["shared"][0]), pixels(paths["host"][0]))
 
     out = pathlib.Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -175,8 +181,9 @@ def main(argv=None) -> int:
         print(f"{label:<8} {', '.join(ran[label]):<16} " +
               " ".join(f"{m[f]:10.2f}" for f in FIELDS) +
               f"  {m['copy_ms'] / m['mapper_ms']:10.1%}")
-    shared, host = medians["shared"], medians["host"]
-    print("shared / host: " + ", ".join(f"{f} {shared[f] / host[f]:.2f}x" for f in FIELDS))
+    if len(paths) == 2:
+        shared, host = medians["shared"], medians["host"]
+        print("shared / host: " + ", ".join(f"{f} {shared[f] / host[f]:.2f}x" for f in FIELDS))
     print(f"images equal: {same}")
     print(f"wrote {out / 'composite.csv'}")
     return 0 if same else 1

@@ -468,7 +468,11 @@ def add_segmentation(
         # Not `not renderer.actors`: pyvista puts a border actor in every subplot.
         reset_camera = not plotter.renderer.camera_set
     plotter.add_actor(actor, name=name, reset_camera=bool(reset_camera))
+    # Nobody watches an off-screen plotter's frames: each still render is refined to spp before
+    # it returns, so show(), screenshot() and VTK's window capture see the refined image.
+    mapper.SetRefineStillRenders(bool(getattr(plotter, "off_screen", False)))
     _enable_refinement(plotter)
+    _refine_before_screenshots(plotter)
     return actor
 
 
@@ -538,6 +542,29 @@ def _enable_refinement(plotter):
 
     plotter.iren.interactor.AddObserver("TimerEvent", on_timer)
     plotter.add_on_render_callback(on_render, render_event=False)
+
+
+def _refine_before_screenshots(plotter):
+    """Make ``plotter.screenshot()`` (which ``show(screenshot=...)`` and pyvista's closing capture
+    call) refine every segmentation first: an on-screen plotter refines progressively while it is
+    shown, and a capture after it was shown would otherwise keep what it had reached.
+
+    pyvista has no hook before a capture, so the plotter's ``screenshot`` is wrapped, once.
+    """
+    if getattr(plotter, "_vtksvdag_screenshot_refines", False):
+        return
+    plotter._vtksvdag_screenshot_refines = True
+    capture = plotter.screenshot
+
+    @functools.wraps(capture)
+    def screenshot(*args, **kwargs):
+        # Before the first render pyvista renders itself (and placed the camera only then); a
+        # closed plotter returns its last image.
+        if plotter.render_window is not None and not getattr(plotter, "_first_time", True):
+            refine(plotter)
+        return capture(*args, **kwargs)
+
+    plotter.screenshot = screenshot
 
 
 def refine(plotter, timeout=60.0):
