@@ -3,6 +3,7 @@
 #include "vtkAlgorithm.h"
 #include "vtkCallbackCommand.h"
 #include "vtkDataArray.h"
+#include "vtkDataCompressor.h"
 #include "vtkDataObject.h"
 #include "vtkDataSetAttributes.h"
 #include "vtkErrorCode.h"
@@ -11,10 +12,13 @@
 #include "vtkPointData.h"
 #include "vtkSegmentationSVDAG.h"
 #include "vtkStreamingDemandDrivenPipeline.h"
+#include "vtkXMLDataParser.h"
+#include "vtkXMLReader.h"
 
 #include <algorithm>
 #include <cstring>
 #include <utility>
+#include <vector>
 
 namespace
 {
@@ -48,7 +52,39 @@ struct svdagVTKImageSlabSource::Impl
 
   // Throws the error the wrapped reader reported since the last call, if any.
   void throwReaderError(const char* during);
+
+  // The VTK objects that report a read's failures: the reader, its executive and, for VTK's XML
+  // readers, the XML parser and the compressor the reader gives it while reading the header.
+  // vtkErrorMacro prints only when nothing observes the ErrorEvent: observed, the first error
+  // is folded into the project's message instead of printed before it.
+  std::vector<vtkObject*> reporters() const;
+  // Observes the reporters not observed yet (the parser and compressor exist only once the
+  // reader has read the header, and a new header read replaces them).
+  void observeReporters();
 };
+
+std::vector<vtkObject*> svdagVTKImageSlabSource::Impl::reporters() const
+{
+  std::vector<vtkObject*> objects{ this->reader, this->reader->GetExecutive() };
+  vtkXMLReader* xml = vtkXMLReader::SafeDownCast(this->reader);
+  vtkXMLDataParser* parser = xml ? xml->GetXMLParser() : nullptr;
+  if (parser)
+  {
+    objects.push_back(parser);
+    if (parser->GetCompressor())
+      objects.push_back(parser->GetCompressor());
+  }
+  return objects;
+}
+
+void svdagVTKImageSlabSource::Impl::observeReporters()
+{
+  for (vtkObject* object : this->reporters())
+  {
+    if (!object->HasObserver(vtkCommand::ErrorEvent, this->errorObserver))
+      object->AddObserver(vtkCommand::ErrorEvent, this->errorObserver);
+  }
+}
 
 svdagVTKImageSlabSource::svdagVTKImageSlabSource(
   vtkSmartPointer<vtkAlgorithm> reader, const std::string& fileName)
@@ -59,15 +95,21 @@ svdagVTKImageSlabSource::svdagVTKImageSlabSource(
   impl->errorObserver = vtkSmartPointer<vtkCallbackCommand>::New();
   impl->errorObserver->SetCallback(storeErrorText);
   impl->errorObserver->SetClientData(&impl->errorText);
-  impl->reader->AddObserver(vtkCommand::ErrorEvent, impl->errorObserver);
-  // The executive reports the reader's failures on itself, as errors too.
-  impl->reader->GetExecutive()->AddObserver(vtkCommand::ErrorEvent, impl->errorObserver);
+  // The reader and its executive, which reports the reader's failures on itself as errors too.
+  impl->observeReporters();
+  // The XML parser is created inside the header read, where its errors (malformed XML) arise:
+  // the reader hands it this observer as it creates it.
+  if (vtkXMLReader* xml = vtkXMLReader::SafeDownCast(impl->reader))
+    xml->SetParserErrorObserver(impl->errorObserver);
 }
 
 svdagVTKImageSlabSource::~svdagVTKImageSlabSource()
 {
-  impl->reader->GetExecutive()->RemoveObserver(impl->errorObserver);
-  impl->reader->RemoveObserver(impl->errorObserver);
+  // The observer's client data dies with impl: nothing may call it afterwards.
+  if (vtkXMLReader* xml = vtkXMLReader::SafeDownCast(impl->reader))
+    xml->SetParserErrorObserver(nullptr);
+  for (vtkObject* object : impl->reporters())
+    object->RemoveObserver(impl->errorObserver);
 }
 
 void svdagVTKImageSlabSource::Impl::throwReaderError(const char* during)
@@ -88,6 +130,7 @@ void svdagVTKImageSlabSource::Impl::throwReaderError(const char* during)
 void svdagVTKImageSlabSource::open()
 {
   impl->reader->UpdateInformation();
+  impl->observeReporters();
   impl->throwReaderError("cannot read the header");
   vtkInformation* info = impl->reader->GetOutputInformation(0);
   if (!info || !info->Has(vtkStreamingDemandDrivenPipeline::WHOLE_EXTENT()))
@@ -151,6 +194,7 @@ void svdagVTKImageSlabSource::readSlab(int32_t z0, int32_t nz, void* dst)
   this->checkSlab(z0, nz);
   const int* whole = impl->wholeExtent;
   int update[6] = { whole[0], whole[1], whole[2], whole[3], whole[4] + z0, whole[4] + z0 + nz - 1 };
+  impl->observeReporters();
   impl->reader->UpdateExtent(update);
   impl->throwReaderError("cannot read the voxels");
 

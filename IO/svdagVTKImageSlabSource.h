@@ -1,7 +1,8 @@
 // Common part of the sources that read through a VTK image reader (today vtkXMLImageDataReader): geometry and scalar type from the reader's
 // information pass, then one update per slab with an update extent covering that slab's slices.
-// The wrapped reader's errors are caught with an ErrorEvent observer and rethrown as
-// svdagReadError, so they reach the user through vtkSegmentationVolumeReader.
+// The wrapped reader's errors (and those of its executive, XML parser and compressor) are caught
+// with an ErrorEvent observer and rethrown as svdagReadError, so they reach the user through
+// vtkSegmentationVolumeReader as one message, not also as VTK's own log lines.
 #ifndef svdagVTKImageSlabSource_h
 #define svdagVTKImageSlabSource_h
 

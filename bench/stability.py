@@ -6,6 +6,7 @@ build-asan/sanitize-summary.txt ("not run" where absent), and the date and machi
 
     xvfb-run -a .venv/bin/python bench/stability.py            # the cases pytest runs
     xvfb-run -a .venv/bin/python bench/stability.py --large    # also the DAG > 128 MiB case
+    .venv/bin/python bench/stability.py --fuzz-only            # only the fuzzing section
 Exit status 1 when a case failed.
 """
 import argparse
@@ -15,6 +16,7 @@ import math
 import os
 import pathlib
 import platform
+import re
 import sys
 import time
 
@@ -62,9 +64,33 @@ def machine():
             f"{platform.release()}, Python {platform.python_version()}, Vulkan device: {device}")
 
 
-def fuzz_section():
+def replay_outcome(path):
+    """What reading a regression input does now: its target's replay (a clean refusal or a
+    right volume passes), as 'refused: <message>', 'read exactly' or 'FAILS: ...'."""
+    import subprocess
+    import tempfile
+
+    target = path.name.split("--")[0]
+    with tempfile.TemporaryDirectory() as work:
+        result = subprocess.run(
+            [sys.executable, str(REPO / "Testing" / "fuzz" / "fuzz_readers.py"), "--target", target,
+             "--workdir", work, "--replay", str(path)], capture_output=True, text=True, timeout=300)
+    if result.returncode != 0:
+        return "**FAILS**: " + (result.stderr.strip().splitlines() or ["no output"])[-1]
+    stats = json.loads(result.stdout.strip().splitlines()[-1])
+    if stats.get("rejected"):
+        # The harness reads a copy in its work folder: the message names that path.
+        message = re.sub(r"Cannot read \S+: ", "", stats.get("last_rejection", ""))
+        return "refused: " + message.replace("|", "/")
+    return "read exactly" if stats.get("accepted_exact_checked") else "read, consistent"
+
+
+def fuzz_section(summary=REPO / "bench" / "out" / "fuzz" / "summary.json",
+                 sanitize=REPO / "build-asan" / "sanitize-summary.txt"):
+    sys.path.insert(0, str(REPO / "Testing" / "fuzz"))
+    from fuzz_readers import GENERATORS, TARGETS
+
     lines = ["## Fuzzing and sanitizers", ""]
-    summary = REPO / "bench" / "out" / "fuzz" / "summary.json"
     lines.append("### Fuzzing (`bench/out/fuzz/summary.json`, written by `scripts/fuzz.sh`)")
     lines.append("")
     if summary.is_file():
@@ -82,17 +108,28 @@ def fuzz_section():
             total = sum(r.get("inputs", 0) for r in runs)
             found = sum(len(r.get("findings", [])) for r in runs)
             lines += ["", f"{total:,} inputs, {found} findings."]
+            missing = [t for t in TARGETS if t not in {r.get("target") for r in runs}]
+            if missing:
+                lines += ["", "Targets this campaign did not run (added since): "
+                          + ", ".join(f"`{t}`" for t in missing) + "."]
         else:
             lines += ["```", summary.read_text().strip(), "```"]
     else:
         lines.append("not run")
-    crashes = sorted((REPO / "Testing" / "fuzz" / "crashes").glob("*"))
+    lines += ["", "Generator targets: their inputs carry one kind of damage, made by a custom "
+              "mutator (`Testing/fuzz/README.md`):", ""]
+    # Each generator's docstring up to its parenthesis says what it damages.
+    lines += [f"- `{t}`: {' '.join(g.__doc__.split('(')[0].split())}."
+              for t, g in GENERATORS.items()]
+    crashes = sorted(p for p in (REPO / "Testing" / "fuzz" / "crashes").glob("*")
+                     if p.is_file() and p.name != "README.md")
     if crashes:
         lines += ["", "Every input the fuzzer ever found, kept in `Testing/fuzz/crashes/` and replayed by "
-                  "`Testing/Python/test_fuzz.py` (each must now be refused cleanly):", ""]
-        lines += [f"- `{c.name}`" for c in crashes]
+                  "`Testing/Python/test_fuzz.py` (each must be refused cleanly or read exactly), "
+                  "and what reading it does now:", "",
+                  "| input | now |", "|---|---|"]
+        lines += [f"| `{c.name}` | {replay_outcome(c)} |" for c in crashes]
     lines.append("")
-    sanitize = REPO / "build-asan" / "sanitize-summary.txt"
     lines.append("### Sanitizers (`build-asan/sanitize-summary.txt`, written by "
                  "`scripts/sanitize.sh`)")
     lines.append("")
@@ -104,13 +141,29 @@ def fuzz_section():
     return lines
 
 
+def rewrite_fuzz_section(path, section):
+    """Replaces the fuzzing and sanitizer section of an existing stability.md by `section`
+    (fuzz_section's lines), keeping the cases and their run line as they were measured."""
+    text = path.read_text()
+    begin = text.index("## Fuzzing and sanitizers")
+    end = text.index("## Run", begin)
+    path.write_text(text[:begin] + "\n".join(section) + "\n" + text[end:])
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--large", action="store_true",
                         help="also run the large cases (a DAG buffer over 128 MiB: ~1024^3 voxels)")
     parser.add_argument("--out", type=pathlib.Path, default=REPO / "docs" / "stability.md")
     parser.add_argument("-k", default="", help="only cases whose name contains this")
+    parser.add_argument("--fuzz-only", action="store_true",
+                        help="rewrite only the fuzzing and sanitizer section of --out (after a "
+                        "campaign, or new regression inputs), without running the cases")
     args = parser.parse_args(argv)
+    if args.fuzz_only:
+        rewrite_fuzz_section(args.out, fuzz_section())
+        print(f"wrote the fuzzing section of {args.out}")
+        return 0
     cases = extreme_cases.CASES + (extreme_cases.LARGE_CASES if args.large else [])
     cases = [c for c in cases if args.k in c.case_name]
     rows = []

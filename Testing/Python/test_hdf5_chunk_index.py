@@ -6,7 +6,8 @@ Every read must then raise, or return exactly the original voxels. Chunks that w
 written are legitimate: they read as the dataset's fill value (as h5py reads them), with a
 warning that says so.
 """
-import struct
+import pathlib
+import sys
 import warnings
 
 import h5py
@@ -15,10 +16,13 @@ import pytest
 
 import vtksvdag
 
+# The B-tree layout is the fuzzing harness's (its h5_chunk_index target damages the same bytes).
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / "fuzz"))
+from fuzz_readers import H5_CHUNK_ENTRY_BYTES as ENTRY_BYTES  # noqa: E402
+from fuzz_readers import chunk_btree as find_chunk_btree  # noqa: E402
+
 SHAPE_ZYX = (16, 16, 16)
 CHUNKS = (4, 8, 8)
-KEY_BYTES = 4 + 4 + 8 * (len(SHAPE_ZYX) + 1)  # chunk size, filter mask, offsets (+ element)
-ENTRY_BYTES = KEY_BYTES + 8                  # a key and its child's address
 
 
 def labels_zyx():
@@ -42,14 +46,10 @@ def write_chunked(path, data, fill=None, write=True):
 
 
 def chunk_btree(raw):
-    """Offset of the raw-data-chunk B-tree node (type 1) and its number of entries."""
-    at = raw.find(b"TREE")
-    while at >= 0:
-        node_type, level, entries = struct.unpack_from("<BBH", raw, at + 4)
-        if node_type == 1 and level == 0:
-            return at, entries
-        at = raw.find(b"TREE", at + 4)
-    raise AssertionError("no chunk B-tree leaf in the file")
+    """Offset of the raw-data-chunk B-tree leaf and its number of entries."""
+    found = find_chunk_btree(raw)
+    assert found is not None, "no chunk B-tree leaf in the file"
+    return found
 
 
 def test_intact_file_reads_exactly(tmp_path):

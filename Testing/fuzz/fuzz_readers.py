@@ -29,6 +29,7 @@ Usage::
     fuzz_readers.py --list
     fuzz_readers.py --target nrrd_gzip --workdir /tmp/fz [libFuzzer flags: -max_total_time=10 ...]
     fuzz_readers.py --target svdag --workdir /tmp/fz --replay FILE [FILE ...]
+    fuzz_readers.py --write-regressions Testing/fuzz/crashes
 
 ``--replay`` runs the given inputs once each (no atheris needed) and exits 0 when each was
 accepted correctly or rejected cleanly. ``<workdir>/stats/<target>.json`` holds the counts
@@ -229,16 +230,153 @@ def _vti_bytes(zyx, raw):
         return pathlib.Path(path).read_bytes()
 
 
+def _vti_base64_bytes(zyx, compressor="None", mode="Binary"):
+    """VTI with its scalars as base64 text: inline (``Binary``) or in a base64 AppendedData."""
+    import tempfile
+
+    from vtkmodules.vtkIOXML import vtkXMLImageDataWriter
+
+    writer = vtkXMLImageDataWriter()
+    writer.SetInputData(_image(zyx))
+    getattr(writer, f"SetDataModeTo{mode}")()
+    getattr(writer, f"SetCompressorTypeTo{compressor}")()
+    with tempfile.TemporaryDirectory() as tmp:
+        path = os.path.join(tmp, "s.vti")
+        writer.SetFileName(path)
+        writer.Write()
+        return pathlib.Path(path).read_bytes()
+
+
+def _h5_chunked_bytes(zyx, chunks):
+    """A gzip-chunked int32 dataset, every chunk written (h5py's default, earliest format: the
+    chunk index is a version-1 B-tree)."""
+    import h5py
+
+    buffer = io.BytesIO()
+    with h5py.File(buffer, "w") as f:
+        f.create_dataset("labels", data=zyx.astype(np.int32), chunks=chunks, compression="gzip")
+    return buffer.getvalue()
+
+
+# ------------------------------------------------------------------ generators of one damage
+# Issue 24: two inputs that read as silently wrong volumes, which the whole-file mutations above
+# did not find (a VTI target only had to be consistent; HDF5 lost track of chunks and read fill
+# values). Each target below draws its inputs from a generator of that one kind of damage (a
+# custom mutator, sometimes after libFuzzer's own mutation) and judges an accepted input by what
+# the damage implies, whoever made it (so a saved input replays alike).
+
+BASE64_ALPHABET = frozenset(b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/=")
+XML_SPACE = frozenset(b" \t\r\n")
+# Neither base64, '=', XML white space nor '<' (which would end the text instead).
+NOT_BASE64 = b"!\"#$%&'()*,-.:;?@[\\]^_`{|}~\x00\x01\x7f\x80\xc3\xe9\xff"
+
+
+def base64_texts(data):
+    """(begin, end) of every base64 text VTK decodes in a VTI file: each inline binary
+    DataArray's text and a base64 AppendedData section after its '_', without the white space
+    around them."""
+    import re
+
+    spans = []
+    for match in re.finditer(rb"<DataArray[^>]* format=\"binary\"[^>]*>", data):
+        spans.append((match.end(), data.find(b"<", match.end())))
+    match = re.search(rb"<AppendedData[^>]* encoding=\"base64\"[^>]*>\s*_", data)
+    if match:
+        spans.append((match.end(), data.find(b"<", match.end())))
+    out = []
+    for begin, end in spans:
+        end = len(data) if end < 0 else end
+        while begin < end and data[begin] in XML_SPACE:
+            begin += 1
+        while end > begin and data[end - 1] in XML_SPACE:
+            end -= 1
+        if begin < end:
+            out.append((begin, end))
+    return out
+
+
+def first_invalid_base64(data):
+    """Byte offset of the first character in a VTI file's base64 text that is neither base64,
+    '=' nor white space, or None. Such a file must be refused: VTK's decoder stops there without
+    an error and leaves the rest of the array 0."""
+    for begin, end in base64_texts(data):
+        for i in range(begin, end):
+            if data[i] not in BASE64_ALPHABET and data[i] not in XML_SPACE:
+                return i
+    return None
+
+
+def inject_invalid_base64(data, rng):
+    """Inserts or overwrites 1-3 characters that are not base64 inside a VTI file's base64 text
+    (unchanged when it has none)."""
+    for _ in range(rng.randint(1, 3)):
+        spans = base64_texts(data)
+        if not spans:
+            return data
+        begin, end = rng.choice(spans)
+        at = rng.randrange(begin, end)
+        char = NOT_BASE64[rng.randrange(len(NOT_BASE64))]
+        keep = 0 if rng.random() < 0.5 else 1  # insert, or overwrite the character there
+        data = data[:at] + bytes([char]) + data[at + keep:]
+    return data
+
+
+H5_CHUNK_KEY_BYTES = 4 + 4 + 8 * 4  # chunk size, filter mask, 3 offsets and the element's
+H5_CHUNK_ENTRY_BYTES = H5_CHUNK_KEY_BYTES + 8  # a key and its child's address
+
+
+def chunk_btree(raw):
+    """(offset, entries) of the first leaf node of an HDF5 file's raw-data-chunk B-tree
+    (version 1, node type 1, level 0) for rank-3 datasets; None when there is none."""
+    import struct
+
+    at = raw.find(b"TREE")
+    while 0 <= at <= len(raw) - 8:
+        node_type, level, entries = struct.unpack_from("<BBH", raw, at + 4)
+        if node_type == 1 and level == 0:
+            return at, entries
+        at = raw.find(b"TREE", at + 4)
+    return None
+
+
+def chunk_index_span(raw):
+    """(begin, end): the keys and child addresses of the chunk B-tree leaf; None without one.
+    Bytes there only locate the chunks: with every chunk written, damage there can make a file
+    unreadable but never hold other voxels."""
+    found = chunk_btree(raw)
+    if found is None:
+        return None
+    node, entries = found
+    begin = node + 24  # signature, type, level, entries used, two sibling addresses
+    return begin, min(len(raw), begin + entries * H5_CHUNK_ENTRY_BYTES + H5_CHUNK_KEY_BYTES)
+
+
+def flip_chunk_index(data, rng):
+    """XORs 1-2 bytes of the chunk B-tree's keys and child addresses with random non-zero
+    values (unchanged when the file has no such B-tree)."""
+    span = chunk_index_span(data)
+    if span is None or span[0] >= span[1]:
+        return data
+    data = bytearray(data)
+    for _ in range(rng.randint(1, 2)):
+        data[rng.randrange(*span)] ^= rng.randrange(1, 256)
+    return bytes(data)
+
+
 class Seed:
     """One valid input of a target: its bytes, the volume it holds (z, y, x), how to check."""
 
-    def __init__(self, data, zyx, header_len=None, body_dtype=None, exact=False, companions=None):
+    def __init__(self, data, zyx, header_len=None, body_dtype=None, exact=False, companions=None,
+                 index_span=None):
         self.data = data
         self.zyx = zyx
         self.header_len = header_len  # bytes not covered by a checksum / before the raw body
         self.body_dtype = body_dtype  # raw body: what the bytes after header_len must decode to
         self.exact = exact  # checksummed: an accepted file holds exactly zyx
         self.companions = companions or {}  # file name -> bytes, written once beside the input
+        # (begin, end) of bytes that only locate the data (a chunk index): an accepted file
+        # equal to this seed outside them holds exactly zyx
+        self.index_span = index_span
 
 
 def _seeds_nrrd_raw(v):
@@ -316,6 +454,22 @@ def _seeds_vti_raw(v):
     return [Seed(_vti_bytes(z, True), z) for z in v.values()]
 
 
+def _seeds_vti_base64(v):
+    out = [Seed(_vti_base64_bytes(z), z) for z in v.values()]
+    out.append(Seed(_vti_base64_bytes(v["b"], "ZLib"), v["b"]))
+    out.append(Seed(_vti_base64_bytes(v["b"], "None", "Appended"), v["b"]))
+    return out
+
+
+def _seeds_h5_chunk_index(v):
+    out = []
+    for name, chunks in (("a", (2, 4, 4)), ("b", (4, 8, 2))):
+        z = v[name].astype(np.int32)
+        data = _h5_chunked_bytes(z, chunks)
+        out.append(Seed(data, z, index_span=chunk_index_span(data)))
+    return out
+
+
 def _seeds_svdag(v):
     return [Seed(_svdag_bytes(z), z, exact=True) for z in v.values()]
 
@@ -341,7 +495,31 @@ TARGETS = {
     "h5": (_seeds_h5, "in.h5", None),
     "vti": (_seeds_vti, "in.vti", None),
     "vti_raw": (_seeds_vti_raw, "in.vti", None),
+    "vti_base64": (_seeds_vti_base64, "in.vti", None),
+    "h5_chunk_index": (_seeds_h5_chunk_index, "in.h5", None),
 }
+
+# target -> the generator of its damage, mutate(data, random.Random) -> bytes
+GENERATORS = {"vti_base64": inject_invalid_base64, "h5_chunk_index": flip_chunk_index}
+
+
+def regression_inputs():
+    """The two inputs of issue 24, rebuilt deterministically from the seeds:
+    {file name in crashes/: bytes}. Both read as silently wrong volumes before the fix."""
+    volumes = seed_volumes()
+    vti = _vti_base64_bytes(volumes["a"])  # inline binary, uncompressed, uint8
+    begin, end = base64_texts(vti)[0]
+    at = begin + (end - begin) // 3
+    vti = vti[:at] + b"!" + vti[at + 1:]
+    h5 = bytearray(_h5_chunked_bytes(volumes["b"].astype(np.int32), (4, 8, 2)))
+    node, _ = chunk_btree(h5)
+    key = node + 24 + 5 * H5_CHUNK_ENTRY_BYTES  # the 6th chunk's key: its first offset (z)
+    h5[key + 8] ^= 0x5A
+    h5[key + 9] ^= 0x01
+    return {
+        "vti_base64--invalid-character-in-inline-base64-read-as-zeros.vti": vti,
+        "h5_chunk_index--two-corrupt-btree-key-bytes-read-as-fill-value.h5": bytes(h5),
+    }
 
 
 def write_seed_corpus(target, directory):
@@ -410,8 +588,9 @@ class Harness:
         self.path.write_bytes(data)
         try:
             volume = self.vtksvdag.read(self.path)
-        except CLEAN_ERRORS:
+        except CLEAN_ERRORS as error:
             self.stats["rejected"] += 1
+            self.stats["last_rejection"] = f"{type(error).__name__}: {error}"  # for reports
             self.write_stats()
             return
         self.stats["accepted"] += 1
@@ -426,6 +605,16 @@ class Harness:
         for seed in self.seeds:
             if data == seed.data:
                 return seed.zyx, "seed"
+        if self.target == "vti_base64":
+            bad = first_invalid_base64(data)
+            if bad is not None:
+                raise SilentWrongVolume(f"{self.target}: accepted a file with a character that "
+                                        f"is not base64 at byte offset {bad}")
+        for seed in self.seeds:
+            span = seed.index_span
+            if span and len(data) == len(seed.data) and data[:span[0]] == seed.data[:span[0]] \
+                    and data[span[1]:] == seed.data[span[1]:]:
+                return seed.zyx, "damaged chunk index"
         for seed in self.seeds:
             if seed.exact and seed.header_len is None:
                 continue
@@ -503,9 +692,15 @@ def main(argv=None):
     parser.add_argument("--list", action="store_true")
     parser.add_argument("--write-seeds", metavar="DIR", help="write the seed corpus and exit")
     parser.add_argument("--replay", nargs="+", metavar="FILE")
+    parser.add_argument("--write-regressions", metavar="DIR",
+                        help="write the generated regression inputs (regression_inputs) and exit")
     args, rest = parser.parse_known_args(argv[1:])
     if args.list:
         print("\n".join(TARGETS))
+        return 0
+    if args.write_regressions:
+        for name, data in regression_inputs().items():
+            (pathlib.Path(args.write_regressions) / name).write_bytes(data)
         return 0
     if not args.target:
         parser.error("--target is required")
@@ -539,17 +734,26 @@ def main(argv=None):
     # symbols shadow libFuzzer's: no input ever adds coverage, the corpus collapses to one empty
     # input and the seeds are dropped. Then every input is a mutation of a seed (or of an input
     # that was accepted), by libFuzzer's own mutator.
-    if "libasan" in os.environ.get("LD_PRELOAD", "") or os.environ.get("VTKSVDAG_FUZZ_SEED_MUTATOR"):
+    pooled = ("libasan" in os.environ.get("LD_PRELOAD", "")
+              or os.environ.get("VTKSVDAG_FUZZ_SEED_MUTATOR"))
+    generator = GENERATORS.get(args.target)
+    if pooled or generator:
         import random
 
         pool = [s.data for s in harness.seeds]
 
         def mutate(data, max_size, seed):
             rng = random.Random(seed)
-            data = rng.choice(pool)
-            for _ in range(rng.randint(1, 4)):
-                data = atheris.Mutate(data, max_size)
-            return data
+            if pooled:
+                data = rng.choice(pool)
+            # A generator target's inputs carry its damage, now and then on top of libFuzzer's
+            # own mutations (so that the readers' other checks meet it too).
+            if generator is None or rng.random() < 0.25:
+                for _ in range(rng.randint(1, 4)):
+                    data = atheris.Mutate(data, max_size)
+            if generator is not None:
+                data = generator(bytes(data), rng)
+            return data[:max_size]
 
         def test_pooled(data):
             before = harness.stats["accepted"]
@@ -557,7 +761,8 @@ def main(argv=None):
             if harness.stats["accepted"] > before and len(pool) < 256:
                 pool.append(bytes(data))
 
-        atheris.Setup([argv[0]] + rest, test_pooled, custom_mutator=mutate)
+        atheris.Setup([argv[0]] + rest, test_pooled if pooled else test_one_input,
+                      custom_mutator=mutate)
     else:
         atheris.Setup([argv[0]] + rest, test_one_input)
     atheris.Fuzz()
