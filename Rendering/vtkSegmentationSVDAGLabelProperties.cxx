@@ -93,6 +93,11 @@ bool vtkSegmentationSVDAGLabelProperties::GetColor(vtkTypeInt64 label, double rg
   return true;
 }
 
+double* vtkSegmentationSVDAGLabelProperties::GetColor(vtkTypeInt64 label)
+{
+  return this->GetColor(label, this->ColorReturned) ? this->ColorReturned : nullptr;
+}
+
 void vtkSegmentationSVDAGLabelProperties::RemoveColor(vtkTypeInt64 label)
 {
   Appearance* a = this->Internal->find(label);
@@ -353,6 +358,37 @@ bool vtkSegmentationSVDAGLabelProperties::GetMaterial(
   for (int p = 0; p < 4; ++p)
     for (int c = 0; c < 4; ++c)
       material[4 * p + c] = double((*parts[p])[c]);
+  return true;
+}
+
+bool vtkSegmentationSVDAGLabelProperties::GetDisplayColor(
+  vtkSegmentationSVDAG* volume, vtkTypeInt64 label, double rgb[3])
+{
+  if (!volume || !volume->HasVolume())
+    return false;
+  const svdag::Volume& v = *volume->GetVolume();
+  const int64_t index = v.findLabel(uint64_t(label));
+  if (index < 0)
+    return false;
+  // The precedence of MaterialsFor, without its highlight dimming and the linear conversion
+  // (one label: MaterialsFor builds the whole table).
+  if (this->GetColor(label, rgb))
+    return true;
+  if (this->Internal->Table)
+  {
+    const uint64_t pattern = uint64_t(label);
+    const double value = svdag::scalarSigned(v.scalarType) ? double(label) : double(pattern);
+    const double* c = this->Internal->Table->GetColor(value);
+    std::copy(c, c + 3, rgb);
+    return true;
+  }
+  const glm::vec4 linear = svdag::render::Renderer::defaultMaterial(uint32_t(index)).baseColorVisibility;
+  for (int c = 0; c < 3; ++c)
+  {
+    // linear -> sRGB display value, the inverse of linearFromSrgb.
+    const double l = clampTo(double(linear[c]), 0.0, 1.0);
+    rgb[c] = l <= 0.0031308 ? 12.92 * l : 1.055 * std::pow(l, 1.0 / 2.4) - 0.055;
+  }
   return true;
 }
 

@@ -72,6 +72,14 @@ public:
   void SetColor(vtkTypeInt64 label, double r, double g, double b);
   /** Whether a color was set for the label; GetColor returns it (else false, rgb untouched). */
   bool GetColor(vtkTypeInt64 label, double rgb[3]);
+  /** The color set for the label (3 values, valid until the next call), or nullptr (None in
+   * Python) when none was set. The form wrappers can return: `props.GetColor(17)` in Python. */
+  double* GetColor(vtkTypeInt64 label) VTK_SIZEHINT(3);
+  /** The display (sRGB) color `label` is drawn with in `volume`: SetColor's, else the lookup
+   * table's, else the default color of its label index; before the highlight's dimming. False
+   * (rgb untouched) when the volume does not hold the label. What legends and label tables
+   * show. */
+  bool GetDisplayColor(vtkSegmentationSVDAG* volume, vtkTypeInt64 label, double rgb[3]);
   /** Forgets the label's color only: the lookup table or the hash colors it again. */
   void RemoveColor(vtkTypeInt64 label);
   void SetOpacity(vtkTypeInt64 label, double opacity);
@@ -163,6 +171,7 @@ protected:
   double HighlightIntensity = 1.0;
   double DimOthers = 1.0;
   double OthersOpacity = 1.0;
+  double ColorReturned[3] = { 0.0, 0.0, 0.0 }; // what GetColor(label) points to
 
 private:
   vtkSegmentationSVDAGLabelProperties(const vtkSegmentationSVDAGLabelProperties&) = delete;

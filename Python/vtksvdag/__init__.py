@@ -29,9 +29,21 @@ from .slicing import add_segmentation_slice  # noqa: E402
 from .streaming import Builder  # noqa: E402
 from .volume import SegmentationVolume  # noqa: E402
 
+
+
+def __getattr__(name):
+    # The legend module imports pyvista; the rest of the package works without it.
+    if name == "add_label_legend":
+        from .legend import add_label_legend
+
+        return add_label_legend
+    raise AttributeError(f"module 'vtksvdag' has no attribute {name!r}")
+
+
 __all__ = [
     "Builder",
     "SegmentationVolume",
+    "add_label_legend",
     "add_segmentation",
     "add_segmentation_slice",
     "build_distributed",

@@ -50,7 +50,11 @@ def _colormap(cmap, categorical, n_categories=0):
         try:
             return matplotlib.colormaps[cmap]
         except KeyError:
-            raise ValueError(f"unknown colormap {cmap!r}") from None
+            from ._options import close_names
+
+            raise ValueError(f"cmap {cmap!r}: unknown colormap{close_names(cmap, matplotlib.colormaps)}"
+                             f"; the names are those of matplotlib.colormaps, e.g. 'tab20' or "
+                             f"'viridis'") from None
     if callable(cmap):
         return cmap
     raise TypeError(f"cmap must be a matplotlib colormap or its name, not {type(cmap).__name__}")
@@ -186,7 +190,22 @@ class LabelStyle:
             props.SetColor(key, *color)
         self.color_column = column
 
+    def set_color(self, value, rgb):
+        """One label's color, kept like add_segmentation's ``colors`` (it wins over columns)."""
+        key = self.key(value)
+        self._explicit[key] = tuple(rgb)
+        self.props.SetColor(key, *rgb)
+
     # -- visibility -----------------------------------------------------------------------
+    def set_hidden(self, values, hidden):
+        """Hide labels (kept hidden through queries, as ``hidden_labels``), or show them (the
+        query in effect is not applied again to them; the next set_query is)."""
+        keys = [self.key(v) for v in values]
+        for key in keys:
+            (self._hidden.add if hidden else self._hidden.discard)(key)
+            if bool(self.props.GetVisibility(key)) == hidden:
+                self.props.SetVisibility(key, not hidden)
+
     def set_query(self, query):
         if query is None:
             shown = set(self.values)

@@ -37,6 +37,82 @@ class LabelRangeError(ValueError):
         super().__init__(f"{what} {value} is out of range for {type_name} [{low}, {high}]{where}")
 
 
+class FloatLabelsError(ValueError, TypeError):
+    """Float labels without ``cast="exact"``.
+
+    A ValueError, as the documentation of the readers promises (the values are the problem:
+    integer-valued floats are accepted with ``cast="exact"``), and a TypeError, which a float
+    array was before ``cast`` existed.
+    """
+
+
+#: The values of the ``cast=`` option of read, from_numpy, from_image and add_segmentation.
+#: None: integer labels only; "exact": floats too when every value is a whole number that an
+#: integer type holds.
+CASTS = (None, "exact")
+
+
+def check_cast(cast):
+    """``cast`` itself; ValueError naming the option and its values for anything else."""
+    if not (cast is None or (isinstance(cast, str) and cast in CASTS)):
+        raise ValueError(f"cast must be one of {list(CASTS)}, got {cast!r}")
+    return cast
+
+
+def _smallest_integer_dtype(low, high):
+    """The narrowest integer dtype holding [low, high] (unsigned when low >= 0), or None."""
+    kinds = ("uint8", "uint16", "uint32", "uint64") if low >= 0 else ("int8", "int16", "int32", "int64")
+    for name in kinds:
+        info = np.iinfo(name)
+        # Python ints: a float64 bound such as 2**64 must not round to the dtype's maximum.
+        if int(info.min) <= low and high <= int(info.max):
+            return np.dtype(name)
+    return None
+
+
+def cast_labels(array, cast, what="label array"):
+    """``array`` as integer labels following ``cast`` (see CASTS): integer and bool arrays are
+    returned as they are; a float array with ``cast="exact"`` becomes the narrowest integer
+    dtype holding its values (unsigned when none is negative), value for value.
+
+    Raises FloatLabelsError for a float array without ``cast``, and for ``cast="exact"`` when a
+    value is not finite, not whole, or outside every integer type, naming the first such value
+    (in C order) and its index.
+    """
+    check_cast(cast)
+    array = np.asarray(array)
+    if array.dtype.kind != "f":
+        return array
+    if cast is None:
+        raise FloatLabelsError(
+            f"the {what} has dtype {array.dtype}; segmentation labels must be integers "
+            f"(int8..int64, uint8..uint64 or bool); cast='exact' accepts floats that are whole "
+            f"numbers")
+    finite = np.isfinite(array)
+    # trunc of nan/inf is nan/inf: the finite mask keeps them out of `whole`.
+    bad = ~(finite & (np.trunc(array) == array))
+    if not bad.any() and array.size:
+        low, high = int(array.min()), int(array.max())
+        dtype = _smallest_integer_dtype(low, high)
+        if dtype is None:
+            # The first value no integer type holds: below -2**63 or from 2**64 on, or, with
+            # negative values (int64 then), from 2**63 on. The bounds are powers of two, exact
+            # as floats (float(2**63 - 1) would round up to 2**63).
+            bad = (array < -2.0**63) | (array >= (2.0**63 if low < 0 else 2.0**64))
+    else:
+        dtype = np.dtype(np.uint8)
+    if bad.any():
+        index = tuple(int(i) for i in np.unravel_index(int(np.argmax(bad)), array.shape))
+        value = array[index]
+        reason = ("not finite" if not np.isfinite(value) else
+                  "not a whole number" if np.trunc(value) != value else
+                  "outside every integer type (with the other values)")
+        raise FloatLabelsError(
+            f"cast='exact': the {what} ({array.dtype}) holds {value!r} at index {index}, "
+            f"{reason}; only whole numbers that an integer type holds are accepted")
+    return array.astype(dtype)
+
+
 def check_label_dtype(dtype, what="label array"):
     """Return the integer dtype labels are stored as, or raise TypeError.
 
@@ -49,12 +125,14 @@ def check_label_dtype(dtype, what="label array"):
         return np.dtype(np.uint8)
     if dtype.kind not in "iu":
         hint = (
-            " Convert a label map stored as floats with array.astype(np.int32) (or another"
-            " integer type) after checking that it holds whole numbers."
+            " A label map stored as whole-number floats is accepted with cast='exact'"
+            " (read, from_numpy, from_image, add_segmentation), or convert it with"
+            " array.astype(np.int32) (or another integer type) after checking it."
             if dtype.kind == "f"
             else ""
         )
-        raise TypeError(
+        error = FloatLabelsError if dtype.kind == "f" else TypeError
+        raise error(
             f"the {what} has dtype {dtype}; segmentation labels must be integers "
             f"(int8..int64, uint8..uint64 or bool).{hint}"
         )

@@ -2,6 +2,9 @@
 
 Imported by add_segmentation (it needs pyvista, which the rest of the package does not).
 """
+import numbers
+
+import numpy as np
 import pyvista as pv
 
 from ._attributes import NAN_COLOR
@@ -41,8 +44,50 @@ class SegmentationActor(pv.Volume):
     @property
     def label_table(self):
         """pandas.DataFrame: the label table (indexed by label value) joined with the
-        attributes given to add_segmentation; queries and ``color_by`` read it."""
-        return self._vtksvdag_style.table
+        attributes given to add_segmentation; queries and ``color_by`` read it. Its ``color``
+        column holds the colors in effect now (RGB 0-1 tuples, :meth:`get_color`), and
+        ``name`` the names where the attributes have them."""
+        table = self._vtksvdag_style.table.copy()
+        table["color"] = [self.get_color(v) for v in table.index.tolist()]
+        return table
+
+    def _label_values(self, labels, what):
+        values = [labels] if isinstance(labels, (numbers.Integral, np.integer)) else list(labels)
+        for value in values:
+            self._vtksvdag_style.key(value, what)  # TypeError / ValueError for a bad value
+        return values
+
+    def get_color(self, label):
+        """The display color ``label`` is drawn with: an RGB tuple of floats in [0, 1] (what
+        :meth:`set_color`, ``colors``, ``cmap``, ``color_by`` or the default palette gave it,
+        before a highlight's dimming). ValueError for a label the volume does not hold.
+
+        Examples
+        --------
+        >>> actor.set_color(7, "red")  # doctest: +SKIP
+        >>> actor.get_color(7)  # doctest: +SKIP
+        (1.0, 0.0, 0.0)
+        """
+        key = self._vtksvdag_style.key(label)
+        rgb = [0.0, 0.0, 0.0]
+        self.label_properties.GetDisplayColor(self.segmentation.dataobject, key, rgb)
+        return tuple(rgb)
+
+    def set_color(self, label, color):
+        """Color one label (any color pyvista accepts); it wins over ``color_by`` columns, as
+        ``colors`` given to add_segmentation does. A material upload, no geometry rebuild."""
+        self._vtksvdag_style.set_color(label, _rgb(color))
+
+    def hide(self, labels):
+        """Hide labels (an int or an iterable): they stay hidden through :meth:`set_query`,
+        like ``hidden_labels``. Rebuilds the acceleration structure from the blocks on the
+        device."""
+        self._vtksvdag_style.set_hidden(self._label_values(labels, "label to hide"), True)
+
+    def show(self, labels):
+        """Show labels hidden by :meth:`hide`, ``hidden_labels`` or a query (an int or an
+        iterable); a later :meth:`set_query` decides again for the labels it does not match."""
+        self._vtksvdag_style.set_hidden(self._label_values(labels, "label to show"), False)
 
     @property
     def query(self):

@@ -2,12 +2,14 @@
 import time
 
 import numpy as np
-from vtkmodules.util.numpy_support import numpy_to_vtk
+from vtkmodules.util.numpy_support import numpy_to_vtk, vtk_to_numpy
 from vtkmodules.vtkCommonDataModel import vtkDataObject, vtkImageData
 
 from ._labels import (
-    check_label_dtype, label_list, label_pattern, label_patterns, numpy_dtype_of_vtk_type,
+    cast_labels, check_cast, check_label_dtype, label_list, label_pattern, label_patterns,
+    numpy_dtype_of_vtk_type,
 )
+from ._options import keywords_checked
 from ._vtkrun import run_algorithm
 from .volume import SegmentationVolume, check_axis_order
 from .vtkSVDAGCore import vtkImageDataToSegmentationSVDAG
@@ -61,6 +63,7 @@ def _compress(image, dtype, background, exclude, scalars, progress):
     return SegmentationVolume(output, build_seconds=seconds)
 
 
+@keywords_checked
 def from_numpy(
     array,
     spacing=(1.0, 1.0, 1.0),
@@ -70,6 +73,8 @@ def from_numpy(
     exclude=(),
     axis_order="xyz",
     progress=None,
+    *,
+    cast=None,
 ):
     """Compress a 3D integer label array losslessly.
 
@@ -96,6 +101,11 @@ def from_numpy(
         and direction are always given in x, y, z order.
     progress : callable, optional
         Called with the compression progress in [0, 1].
+    cast : {None, "exact"}, default: None
+        Float arrays: ``None`` refuses them; ``"exact"`` accepts them when every value is a
+        whole number, stored as the narrowest integer dtype that holds them (unsigned when none
+        is negative): ``volume.to_numpy()`` equals the array value for value. Integer arrays
+        are kept as they are either way.
 
     Returns
     -------
@@ -105,11 +115,14 @@ def from_numpy(
     Raises
     ------
     TypeError
-        The array is not an integer or bool array (or is a masked array), or a label value
-        is not an integer.
+        The array is not an integer, bool or float array (or is a masked array), a label value
+        is not an integer, or an option is unknown (the message suggests the closest names).
     ValueError
-        The array is not 3D or is empty, a label value does not fit the dtype, or the
-        geometry is invalid.
+        The array is not 3D or is empty, a label value does not fit the dtype, the geometry is
+        invalid, ``cast`` is not one of its values, or the array holds floats: without
+        ``cast="exact"``, or with it when a value is not a whole number an integer type holds
+        (the message names the first such value and its index). The float errors are
+        ``FloatLabelsError``, a ValueError that is also a TypeError.
     Exception
         Whatever ``progress`` raised (compression stops).
 
@@ -123,6 +136,12 @@ def from_numpy(
     array([1, 2, 3], dtype=int16)
     >>> np.array_equal(volume.to_numpy(), labels)
     True
+
+    Integer-valued floats (a label map saved as float32) with ``cast="exact"``:
+
+    >>> floats = labels.astype(np.float32)
+    >>> vtksvdag.from_numpy(floats, cast="exact").to_numpy().dtype
+    dtype('uint8')
     """
     if isinstance(array, np.ma.MaskedArray):
         # np.asarray would drop the mask and store whatever lies under it.
@@ -131,6 +150,11 @@ def from_numpy(
             "e.g. array.filled(background)"
         )
     array = np.asarray(array)
+    check_cast(cast)
+    if array.ndim == 3 and array.size:
+        # Before the dtype check, which refuses floats; the shape checks below come first for
+        # other shapes (no scan of a wrong array).
+        array = cast_labels(array, cast)
     dtype = check_label_dtype(array.dtype)  # native byte order
     if array.ndim != 3:
         raise ValueError(
@@ -172,7 +196,60 @@ def from_numpy(
     return volume
 
 
-def from_image(image, scalars=None, background=0, exclude=(), progress=None):
+def _label_array(image, scalars):
+    """(array, association) of the labels of ``image``: the array named ``scalars``, looked up
+    in the point data first and then in the cell data (pyvista's default preference), or the
+    active point scalars, else the active cell scalars."""
+    point_data, cell_data = image.GetPointData(), image.GetCellData()
+    if scalars is None:
+        for association, data in (("point", point_data), ("cell", cell_data)):
+            if data.GetScalars() is not None:
+                return data.GetScalars(), association
+        raise KeyError("the image has no active point scalars and no active cell scalars; name "
+                       "the label array with scalars=")
+    for association, data in (("point", point_data), ("cell", cell_data)):
+        array = data.GetArray(scalars)
+        if array is not None:
+            return array, association
+
+    def names(data):
+        return [data.GetArrayName(i) for i in range(data.GetNumberOfArrays())]
+
+    raise KeyError(f"the image has no point data array {scalars!r} and no cell data array of "
+                   f"that name (point data: {names(point_data)}, cell data: {names(cell_data)})")
+
+
+def _voxel_image(image, array, association):
+    """An image whose point scalars are ``array`` and whose points are the voxel centers.
+
+    Cell labels are the voxel grid itself: an image of n points along an axis has n - 1 cells,
+    and the voxel of cell i spans the points i and i + 1, so the voxel centers are the cell
+    centers, half a spacing (along the direction) from the image's origin.
+    """
+    voxels = vtkImageData()
+    spacing = np.asarray(image.GetSpacing(), float)
+    origin = np.asarray(image.GetOrigin(), float)
+    dims = np.asarray(image.GetDimensions())
+    if association == "cell":
+        direction = np.array([image.GetDirectionMatrix().GetElement(r, c)
+                              for r in range(3) for c in range(3)]).reshape(3, 3)
+        flat = dims <= 1  # an axis of one point has one (flat) cell: its voxel sits on it
+        origin = origin + direction @ np.where(flat, 0.0, 0.5 * spacing)
+        dims = np.where(flat, 1, dims - 1)
+    voxels.SetDimensions(*(int(d) for d in dims))
+    voxels.SetSpacing(*spacing)
+    voxels.SetOrigin(*origin)
+    voxels.SetDirectionMatrix(image.GetDirectionMatrix())
+    if voxels.GetNumberOfPoints() != array.GetNumberOfTuples():
+        raise ValueError(f"the {association} data array {array.GetName()!r} has "
+                         f"{array.GetNumberOfTuples()} values for {voxels.GetNumberOfPoints()} "
+                         f"voxels")
+    voxels.GetPointData().SetScalars(array)
+    return voxels
+
+
+@keywords_checked
+def from_image(image, scalars=None, background=0, exclude=(), progress=None, *, cast=None):
     """Compress the integer labels of a vtkImageData or ``pyvista.ImageData`` losslessly.
 
     Parameters
@@ -180,13 +257,21 @@ def from_image(image, scalars=None, background=0, exclude=(), progress=None):
     image : vtkImageData or pyvista.ImageData
         The label image; its spacing, origin and direction are kept.
     scalars : str, optional
-        Name of the point data array holding the labels; the active point scalars by default.
+        Name of the array holding the labels, point data or cell data (a name in both is taken
+        from the point data, pyvista's default preference). By default the active point
+        scalars, else the active cell scalars. Point labels put a voxel on every point; cell
+        labels are the voxel grid itself: an image of (nx, ny, nz) points with cell labels is a
+        volume of (nx - 1, ny - 1, nz - 1) voxels whose boxes are the cells (its origin, the
+        first voxel center, is half a voxel inside the image's).
     background : int, default: 0
         Label value that is not stored.
     exclude : sequence of int, default: ()
         Labels left out; they decode as background.
     progress : callable, optional
         Called with the compression progress in [0, 1].
+    cast : {None, "exact"}, default: None
+        Float labels: refused, or with ``"exact"`` accepted when every value is a whole number
+        (see :func:`from_numpy`).
 
     Returns
     -------
@@ -195,10 +280,13 @@ def from_image(image, scalars=None, background=0, exclude=(), progress=None):
     Raises
     ------
     TypeError
-        ``image`` is not image data, its labels are not integers, or ``scalars`` is not a
-        string.
+        ``image`` is not image data, its labels are not integers (or floats, see ``cast``),
+        ``scalars`` is not a string, or an option is unknown.
+    ValueError
+        Float labels without ``cast="exact"`` (or with it, a value that is not a whole number),
+        an array of several components, or an empty image.
     KeyError
-        There is no point data array called ``scalars`` (or no active scalars).
+        There is no point or cell data array called ``scalars`` (or no active scalars).
 
     Examples
     --------
@@ -207,25 +295,38 @@ def from_image(image, scalars=None, background=0, exclude=(), progress=None):
     >>> grid.point_data["seg"] = (np.arange(grid.n_points) % 3).astype(np.uint8)
     >>> vtksvdag.from_image(grid, scalars="seg").labels
     array([1, 2], dtype=uint8)
+
+    Cell labels: one voxel per cell.
+
+    >>> grid.cell_data["parcels"] = (np.arange(grid.n_cells) % 4).astype(np.int16)
+    >>> vtksvdag.from_image(grid, scalars="parcels").dims
+    (7, 7, 7)
     """
     if not isinstance(image, vtkImageData):
         raise TypeError(f"expected a vtkImageData or pyvista.ImageData, not {type(image).__name__}")
     if scalars is not None and not isinstance(scalars, str):
         # vtkPointData.GetArray(0) would take an index, and the builder an attribute type.
-        raise TypeError(f"scalars must be the name of a point data array, not {scalars!r}")
-    point_data = image.GetPointData()
-    array = point_data.GetArray(scalars) if scalars is not None else point_data.GetScalars()
-    if array is None:
-        if scalars is None:
-            raise KeyError("the image has no active point scalars; name the label array with scalars=")
-        names = [point_data.GetArrayName(i) for i in range(point_data.GetNumberOfArrays())]
-        raise KeyError(f"the image has no point data array {scalars!r} (it has {names})")
+        raise TypeError(f"scalars must be the name of a point or cell data array, not {scalars!r}")
+    check_cast(cast)
+    array, association = _label_array(image, scalars)
     if array.GetNumberOfComponents() != 1:
         raise ValueError(f"the label array has {array.GetNumberOfComponents()} components, not 1")
-    dtype = check_label_dtype(numpy_dtype_of_vtk_type(array.GetDataType()))
-    if image.GetNumberOfPoints() == 0:
+    if image.GetNumberOfPoints() == 0 or array.GetNumberOfTuples() == 0:
         raise ValueError("the image is empty")
+    dtype = numpy_dtype_of_vtk_type(array.GetDataType())
+    cast_copy = np.dtype(dtype).kind == "f"
+    if cast_copy:
+        values = cast_labels(vtk_to_numpy(array), cast,
+                             f"{association} data array {array.GetName()!r}")
+        array = numpy_to_vtk(values, deep=True)
+        array.SetName("Labels")
+        dtype = values.dtype
+    dtype = check_label_dtype(dtype)
     exclude = label_list(exclude)
     label_pattern(background, dtype, "background")
     label_patterns(exclude, dtype)
-    return _compress(image, dtype, background, exclude, scalars, progress)
+    if association == "point" and not cast_copy:
+        # The image as it is: no copy of its geometry or arrays.
+        return _compress(image, dtype, background, exclude, scalars, progress)
+    return _compress(_voxel_image(image, array, association), dtype, background, exclude, None,
+                     progress)

@@ -5,8 +5,10 @@ import time
 import numpy as np
 
 from ._labels import (
-    LabelRangeError, label_list, label_pattern, label_patterns, numpy_dtype_of_vtk_type,
+    FloatLabelsError, LabelRangeError, check_cast, label_list, label_pattern, label_patterns,
+    numpy_dtype_of_vtk_type,
 )
+from ._options import keywords_checked
 from ._svdagfile import dataobject_from_bytes
 from ._vtkrun import run_algorithm
 from .volume import SegmentationVolume
@@ -45,6 +47,25 @@ def from_bytes(data):
     return SegmentationVolume(dataobject_from_bytes(data))
 
 
+# The start of the C++ readers' message for float (or other non-integer) voxels
+# (svdagThrowNotIntegerLabels in IO/svdagSlabSource.cxx; Testing/Python/test_reader_formats.py
+# pins it): the reader reports it with the file-format error code, which would be an OSError.
+_NOT_INTEGER_LABELS = "label volumes need integer scalars"
+
+
+class NotAStoreError(IsADirectoryError, ValueError):
+    """``read(directory)`` where the directory holds no store :func:`vtksvdag.read` knows: the
+    IsADirectoryError it always was, and a ValueError about the ``path`` argument."""
+
+
+def _not_a_store(path):
+    from .stores import LOOKED_FOR
+
+    return NotAStoreError(
+        21, f"Is a directory, and no chunked store that read() knows: path must be a label "
+        f"volume file, or a directory holding one of: {'; '.join(LOOKED_FOR)}", path)
+
+
 def _check_input_file(path):
     try:
         path = os.fsdecode(path)  # str, bytes or os.PathLike
@@ -53,7 +74,7 @@ def _check_input_file(path):
     if not os.path.exists(path):
         raise FileNotFoundError(2, "No such file or directory", path)
     if os.path.isdir(path):
-        raise IsADirectoryError(21, "Is a directory", path)
+        raise _not_a_store(path)
     return path
 
 
@@ -78,7 +99,7 @@ def _chunked_store(path, dataset):
     location, kind = stores.find_store(text, dataset)
     if kind is None:
         if dataset is not None and os.path.isdir(location.local):
-            raise IsADirectoryError(21, "Is a directory (no chunked store)", location.text)
+            raise _not_a_store(location.text)
         return None  # IsADirectoryError from _check_input_file
     return location, kind
 
@@ -93,8 +114,38 @@ def check_cache_bytes(cache_bytes):
     return int(cache_bytes)
 
 
+def _read_float_nrrd(path, background, exclude, progress, cast):
+    """A float NRRD file through pynrrd, cast by from_numpy: the C++ readers stream integer
+    voxels only. The whole array is read into memory (a float volume is read once to be cast).
+    The geometry is the C++ NRRD reader's: ``space directions`` (spacing = their lengths,
+    direction = their unit vectors), else ``spacings``; ``space origin``."""
+    try:
+        import nrrd
+    except ImportError:
+        raise ImportError(f"{path}: cast='exact' reads float NRRD files with pynrrd "
+                          f"(pip install pynrrd)") from None
+    from .build import from_numpy
+
+    array, header = nrrd.read(path)  # [x, y, z], as the C++ reader's index order
+    if array.ndim != 3:
+        raise ValueError(f"{path}: label volumes need 3 dimensions, the file has {array.ndim}")
+    spacing = np.ones(3)
+    direction = np.eye(3)
+    directions = header.get("space directions")
+    if directions is not None:
+        vectors = np.asarray(directions, float)  # one row per axis
+        spacing = np.linalg.norm(vectors, axis=1)
+        direction = (vectors / spacing[:, None]).T  # columns are the axes
+    elif header.get("spacings") is not None:
+        spacing = np.asarray(header["spacings"], float)
+    origin = np.asarray(header.get("space origin", np.zeros(3)), float)
+    return from_numpy(array, spacing=spacing, origin=origin, direction=direction,
+                      background=background, exclude=exclude, progress=progress, cast=cast)
+
+
+@keywords_checked
 def read(path, background=0, exclude=(), dataset=None, progress=None, *, scale=None,
-         axis_order=None, cache_bytes=None):
+         axis_order=None, cache_bytes=None, cast=None):
     """Read a label volume file, a chunked store, or a compressed ``.svdag`` file, as a
     SegmentationVolume.
 
@@ -140,6 +191,13 @@ def read(path, background=0, exclude=(), dataset=None, progress=None, *, scale=N
         Chunked stores only: the bound of tensorstore's chunk cache in bytes. By default there
         is none where the slabs read keep to the store's chunks along z (each chunk is then
         read once), and 256 MiB where they do not.
+    cast : {None, "exact"}, default: None
+        Float voxels: ``None`` refuses them (ValueError); ``"exact"`` accepts them when every
+        value is a whole number, stored as the narrowest integer dtype that holds them (see
+        :func:`from_numpy`). Supported for NRRD files (read whole into memory with pynrrd,
+        not streamed) and ``.npy`` files; other float files are refused with a ValueError that
+        says so (read the array with the format's library and pass it to
+        :func:`from_numpy`). Integer files are read as they are either way.
 
     Returns
     -------
@@ -152,13 +210,16 @@ def read(path, background=0, exclude=(), dataset=None, progress=None, *, scale=N
     FileNotFoundError
         The file does not exist.
     IsADirectoryError
-        ``path`` is a directory that holds no known chunked store.
+        ``path`` is a directory that holds no known chunked store; the message lists the stores
+        looked for (it is also a ValueError).
     ImportError
         ``path`` is a chunked store and tensorstore is not installed.
     OSError
         The file cannot be read (unknown format, truncated, corrupt).
     ValueError
-        The file holds no integer label volume, ``background`` or an excluded label does not
+        The file holds float voxels (without ``cast="exact"``, or with it a value that is not a
+        whole number: the message names the first one and its index), the file holds no
+        integer label volume, ``cast`` is not one of its values, ``background`` or an excluded label does not
         fit the file's dtype, ``dataset`` is given for a file that is not HDF5, ``scale`` or
         ``axis_order`` for a file that is no chunked store, ``scale`` is out of range, or a
         store's non-spatial axis (channel) has more than one element.
@@ -174,10 +235,14 @@ def read(path, background=0, exclude=(), dataset=None, progress=None, *, scale=N
         raise TypeError(f"dataset must be a str (an HDF5 dataset path), not {dataset!r}")
     if axis_order is not None and axis_order not in ("zyx", "xyz"):
         raise ValueError(f"axis_order must be 'zyx' or 'xyz' (or None), not {axis_order!r}")
+    check_cast(cast)
     store = _chunked_store(path, dataset)
     if store is not None:
         from .stores import read_store
 
+        if cast is not None:
+            raise ValueError(f"cast={cast!r} is not supported for chunked stores yet (only "
+                             f"NRRD and .npy files); a store's float array is refused")
         exclude = label_list(exclude)
         return read_store(*store, background=background, exclude=exclude, scale=scale,
                           axis_order=axis_order, progress=progress,
@@ -198,7 +263,8 @@ def read(path, background=0, exclude=(), dataset=None, progress=None, *, scale=N
             array = np.load(path, mmap_mode="r", allow_pickle=False)
         except ValueError as e:
             raise OSError(f"{path}: not a readable .npy array ({e})") from None
-        return from_numpy(array, background=background, exclude=exclude, progress=progress)
+        return from_numpy(array, background=background, exclude=exclude, progress=progress,
+                          cast=cast)
 
     from .vtkSVDAGIO import vtkSegmentationVolumeReader
 
@@ -210,7 +276,20 @@ def read(path, background=0, exclude=(), dataset=None, progress=None, *, scale=N
     if dataset is not None:
         reader.SetDatasetName(dataset)
     start = time.perf_counter()
-    run_algorithm(reader, progress=progress, error=ValueError, what=path)
+    try:
+        run_algorithm(reader, progress=progress, error=ValueError, what=path)
+    except OSError as error:
+        if _NOT_INTEGER_LABELS not in str(error):
+            raise
+        # The header check fails before the reader names the format: NRRD by its magic.
+        with open(path, "rb") as f:
+            is_nrrd = f.read(4) == b"NRRD"
+        if cast is not None and is_nrrd:
+            return _read_float_nrrd(path, background, exclude, progress, cast)
+        hint = ("cast='exact' accepts whole-number floats" if cast is None else
+                f"cast={cast!r} reads float NRRD and .npy files only: read the array with the "
+                f"format's library and pass it to vtksvdag.from_numpy(..., cast={cast!r})")
+        raise FloatLabelsError(f"{error}; {hint}") from None
     seconds = time.perf_counter() - start
     output = reader.GetOutput()
     if output is None or not output.HasVolume():

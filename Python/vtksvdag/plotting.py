@@ -3,17 +3,16 @@
 The volume is drawn by ``vtkSegmentationSVDAGVolumeMapper`` inside the plotter's own render
 window, depth-composited with every mesh in the scene.
 """
-import difflib
-import functools
-import inspect
 import numbers
 import os
 import time
+import weakref
 
 import numpy as np
 
 from ._colors import to_rgb as _rgb
-from ._labels import label_pattern, numpy_dtype_of_vtk_type
+from ._labels import check_cast, label_pattern, numpy_dtype_of_vtk_type
+from ._options import close_names, keywords_checked as _keywords_checked
 from ._settingnames import set_by_name
 from ._vtkrun import vtk_errors_raised
 from .build import from_image, from_numpy
@@ -24,36 +23,30 @@ from .volume import SegmentationVolume
 # works without them (a machine without Vulkan, a script that only compresses).
 
 
-def _keywords_checked(function):
-    """Makes an unknown keyword argument of ``function`` a TypeError that suggests the closest
-    option names (difflib), instead of Python's bare "unexpected keyword argument"."""
-    parameters = inspect.signature(function).parameters
-
-    @functools.wraps(function)
-    def checked(*args, **kwargs):
-        unknown = sorted(set(kwargs) - set(parameters))
-        if unknown:
-            hints = []
-            for option in unknown:
-                close = difflib.get_close_matches(option, parameters, n=3)
-                hints.append(f"{option!r}" + (f" (did you mean {' or '.join(map(repr, close))}?)"
-                                              if close else ""))
-            raise TypeError(f"{function.__name__}() got unknown options: {', '.join(hints)}")
-        return function(*args, **kwargs)
-
-    return checked
-
-
-def _segmentation_volume(data):
-    """A SegmentationVolume from any of the inputs add_segmentation accepts."""
+def _segmentation_volume(data, scalars=None, spacing=None, origin=None, axis_order=None,
+                         cast=None):
+    """A SegmentationVolume from any of the inputs add_segmentation accepts; each option is for
+    the inputs named in add_segmentation (ValueError naming it for the others)."""
+    geometry = {k: v for k, v in (("spacing", spacing), ("origin", origin),
+                                  ("axis_order", axis_order)) if v is not None}
+    is_image = hasattr(data, "IsA") and data.IsA("vtkImageData")
+    if geometry and not isinstance(data, np.ndarray):
+        raise ValueError(f"{'=, '.join(geometry)}= is for numpy arrays; "
+                         f"{type(data).__name__} data carries its own geometry")
+    if scalars is not None and not is_image:
+        raise ValueError(f"scalars={scalars!r} names an array of a pyvista.ImageData / "
+                         f"vtkImageData; {type(data).__name__} data has no named arrays")
     if isinstance(data, SegmentationVolume):
+        if cast is not None:
+            raise ValueError("cast is for label arrays and files; a SegmentationVolume holds "
+                             "integer labels already")
         return data
     if isinstance(data, (str, bytes, os.PathLike)):
-        return read(data)
+        return read(data, cast=cast)
     if isinstance(data, np.ndarray):
-        return from_numpy(data)
-    if hasattr(data, "IsA") and data.IsA("vtkImageData"):
-        return from_image(data)
+        return from_numpy(data, cast=cast, **geometry)
+    if is_image:
+        return from_image(data, scalars=scalars, cast=cast)
     raise TypeError(
         "data must be a SegmentationVolume, a file path, a numpy label array or a "
         f"pyvista.ImageData / vtkImageData, not {type(data).__name__}"
@@ -84,9 +77,9 @@ def _apply_colors(props, volume, colors, cmap):
         if hasattr(cmap, "IsA") and cmap.IsA("vtkScalarsToColors"):
             props.SetLookupTable(cmap)
         else:
-            import matplotlib
+            from ._attributes import _colormap
 
-            colormap = matplotlib.colormaps[cmap] if isinstance(cmap, str) else cmap
+            colormap = _colormap(cmap, categorical=True)
             n = len(volume.labels)
             # Categorical: listed colormaps cycle their colors, continuous ones are sampled evenly.
             count = getattr(colormap, "N", 256)
@@ -104,7 +97,22 @@ def _apply_colors(props, volume, colors, cmap):
             props.SetColor(key, *_rgb(colors[value]))
 
 
+_SUN_FORMS = ("None/False (no sun), True (the default sun), a direction towards the sun (3 "
+              "numbers) or a dict with direction, irradiance, angular_radius")
+
+
+def _sun_number(value, what):
+    try:
+        return np.asarray(value, float)
+    except (TypeError, ValueError):
+        raise ValueError(f"sun {what} must be numbers, got {value!r}") from None
+
+
 def _apply_sun(settings, sun):
+    if isinstance(sun, (str, bytes)) or not (sun is None or isinstance(sun, bool)
+                                             or hasattr(sun, "items") or np.iterable(sun)):
+        # "yes" would otherwise reach float("yes"), a message that does not name sun.
+        raise ValueError(f"sun must be {_SUN_FORMS}; got {sun!r}")
     if sun is None or sun is False:
         settings.SetSun(False)
         return
@@ -117,19 +125,19 @@ def _apply_sun(settings, sun):
             raise TypeError(f"unknown sun options {sorted(unknown)} (direction, irradiance, angular_radius)")
         direction = sun.get("direction")
         if "irradiance" in sun:
-            irradiance = np.broadcast_to(np.asarray(sun["irradiance"], float), (3,))
+            irradiance = np.broadcast_to(_sun_number(sun["irradiance"], "irradiance"), (3,))
             if not np.all(np.isfinite(irradiance)) or np.any(irradiance < 0):
                 raise ValueError("the sun irradiance must be finite and >= 0")
             settings.SetSunIrradiance(*irradiance)
         if "angular_radius" in sun:
-            radius = float(sun["angular_radius"])
+            radius = float(_sun_number(sun["angular_radius"], "angular_radius"))
             if not 0 <= radius <= 89.9:
                 raise ValueError(f"the sun's angular radius must be in [0, 89.9] degrees, got {radius}")
             settings.SetSunAngularRadius(radius)
     else:
         direction = sun
     if direction is not None:
-        d = np.asarray(direction, float)
+        d = _sun_number(direction, "direction")
         if d.shape != (3,) or not np.all(np.isfinite(d)) or not np.any(d):
             raise ValueError(f"the sun direction must be 3 finite numbers, not all 0, got {direction!r}")
         settings.SetSunDirection(*d)
@@ -231,6 +239,12 @@ def add_segmentation(
     error_target=None,
     name=None,
     reset_camera=None,
+    scalars=None,
+    spacing=None,
+    origin=None,
+    axis_order=None,
+    cast=None,
+    show_scalar_bar=None,
 ):
     """Add a path-traced segmentation volume to a ``pyvista.Plotter``.
 
@@ -358,6 +372,26 @@ def add_segmentation(
         Actor name (replaces an actor of the same name).
     reset_camera : bool, optional
         Reset the camera after adding; by default only when it is the first actor.
+    scalars : str, optional
+        ``pyvista.ImageData`` / vtkImageData input: the name of the point or cell data array
+        holding the labels (see :func:`vtksvdag.from_image`: cell labels are the voxel grid
+        itself, one voxel per cell). By default the active point scalars, else the active cell
+        scalars. A ValueError for other inputs.
+    spacing, origin : sequence of 3 floats, optional
+        numpy input: the voxel size and the position of voxel (0, 0, 0), in x, y, z order
+        (defaults those of :func:`vtksvdag.from_numpy`: 1 and 0). A ValueError for other
+        inputs, which carry their own geometry.
+    axis_order : {"xyz", "zyx"}, optional
+        numpy input: ``array[x, y, z]`` (the default, pyvista's order) or ``array[z, y, x]``.
+    cast : {None, "exact"}, optional
+        Float labels (numpy arrays, images, NRRD and ``.npy`` files): refused by default;
+        ``"exact"`` accepts them when every value is a whole number (see
+        :func:`vtksvdag.from_numpy`).
+    show_scalar_bar : bool, optional
+        Add the label legend (:func:`vtksvdag.add_label_legend`: label names or values with
+        their colors, visible labels first). Default False: unlike a continuous scalar bar, a
+        legend of thousands of labels is rarely wanted. ``plotter.add_scalar_bar()`` works on a
+        plotter whose only mapper is a segmentation too: a categorical bar of the same entries.
 
     Returns
     -------
@@ -374,7 +408,9 @@ def add_segmentation(
         No usable Vulkan device (the message lists the devices found), or ``backend="rt"`` on
         a device without ray tracing.
     ValueError, TypeError
-        An option is out of range or of the wrong type; TypeError for an unknown option.
+        An option is out of range or of the wrong type (the message names it and its accepted
+        values); an unknown option is a TypeError that suggests the closest names. Float labels
+        without ``cast="exact"`` are a ValueError.
 
     Examples
     --------
@@ -386,6 +422,8 @@ def add_segmentation(
     >>> image = plotter.screenshot()  # doctest: +SKIP
     """
     import pyvista as pv  # noqa: F401 (pyvista is required: fail before any work without it)
+
+    check_cast(cast)
 
     from .vtkSVDAGRendering import vtkSegmentationSVDAGVolumeMapper
 
@@ -433,7 +471,8 @@ def add_segmentation(
     _apply_clipping(mapper, clipping_planes, crop)
 
     # The options are checked before the volume is built or read (the costly part).
-    volume = _segmentation_volume(data)
+    volume = _segmentation_volume(data, scalars=scalars, spacing=spacing, origin=origin,
+                                  axis_order=axis_order, cast=cast)
     mapper.SetInputData(volume.dataobject)
     props = mapper.GetLabelProperties()
     # With color_by, cmap colors the column (below), not the labels in order.
@@ -467,10 +506,24 @@ def add_segmentation(
     if reset_camera is None:
         # Not `not renderer.actors`: pyvista puts a border actor in every subplot.
         reset_camera = not plotter.renderer.camera_set
+    # The legend and the scalar bar find their plotter through the actor (no cycle: a weak
+    # reference).
+    actor._vtksvdag_plotter = weakref.ref(plotter)
     plotter.add_actor(actor, name=name, reset_camera=bool(reset_camera))
     # Nobody watches an off-screen plotter's frames: each still render is refined to spp before
     # it returns, so show(), screenshot() and VTK's window capture see the refined image.
     mapper.SetRefineStillRenders(bool(getattr(plotter, "off_screen", False)))
+    if plotter.mapper is None:
+        # pyvista's add_scalar_bar() reads plotter.mapper, which add_actor does not set: a
+        # mapper of the label legend's entries as a categorical lookup table (a mesh added later
+        # replaces it, as one added before keeps its own).
+        from .legend import LabelLegendMapper
+
+        plotter.mapper = LabelLegendMapper(actor)
+    if show_scalar_bar:
+        from .legend import add_label_legend
+
+        add_label_legend(actor)
     _enable_refinement(plotter)
     _refine_before_screenshots(plotter)
     return actor
@@ -567,6 +620,7 @@ def _refine_before_screenshots(plotter):
     plotter.screenshot = screenshot
 
 
+@_keywords_checked
 def refine(plotter, timeout=60.0):
     """Render until every segmentation in the plotter has converged, or ``timeout`` seconds.
 
@@ -615,6 +669,7 @@ def refine(plotter, timeout=60.0):
     ]
 
 
+@_keywords_checked
 def pick(plotter, x, y):
     """The segmentation label under a display pixel of the last rendered frame.
 
@@ -633,12 +688,28 @@ def pick(plotter, x, y):
         the one the frame was lit with (the same with ``shading="voxel"``, the smooth estimate
         with ``shading="smooth"``).
 
+    Raises
+    ------
+    TypeError
+        ``x`` or ``y`` is not a number.
+    ValueError
+        ``x`` or ``y`` is not finite, or lies outside the window (0 <= x < width,
+        0 <= y < height): ``None`` means background, not a pixel that does not exist.
+
     Examples
     --------
     >>> hit = vtksvdag.pick(plotter, 150, 120)  # doctest: +SKIP
     >>> hit["label"]  # doctest: +SKIP
     7
     """
+    width, height = plotter.render_window.GetSize() if plotter.render_window is not None else (
+        plotter.window_size)
+    for value, what, size in ((x, "x", width), (y, "y", height)):
+        if isinstance(value, bool) or not isinstance(value, numbers.Real):
+            raise TypeError(f"{what} must be a number (display pixels), got {value!r}")
+        if not (np.isfinite(value) and 0 <= value < size):
+            raise ValueError(f"{what} must be a display coordinate in [0, {size}) (the window "
+                             f"is {width} x {height} pixels, origin bottom left), got {value!r}")
     best = None
     for renderer, mapper in _segmentation_mappers(plotter):
         if not mapper.Pick(renderer, float(x), float(y)):

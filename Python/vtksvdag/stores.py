@@ -134,6 +134,16 @@ def _ome_multiscales(attributes):
     return None
 
 
+#: What detect() looks for in a directory, in its order (for the message of read(directory)).
+LOOKED_FOR = (
+    "a Zarr v2 array (.zarray)",
+    "a Zarr v3 array or OME-Zarr group (zarr.json)",
+    "an OME-Zarr group (.zattrs with multiscales)",
+    "an N5 array (attributes.json with dimensions)",
+    "a neuroglancer precomputed volume (info with scales)",
+)
+
+
 def detect(location):
     """The kind of store at ``location`` (a _Location): one of ZARR2, ZARR3, N5, PRECOMPUTED,
     OME, or None when it holds no store this module knows."""

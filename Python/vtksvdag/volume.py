@@ -593,7 +593,10 @@ class SegmentationVolume:
             - ``surface_voxels`` (int64): voxels of the label with at least one of their 6
               face neighbours of another label (background included) or outside the volume.
 
-            followed by the attribute columns.
+            followed by the attribute columns, and ``color``: the display color each label
+            is drawn with by default (an RGB tuple of floats in [0, 1], the default palette of
+            ``vtkSegmentationSVDAGLabelProperties``; ``actor.label_table`` has the colors in
+            effect in a plotter). Attributes with a ``color`` column keep theirs instead.
 
         Raises
         ------
@@ -624,7 +627,24 @@ class SegmentationVolume:
         n = len(self.labels)
         c = vtk_to_numpy(centroids).reshape(n, 3) if n else np.empty((0, 3))
         s = vtk_to_numpy(surface) if n else np.empty(0, dtype=np.int64)
-        return label_table(self, c, s, attributes)
+        table = label_table(self, c, s, attributes)
+        if "color" not in table.columns:
+            table["color"] = self._default_colors(table.index.tolist())
+        return table
+
+    def _default_colors(self, values):
+        """The display colors of ``values`` (labels of the volume) as a fresh label properties
+        object gives them: the palette is defined once, in the rendering module."""
+        from ._attributes import label_key
+        from .vtkSVDAGRendering import vtkSegmentationSVDAGLabelProperties
+
+        props = vtkSegmentationSVDAGLabelProperties()
+        colors = []
+        for value in values:
+            rgb = [0.0, 0.0, 0.0]
+            props.GetDisplayColor(self._obj, label_key(value, self.dtype), rgb)
+            colors.append(tuple(rgb))
+        return colors
 
     def to_pyvista(self):
         """Decode into a ``pyvista.ImageData`` with point data "Labels".

@@ -47,7 +47,7 @@ def reference_table(array, background, spacing=(1, 1, 1), origin=(0, 0, 0), dire
 
 def check_table(table, array, volume, **geometry):
     ref = reference_table(array, volume.background, **geometry)
-    assert list(table.columns) == COLUMNS
+    assert list(table.columns) == COLUMNS + ["color"]
     assert table.index.name == "label" and table.index.dtype == array.dtype
     np.testing.assert_array_equal(table.index.to_numpy(), ref["labels"])
     np.testing.assert_array_equal(table["voxel_count"].to_numpy(), ref["voxel_count"])
@@ -111,7 +111,7 @@ def test_solid_and_empty_volumes():
     np.testing.assert_allclose(table.loc[5, ["centroid_i", "centroid_j", "centroid_k"]].to_numpy(float),
                                [9.5, 8, 8.5])
     empty = vtksvdag.from_numpy(np.zeros((5, 6, 7), dtype=np.int32)).label_table()
-    assert len(empty) == 0 and list(empty.columns) == COLUMNS and empty.index.name == "label"
+    assert len(empty) == 0 and list(empty.columns) == COLUMNS + ["color"] and empty.index.name == "label"
 
 
 def test_attributes_left_join(tmp_path):
@@ -123,7 +123,7 @@ def test_attributes_left_join(tmp_path):
     attributes = pd.DataFrame({"label": np.array([4, 2**64 - 1], dtype=np.uint64), "name": ["a", "max"],
                                "weight": [1.5, 2.5]})
     table = volume.label_table(attributes)
-    assert list(table.columns) == COLUMNS + ["name", "weight"]
+    assert list(table.columns) == COLUMNS + ["name", "weight", "color"]
     assert table.loc[4, "name"] == "a" and table.loc[2**64 - 1, "weight"] == 2.5
     assert pd.isna(table.loc[11, "name"]) and len(table) == 3
     # Indexed by label, and from a CSV file; unknown labels warn and are left out.
