@@ -14,7 +14,10 @@
 #include "vtkType.h"
 
 #include "svdag/Decoder.h"
+#include "svdag/LabelAdjacency.h"
+#include "svdag/LabelColoring.h"
 #include "svdag/LabelStatistics.h"
+#include "svdag/Palette.h"
 #include "svdag/RandomAccess.h"
 #include "svdag/Volume.h"
 
@@ -491,6 +494,81 @@ bool vtkSegmentationSVDAG::ComputeLabelStatistics(
       surfaceVoxels->SetValue(i, static_cast<vtkIdType>(stats[size_t(i)].surfaceVoxels));
   }
   return true;
+}
+
+bool vtkSegmentationSVDAG::ComputeLabelAdjacency(vtkIdTypeArray* pairs) const
+{
+  if (!this->Volume)
+  {
+    vtkErrorMacro("ComputeLabelAdjacency: no compressed volume");
+    return false;
+  }
+  if (!pairs)
+  {
+    vtkErrorMacro("ComputeLabelAdjacency: no output array");
+    return false;
+  }
+  std::vector<svdag::LabelPair> found;
+  try
+  {
+    found = svdag::labelAdjacency(*this->Volume, vtkSVDAGParallelFor());
+  }
+  catch (const std::exception& e)
+  {
+    vtkErrorMacro("ComputeLabelAdjacency: " << e.what());
+    return false;
+  }
+  pairs->SetNumberOfComponents(2);
+  pairs->SetNumberOfTuples(static_cast<vtkIdType>(found.size()));
+  pairs->SetName("LabelAdjacency");
+  for (size_t i = 0; i < found.size(); ++i)
+  {
+    pairs->SetTypedComponent(vtkIdType(i), 0, vtkIdType(found[i][0]));
+    pairs->SetTypedComponent(vtkIdType(i), 1, vtkIdType(found[i][1]));
+  }
+  return true;
+}
+
+namespace
+{
+void SetColors(vtkDoubleArray* out, const std::vector<svdag::color::RGB>& colors, const char* name)
+{
+  out->SetNumberOfComponents(3);
+  out->SetNumberOfTuples(static_cast<vtkIdType>(colors.size()));
+  out->SetName(name);
+  for (size_t i = 0; i < colors.size(); ++i)
+    out->SetTypedTuple(vtkIdType(i), colors[i].data());
+}
+} // namespace
+
+bool vtkSegmentationSVDAG::ComputeDistinctLabelColors(vtkDoubleArray* colors) const
+{
+  if (!this->Volume)
+  {
+    vtkErrorMacro("ComputeDistinctLabelColors: no compressed volume");
+    return false;
+  }
+  if (!colors)
+  {
+    vtkErrorMacro("ComputeDistinctLabelColors: no output array");
+    return false;
+  }
+  try
+  {
+    SetColors(colors, svdag::distinctLabelColors(*this->Volume, vtkSVDAGParallelFor()), "Colors");
+  }
+  catch (const std::exception& e)
+  {
+    vtkErrorMacro("ComputeDistinctLabelColors: " << e.what());
+    return false;
+  }
+  return true;
+}
+
+void vtkSegmentationSVDAG::GetCategoricalPalette(vtkIdType n, vtkDoubleArray* colors)
+{
+  if (colors)
+    SetColors(colors, svdag::color::categoricalPalette(size_t(std::max<vtkIdType>(n, 0))), "Palette");
 }
 
 vtkSegmentationSVDAG* vtkSegmentationSVDAG::GetData(vtkInformation* info)

@@ -117,6 +117,23 @@ public:
    * label (background included) or outside the volume. Either array may be null.
    */
   bool ComputeLabelStatistics(vtkDoubleArray* centroids, vtkIdTypeArray* surfaceVoxels) const;
+  /**
+   * The label pairs that touch across a voxel face (6-neighbourhood), from the compressed form
+   * one layer of cells at a time (svdag/LabelAdjacency.h): `pairs` gets 2 components per pair,
+   * the table indices a < b of the two labels, sorted. The background is no label.
+   */
+  bool ComputeLabelAdjacency(vtkIdTypeArray* pairs) const;
+  /**
+   * The default categorical colors (svdag/LabelColoring.h), display sRGB, 3 components per
+   * label in table order: palette colors assigned over the label adjacency so that touching
+   * labels get clearly different ones.
+   */
+  bool ComputeDistinctLabelColors(vtkDoubleArray* colors) const;
+  /**
+   * The first `n` colors of the categorical palette (svdag/Palette.h), display sRGB, 3
+   * components each; past its size the palette repeats.
+   */
+  static void GetCategoricalPalette(vtkIdType n, vtkDoubleArray* colors);
   ///@}
 
 #ifndef __VTK_WRAP__

@@ -297,6 +297,34 @@ void decodeCellLabels(
   }
 }
 
+void decodeLayerLabels(const Volume& v, int32_t cz, uint32_t empty, std::vector<uint32_t>& out,
+  const ParallelFor& parallel)
+{
+  const auto& d = v.geometry.dims;
+  const auto n = v.geometry.cellCounts();
+  const size_t nx = size_t(d[0]), ny = size_t(d[1]);
+  const int32_t z0 = cz * int32_t(S);
+  const size_t lz = size_t(std::min<int32_t>(int32_t(S), d[2] - z0));
+  out.assign(nx * ny * lz, empty);
+  const uint32_t perLayer = uint32_t(n[0]) * uint32_t(n[1]);
+  parallel(0, perLayer, 1, [&](uint64_t begin, uint64_t end) {
+    std::vector<uint8_t> occ(S * S * S);
+    std::vector<uint32_t> labels(S * S * S);
+    for (uint64_t c = begin; c < end; ++c)
+    {
+      const uint32_t cell = uint32_t(cz) * perLayer + uint32_t(c);
+      const size_t cx = size_t(c % uint32_t(n[0])) * S, cy = size_t(c / uint32_t(n[0])) * S;
+      decodeCellLabels(v, cell, empty, labels.data(), occ.data());
+      // The cell's part inside the volume (edge cells are partial).
+      const size_t ex = std::min<size_t>(S, nx - cx), ey = std::min<size_t>(S, ny - cy);
+      for (size_t z = 0; z < lz; ++z)
+        for (size_t y = 0; y < ey; ++y)
+          for (size_t x = 0; x < ex; ++x)
+            out[cx + x + nx * (cy + y + ny * z)] = labels[x + S * (y + S * z)];
+    }
+  });
+}
+
 void decodeBox(const Volume& v, const Box& box, void* out, const ParallelFor& parallel)
 {
   checkBox(v, box, "decodeBox");

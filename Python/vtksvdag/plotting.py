@@ -72,8 +72,25 @@ def _label_keys(volume, values, what):
     return keys
 
 
+# The pyvista glue's default look (the first image a user sees), applied where add_segmentation's
+# options are left at None: a sun with a soft penumbra and a slightly blue sky over the C++
+# defaults' neutral-white environment. Only what differs from vtkSegmentationSVDAGRenderSettings'
+# defaults is named here; the sun's direction and irradiance stay the C++ core's. The C++ defaults
+# themselves are unchanged, so VTK viewers and the C++ regression baselines keep their look.
+DEFAULT_SUN_ANGULAR_RADIUS = 4.0  # degrees: shadows with soft edges (the real sun's 0.27 is hard)
+DEFAULT_SKY = (0.55, 0.6, 0.7)     # linear radiance of the constant environment
+
+
 def _apply_colors(props, volume, colors, cmap):
-    if cmap is not None:
+    if cmap is None:
+        # The default: palette colors assigned over the label adjacency (svdag::
+        # distinctLabelColors), set per label so that GetColor reports them.
+        keys = _label_keys(volume, volume.labels.tolist(), "label")
+        for key, rgb in zip(keys, volume.distinct_colors()):
+            props.SetColor(key, *rgb)
+    elif isinstance(cmap, str) and cmap == "hash":
+        pass  # the renderer's hash of each label index (the default before the palette)
+    else:
         if hasattr(cmap, "IsA") and cmap.IsA("vtkScalarsToColors"):
             props.SetLookupTable(cmap)
         else:
@@ -97,8 +114,9 @@ def _apply_colors(props, volume, colors, cmap):
             props.SetColor(key, *_rgb(colors[value]))
 
 
-_SUN_FORMS = ("None/False (no sun), True (the default sun), a direction towards the sun (3 "
-              "numbers) or a dict with direction, irradiance, angular_radius")
+_SUN_FORMS = ("None (the default: the sun with soft shadows), False (no sun), True (the settings' "
+              "sun), a direction towards the sun (3 numbers) or a dict with direction, irradiance, "
+              "angular_radius")
 
 
 def _sun_number(value, what):
@@ -113,10 +131,13 @@ def _apply_sun(settings, sun):
                                              or hasattr(sun, "items") or np.iterable(sun)):
         # "yes" would otherwise reach float("yes"), a message that does not name sun.
         raise ValueError(f"sun must be {_SUN_FORMS}; got {sun!r}")
-    if sun is None or sun is False:
+    if sun is False:
         settings.SetSun(False)
         return
     settings.SetSun(True)
+    if sun is None:
+        settings.SetSunAngularRadius(DEFAULT_SUN_ANGULAR_RADIUS)
+        return
     if sun is True:
         return
     if hasattr(sun, "items"):
@@ -145,6 +166,7 @@ def _apply_sun(settings, sun):
 
 def _apply_environment(settings, environment):
     if environment is None:
+        settings.SetEnvironmentColor(*DEFAULT_SKY)
         return
     if isinstance(environment, (str, os.PathLike)) and str(environment).lower().endswith(".exr"):
         if not os.path.isfile(environment):
@@ -255,8 +277,10 @@ def add_segmentation(
 
     Options left at ``None`` keep the default of the VTK object they set
     (``vtkSegmentationSVDAGRenderSettings`` for the path tracer, whose defaults are the C++ core's,
-    or ``vtkSegmentationSVDAGVolumeMapper``); the defaults named below are those. An unknown
-    option is a TypeError that suggests the closest names.
+    or ``vtkSegmentationSVDAGVolumeMapper``); the defaults named below are those, except the
+    default look of ``colors``/``cmap``, ``sun`` and ``environment`` (distinct label colors, a
+    soft sun and a sky), which this glue applies over the C++ defaults. An unknown option is a
+    TypeError that suggests the closest names.
 
     Parameters
     ----------
@@ -270,7 +294,10 @@ def add_segmentation(
     cmap : str, matplotlib colormap or vtkScalarsToColors, optional
         Colors of the labels ``colors`` does not name: a listed (categorical) colormap cycles
         through its colors in label order, a continuous one is sampled evenly; a VTK lookup
-        table maps the label values. Without either, colors come from a hash of each label.
+        table maps the label values. Without either (the default), the categorical palette
+        assigned over the label adjacency, so that touching labels get clearly different colors
+        (:meth:`SegmentationVolume.distinct_colors`); ``"hash"``: the renderer's hash of each
+        label index (the default before the palette).
         With ``color_by``, the colormap of that column instead (a matplotlib colormap or name).
     opacity : float or dict, default: 1.0
         Opacity of every label, or ``{label value: opacity}``. 0 hides a label; values between
@@ -345,10 +372,13 @@ def add_segmentation(
     exposure : float, optional
         Scale of the linear color before the tone curve (1e-6 .. 1e6; default 1).
     sun : bool, sequence of 3 floats or dict, optional
-        A sun light: ``True`` for the default one, a direction towards the sun, or a dict with
-        ``direction``, ``irradiance`` and ``angular_radius`` (degrees).
+        A sun light: ``True`` for the C++ default one (a hard-edged real-size sun), a direction
+        towards the sun, a dict with ``direction``, ``irradiance`` and ``angular_radius``
+        (degrees), or ``False`` for none. Default: the C++ default sun with an angular radius
+        of ``DEFAULT_SUN_ANGULAR_RADIUS`` (4 degrees: soft shadows).
     environment : color or str, optional
         The environment light: a constant color, or the path of an equirectangular ``.exr`` map.
+        Default: the sky ``DEFAULT_SKY``, a slightly blue constant (linear (0.55, 0.6, 0.7)).
     clipping_planes : sequence of (origin, normal), optional
         Up to 6 clipping planes in world coordinates (VTK's, after the actor's matrix), each
         keeping the side its normal points to. Every ray is clipped, so cut-away parts cast no
@@ -371,7 +401,10 @@ def add_segmentation(
     name : str, optional
         Actor name (replaces an actor of the same name).
     reset_camera : bool, optional
-        Reset the camera after adding; by default only when it is the first actor.
+        Reset the camera after adding; by default when the camera was not set yet, or was
+        last set by this function and not moved since. The reset looks along pyvista's default
+        direction and frames the voxels of the visible labels of every segmentation in the
+        renderer (hidden and opacity-0 labels do not count), with the other visible props.
     scalars : str, optional
         ``pyvista.ImageData`` / vtkImageData input: the name of the point or cell data array
         holding the labels (see :func:`vtksvdag.from_image`: cell labels are the voxel grid
@@ -503,13 +536,18 @@ def add_segmentation(
     # Keep the Python wrapper (and so the SegmentationVolume) alive as long as the actor.
     actor._vtksvdag_volume = volume
     actor._vtksvdag_style = style
+    renderer = plotter.renderer
     if reset_camera is None:
-        # Not `not renderer.actors`: pyvista puts a border actor in every subplot.
-        reset_camera = not plotter.renderer.camera_set
+        # Not `not renderer.actors`: pyvista puts a border actor in every subplot. A camera
+        # this glue framed (and nobody moved since) is framed again for the new volume.
+        reset_camera = not renderer.camera_set or _camera_state(renderer) == getattr(
+            renderer, "_vtksvdag_framed", None)
     # The legend and the scalar bar find their plotter through the actor (no cycle: a weak
     # reference).
     actor._vtksvdag_plotter = weakref.ref(plotter)
-    plotter.add_actor(actor, name=name, reset_camera=bool(reset_camera))
+    plotter.add_actor(actor, name=name, reset_camera=False)
+    if reset_camera:
+        _frame_visible(renderer)
     # Nobody watches an off-screen plotter's frames: each still render is refined to spp before
     # it returns, so show(), screenshot() and VTK's window capture see the refined image.
     mapper.SetRefineStillRenders(bool(getattr(plotter, "off_screen", False)))
@@ -527,6 +565,55 @@ def add_segmentation(
     _enable_refinement(plotter)
     _refine_before_screenshots(plotter)
     return actor
+
+
+def _camera_state(renderer):
+    camera = renderer.GetActiveCamera()
+    return (camera.GetPosition(), camera.GetFocalPoint(), camera.GetViewUp(),
+            camera.GetViewAngle(), camera.GetParallelScale())
+
+
+def _visible_label_bounds(actor):
+    """World bounds (after the actor's matrix) of the voxels of the visible labels of a
+    segmentation actor (visible and opacity > 0), or None when none is."""
+    volume = actor._vtksvdag_volume
+    props = actor.GetMapper().GetLabelProperties()
+    keys = _label_keys(volume, volume.labels.tolist(), "label")
+    visible = np.array([props.GetVisibility(k) and props.GetOpacity(k) > 0 for k in keys], bool)
+    if not visible.any():
+        return None
+    boxes = volume.label_bounds[visible]
+    # Voxel (i, j, k) is the box [i, i + 1] of index space, centered on its point in world.
+    lo, hi = boxes[:, 0::2].min(axis=0), boxes[:, 1::2].max(axis=0) + 1
+    corners = np.array([[(hi if c >> a & 1 else lo)[a] for a in range(3)] for c in range(8)], float)
+    frame = np.asarray(volume.direction, float).reshape(3, 3) * np.asarray(volume.spacing, float)
+    world = np.asarray(volume.origin, float) + (corners - 0.5) @ frame.T
+    matrix = np.array([[actor.GetMatrix().GetElement(r, c) for c in range(4)] for r in range(4)])
+    world = world @ matrix[:3, :3].T + matrix[:3, 3]
+    return np.ravel([world.min(axis=0), world.max(axis=0)], order="F")
+
+
+def _frame_visible(renderer):
+    """Point the camera the way pyvista's first render would (its theme's direction), framing
+    the visible labels of every segmentation in the renderer and the other visible props."""
+    boxes = []
+    for actor in renderer.actors.values():
+        if not actor.GetVisibility() or not actor.IsA("vtkProp3D"):
+            continue
+        if hasattr(actor, "_vtksvdag_volume"):
+            box = _visible_label_bounds(actor)
+        else:
+            box = actor.GetBounds() if actor.GetUseBounds() else None
+        if box is not None and np.all(np.isfinite(box)) and box[0] <= box[1]:
+            boxes.append(np.asarray(box, float))
+    if not boxes:
+        renderer.reset_camera()
+        return
+    boxes = np.array(boxes)
+    bounds = np.ravel([boxes[:, 0::2].min(axis=0), boxes[:, 1::2].max(axis=0)], order="F")
+    renderer.camera_position = renderer.get_default_cam_pos()
+    renderer.ResetCamera(*bounds)
+    renderer._vtksvdag_framed = _camera_state(renderer)
 
 
 def _label_style(volume, props, attributes, colors, hidden_labels, color_by, cmap, clim, nan_color,

@@ -19,8 +19,9 @@ def _srgb_from_linear(c):
 def label_colors(volume, colors=None, cmap=None):
     """Display (sRGB, 0..1) color of each label of ``volume``, in the order of ``volume.labels``.
 
-    The same precedence as :func:`vtksvdag.add_segmentation`: ``colors`` first, then ``cmap``,
-    then the renderer's hash of the label index (the renderer's linear colors, sRGB-encoded).
+    The same precedence as :func:`vtksvdag.add_segmentation`: ``colors`` first, then ``cmap``
+    (``"hash"``: the renderer's hash of the label index, its linear colors sRGB-encoded), else
+    the distinct default colors (:meth:`SegmentationVolume.distinct_colors`).
 
     Returns
     -------
@@ -92,7 +93,7 @@ def add_segmentation_slice(plotter, data, *, normal="z", origin=None, index=None
     The slice is decoded straight from the compressed volume (only the cells it crosses), and
     every sample is drawn as a flat, unlit quad in its label's color, the colors
     :func:`vtksvdag.add_segmentation` gives the same labels (``colors``, then ``cmap``, then the
-    renderer's hash of the label index), so a slice and the 3D view match.
+    distinct default colors), so a slice and the 3D view match.
 
     Parameters
     ----------

@@ -646,6 +646,50 @@ class SegmentationVolume:
             colors.append(tuple(rgb))
         return colors
 
+    def label_adjacency(self):
+        """The label pairs that touch across a voxel face (6-neighbourhood).
+
+        Computed from the compressed form one 16-voxel layer of cells at a time (a few z-slices
+        of memory, never the dense volume). The background is not a label.
+
+        Returns
+        -------
+        numpy.ndarray of shape (n_pairs, 2), in :attr:`dtype`
+            Label values ``[a, b]`` with ``a < b`` (in the order of :attr:`labels`), each pair
+            once, sorted.
+
+        Examples
+        --------
+        >>> import numpy as np, vtksvdag
+        >>> labels = np.zeros((6, 1, 1), dtype=np.uint8)
+        >>> labels[:, 0, 0] = [1, 1, 2, 0, 3, 2]
+        >>> vtksvdag.from_numpy(labels).label_adjacency().tolist()
+        [[1, 2], [2, 3]]
+        """
+        pairs = vtkIdTypeArray()
+        with vtk_errors_raised(self._obj, ValueError):
+            self._obj.ComputeLabelAdjacency(pairs)
+        if pairs.GetNumberOfTuples() == 0:
+            return np.empty((0, 2), dtype=self._dtype)
+        return self.labels[vtk_to_numpy(pairs).reshape(-1, 2)]
+
+    def distinct_colors(self):
+        """The default label colors: a categorical palette assigned over :meth:`label_adjacency`
+        so that touching labels get clearly different colors (the C++ core's
+        ``svdag::distinctLabelColors``; ``add_segmentation`` uses them when no colors are given).
+
+        Returns
+        -------
+        numpy.ndarray of shape (n_labels, 3)
+            Display sRGB colors in [0, 1], in the order of :attr:`labels`.
+        """
+        colors = vtkDoubleArray()
+        with vtk_errors_raised(self._obj, ValueError):
+            self._obj.ComputeDistinctLabelColors(colors)
+        if colors.GetNumberOfTuples() == 0:
+            return np.empty((0, 3))
+        return vtk_to_numpy(colors).reshape(-1, 3).copy()
+
     def to_pyvista(self):
         """Decode into a ``pyvista.ImageData`` with point data "Labels".
 

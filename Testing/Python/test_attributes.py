@@ -134,9 +134,12 @@ def test_color_by_numeric_is_the_colormap_value(plotter):
     actor.set_color_by("score", cmap="viridis", clim=(0, 5))
     tops = [actor.label_properties.GetColor(v, got) and tuple(got) for v in (3, 4, 5)]
     np.testing.assert_allclose(tops, [viridis(1.0)[:3]] * 3, atol=1e-12)
-    # Back to the colors of add_segmentation (none: the hash colors, no color set).
+    # Back to the colors of add_segmentation (none given: the distinct default colors).
     actor.set_color_by(None)
-    assert not any(actor.label_properties.GetColor(v, got) for v in (1, 2, 3, 4, 5, 9))
+    volume = vtksvdag.from_numpy(slabs())
+    for value, color in zip(volume.labels.tolist(), volume.distinct_colors()):
+        assert actor.label_properties.GetColor(value, got)
+        np.testing.assert_allclose(got, color)
 
 
 def test_color_by_categorical_and_explicit_colors(plotter):

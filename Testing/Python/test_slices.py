@@ -384,7 +384,7 @@ def test_add_segmentation_slice_colors_and_geometry():
 
 
 def test_hashed_default_colors_are_the_renderers():
-    """The slice's default (hash) colors are the renderer's (its materials), and that is the
+    """The slice's hash colors (cmap="hash") are the renderer's (its materials), and that is the
     documented svdagLabelColor finalizer, recomputed here with Python integers."""
     from vtksvdag.slicing import _srgb_from_linear, label_colors
 
@@ -398,9 +398,11 @@ def test_hashed_default_colors_are_the_renderers():
         return [0.15 + 0.8 * ((x >> s) & 255) / 255 for s in (0, 8, 16)]
 
     volume = vtksvdag.from_numpy(np.arange(1, 301, dtype=np.uint16).reshape(10, 6, 5))
-    got = label_colors(volume)
+    got = label_colors(volume, cmap="hash")
     expected = _srgb_from_linear(np.array([reference(i) for i in range(300)]))
     np.testing.assert_allclose(got, expected, rtol=1e-6)
+    # Without colors or cmap, the slice has the 3D view's default: the distinct colors.
+    np.testing.assert_allclose(label_colors(volume), volume.distinct_colors(), atol=1e-6)
 
 
 def test_slice_filter_in_a_pipeline(rng):

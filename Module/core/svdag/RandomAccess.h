@@ -47,6 +47,12 @@ void occupancyInBox(const Volume& volume, uint64_t blockIndex, const std::array<
 // `empty` where no block is; `scratch4096` is occupancy scratch space of 4096 bytes.
 void decodeCellLabels(const Volume& volume, uint64_t cell, uint32_t empty, uint32_t* out4096,
   uint8_t* scratch4096);
+// The label indices (`empty` where no block is) of the z-slices of cell layer `cz` (voxel z in
+// [16 cz, 16 cz + 16), clipped to the volume): dims[0] * dims[1] * slices values, x fastest, in
+// `out` (resized). The cells of the layer decode in parallel. The streaming passes over the
+// compressed form (label statistics, adjacency) walk the volume one layer at a time with it.
+void decodeLayerLabels(const Volume& volume, int32_t cz, uint32_t empty, std::vector<uint32_t>& out,
+  const ParallelFor& parallel = sequentialFor);
 
 // Decodes the labels of `box` into `out` (boxVoxels(box) values of the volume's scalar type,
 // x fastest). Voxels of no block hold the background.
