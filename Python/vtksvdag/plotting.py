@@ -3,6 +3,7 @@
 The volume is drawn by ``vtkSegmentationSVDAGVolumeMapper`` inside the plotter's own render
 window, depth-composited with every mesh in the scene.
 """
+import functools
 import numbers
 import os
 import time
