@@ -24,6 +24,7 @@ __version__ = "0.1.0"
 from .build import from_image, from_numpy  # noqa: E402 (needs the extended __path__)
 from .distributed import build_distributed  # noqa: E402
 from .fileio import from_bytes, read  # noqa: E402
+from .labelmeta import read_label_table  # noqa: E402
 from .plotting import add_segmentation, pick, refine  # noqa: E402
 from .slicing import add_segmentation_slice  # noqa: E402
 from .streaming import Builder  # noqa: E402
@@ -52,6 +53,7 @@ __all__ = [
     "from_numpy",
     "pick",
     "read",
+    "read_label_table",
     "refine",
     "__version__",
 ]

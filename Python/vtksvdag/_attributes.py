@@ -14,7 +14,9 @@ import numbers
 
 import numpy as np
 
+from ._colors import to_rgb as _rgb
 from ._labels import label_pattern
+from ._labeltable import read_attributes
 
 #: The color of labels without a value in the ``color_by`` column (documented in
 #: add_segmentation): a neutral mid grey, darker than the default light background.
@@ -111,19 +113,31 @@ def column_colors(series, cmap=None, clim=None, nan_color=NAN_COLOR):
 
 
 def query_labels(table, query):
-    """Index values of the rows of ``table`` that satisfy the pandas query expression."""
+    """Index values of the rows of ``table`` that satisfy the pandas query expression.
+
+    Evaluated with pandas' python engine, whether or not numexpr is installed: numexpr cannot
+    run string methods (``name.str.contains('Hippocampus')``), and one engine keeps one
+    behaviour everywhere. A missing value where the expression gives True or False (a label
+    without a name) does not match, as a comparison with a missing value is false.
+    """
+    pd = _pandas()
     if not isinstance(query, str) or not query.strip():
         raise ValueError(f"query must be a non-empty pandas query expression, got {query!r}")
     columns = [str(c) for c in table.columns]
     try:
-        matched = table.query(query)
+        result = table.eval(query, engine="python")
     except Exception as error:  # pandas raises NameError, SyntaxError, TypeError, KeyError, ...
         raise ValueError(f"query {query!r} failed on the label table ({type(error).__name__}: "
                          f"{error}); its columns are {columns}") from None
-    if not isinstance(matched, type(table)) or not matched.index.isin(table.index).all():
-        raise ValueError(f"query {query!r} does not select rows of the label table; its columns "
-                         f"are {columns}")
-    return matched.index
+    values = result.to_numpy(dtype=object) if isinstance(result, pd.Series) else None
+    known = None if values is None else ~pd.isna(result).to_numpy()
+    if (values is None or not result.index.equals(table.index)
+            or not all(isinstance(v, (bool, np.bool_)) for v in values[known])):
+        raise ValueError(f"query {query!r} does not select rows of the label table (it must be "
+                         f"true or false for each label); its columns are {columns}")
+    matched = known.copy()
+    matched[known] = values[known].astype(bool)
+    return table.index[matched]
 
 
 class LabelStyle:
@@ -133,13 +147,14 @@ class LabelStyle:
     column or query is applied on top of it, and changes only the labels whose state changes.
     """
 
-    def __init__(self, volume, props, *, attributes=None, colors=None, hidden=()):
+    def __init__(self, volume, props, *, attributes=None, colors=None, hidden=(), check=True):
         self.volume = volume
         self.props = props
         self.values = volume.labels.tolist()
         self.keys = [label_key(v, volume.dtype) for v in self.values]
         self._key_of = dict(zip(self.values, self.keys))
-        self._attributes = attributes
+        # Read (a file) and checked once; joined with the label statistics when first needed.
+        self._attributes = None if attributes is None else read_attributes(attributes)
         self._table = None
         # Colors set before any color_by (cmap, colors): restored by color_by(None).
         self._base_colors = {}
@@ -152,7 +167,9 @@ class LabelStyle:
         self.query = None
         self.color_column = None
         self.highlighted = []
-        if attributes is not None:
+        # check=False: a table that came with the volume's file is joined on first use, so
+        # that adding the volume does not make the statistics pass for it.
+        if attributes is not None and check:
             self.table  # noqa: B018 (read and check the attributes now, not on first use)
 
     @property
@@ -169,6 +186,33 @@ class LabelStyle:
         return self._key_of[value]
 
     # -- colors ---------------------------------------------------------------------------
+    def use_color_column(self):
+        """The attributes' ``color`` column (from :func:`vtksvdag.read_label_table`, or any
+        color pyvista accepts) as the labels' base colors, under the explicit ones; labels
+        without a value keep theirs. Read from the attributes alone: the label statistics
+        are not computed for it."""
+        attributes = self._attributes
+        if attributes is None or "color" not in attributes.columns:
+            return
+        props = self.props
+        index = {int(v): i for i, v in enumerate(attributes.index.tolist())}
+        column = attributes["color"].tolist()
+        for value, key in zip(self.values, self.keys):
+            row = index.get(int(value))
+            color = None if row is None else column[row]
+            if color is None or (not isinstance(color, (tuple, list, np.ndarray, str))
+                                 and _pandas().isna(color)):
+                continue
+            try:
+                rgb = _rgb(color)
+            except (ValueError, TypeError) as error:
+                raise ValueError(f"the color column's value for label {value} is not a color: "
+                                 f"{color!r} ({error})") from None
+            self._base_colors[key] = rgb
+            props.SetColor(key, *rgb)
+        for key, color in self._explicit.items():
+            props.SetColor(key, *color)
+
     def set_color_by(self, column, cmap=None, clim=None, nan_color=NAN_COLOR):
         props = self.props
         if column is None:
@@ -283,7 +327,9 @@ def add_render_arguments(parser):
     group = parser.add_argument_group("label attributes")
     group.add_argument("--attributes", metavar="TABLE.csv",
                        help="CSV table of per-label attributes with a 'label' column, joined on the "
-                            "label value with the computed columns (voxel_count, volume, ...)")
+                            "label value with the computed columns (voxel_count, volume, ...), or "
+                            "a label table vtksvdag.read_label_table reads (FreeSurfer, ITK-SNAP, "
+                            ".seg.nrrd, ...); its 'color' column colors the labels")
     group.add_argument("--color-by", metavar="COLUMN",
                        help="color the labels by a column: numbers on a continuous colormap over its "
                             "range, other values one color per category; labels without a value grey")
@@ -311,6 +357,7 @@ def apply_render_options(args, volume, props, hidden_values=()):
     hidden = [label_key(v, volume.dtype) for v in hidden_values]
     try:
         style = LabelStyle(volume, props, attributes=args.attributes, hidden=hidden)
+        style.use_color_column()
     except ValueError as error:
         raise ValueError(f"--attributes: {error}") from None
     for option, apply in (("--color-by", lambda: args.color_by is not None and style.set_color_by(

@@ -43,52 +43,33 @@ def label_table(volume, centroids, surface, attributes=None):
 
 
 def read_attributes(attributes):
-    """``attributes`` (a DataFrame with a ``label`` column or index, or a CSV path) as a
-    DataFrame indexed by integer label value (index name ``label``).
+    """``attributes`` (a DataFrame with a ``label`` column or index, or the path of a label
+    table: a CSV file, or any file :func:`vtksvdag.read_label_table` reads) as a DataFrame
+    indexed by integer label value (index name ``label``).
 
     Raises ValueError for a table without labels, non-integer or duplicate labels, and
-    FileNotFoundError for a missing CSV file.
+    FileNotFoundError for a missing file.
     """
     import pandas as pd
 
+    from .labelmeta import CSV, detect_format, indexed_by_label, read_label_table
+
     if isinstance(attributes, (str, bytes, os.PathLike)):
         path = os.fsdecode(attributes)
-        if not os.path.isfile(path):
+        if not os.path.exists(path):
             raise FileNotFoundError(f"attribute table {path} does not exist")
-        try:
-            table = pd.read_csv(path)
-        except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as error:
-            raise ValueError(f"attribute table {path} is not a readable CSV file: {error}") from None
-        where = f" (in {path})"
-    elif isinstance(attributes, pd.DataFrame):
-        table = attributes
-        where = ""
-    else:
-        raise TypeError("attributes must be a pandas.DataFrame or the path of a CSV file, not "
-                        f"{type(attributes).__name__}")
-    if "label" in table.columns:
-        table = table.set_index("label")
-    elif table.index.name != "label":
-        raise ValueError(
-            f"the attribute table{where} needs a 'label' column (or an index named 'label') with "
-            f"the label values; its columns are {list(map(str, table.columns))}")
-    index = table.index
-    if len(index) and index.dtype.kind not in "iu":
-        # Whole floats are accepted (labels that passed through a float column); missing
-        # labels, fractions and strings are not.
-        values = index.to_numpy()
-        whole = values.dtype.kind == "f" and bool(np.all(np.isfinite(values))) and bool(
-            np.all(values == np.round(values)))
-        if not whole:
-            raise ValueError(f"the attribute table's labels{where} must be integers (no missing "
-                             f"values), got {index.dtype} values such as {index[:3].tolist()}")
-        table = table.copy()
-        table.index = pd.Index(values.astype(np.int64), name="label")
-        index = table.index
-    if not index.is_unique:
-        duplicates = sorted(set(index[index.duplicated()].tolist()))[:5]
-        raise ValueError(f"the attribute table{where} has more than one row for labels {duplicates}")
-    return table
+        # A CSV file is read as it is (its columns unchanged); other formats are color tables.
+        if os.path.isfile(path) and (path.lower().endswith(".csv") or detect_format(path) == CSV):
+            try:
+                table = pd.read_csv(path)
+            except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as error:
+                raise ValueError(f"attribute table {path} is not a readable CSV file: {error}") from None
+            return indexed_by_label(table, f" (in {path})")
+        return read_label_table(path)
+    if isinstance(attributes, pd.DataFrame):
+        return indexed_by_label(attributes, "")
+    raise TypeError("attributes must be a pandas.DataFrame or the path of a CSV file (or of a "
+                    f"label table read_label_table reads), not {type(attributes).__name__}")
 
 
 def _join_attributes(table, attributes, dtype):
@@ -105,7 +86,9 @@ def _join_attributes(table, attributes, dtype):
     present = set(int(k) for k in table.index.tolist())
     known = np.array([int(info.min) <= k <= int(info.max) and k in present for k in keys], bool)
     unknown = [k for k, ok in zip(keys, known) if not ok]
-    if unknown:
+    # A color table (read_label_table: a FreeSurfer LUT, a .seg.nrrd's segments) names labels
+    # in general; that a volume holds only some of them is expected, not worth a warning.
+    if unknown and not attributes.attrs.get("format"):
         shown = ", ".join(str(k) for k in unknown[:10]) + (" ..." if len(unknown) > 10 else "")
         warnings.warn(f"{len(unknown)} labels of the attributes are not in the volume and are "
                       f"left out: {shown}", UserWarning, stacklevel=3)

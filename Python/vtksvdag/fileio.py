@@ -1,6 +1,7 @@
 """Files: read label volumes and ``.svdag`` files, write ``.svdag`` files."""
 import os
 import time
+import warnings
 
 import numpy as np
 
@@ -204,6 +205,10 @@ def read(path, background=0, exclude=(), dataset=None, progress=None, *, scale=N
     SegmentationVolume
         ``load_seconds`` is set for ``.svdag`` files; otherwise ``build_seconds`` holds the time
         of reading and compressing (one streaming pass, they cannot be timed apart).
+        ``label_metadata`` holds the segment names and colors of a 3D Slicer ``.seg.nrrd``
+        (its header, read with pynrrd) or an OME-Zarr label image's ``image-label`` metadata,
+        as :func:`vtksvdag.read_label_table` reads them, else None; malformed metadata is
+        left out with a ``UserWarning`` that says what is wrong.
 
     Raises
     ------
@@ -238,15 +243,23 @@ def read(path, background=0, exclude=(), dataset=None, progress=None, *, scale=N
     check_cast(cast)
     store = _chunked_store(path, dataset)
     if store is not None:
+        from . import stores
         from .stores import read_store
 
         if cast is not None:
             raise ValueError(f"cast={cast!r} is not supported for chunked stores yet (only "
                              f"NRRD and .npy files); a store's float array is refused")
         exclude = label_list(exclude)
-        return read_store(*store, background=background, exclude=exclude, scale=scale,
-                          axis_order=axis_order, progress=progress,
-                          cache_bytes=check_cache_bytes(cache_bytes))
+        volume = read_store(*store, background=background, exclude=exclude, scale=scale,
+                            axis_order=axis_order, progress=progress,
+                            cache_bytes=check_cache_bytes(cache_bytes))
+        location, kind = store
+        if kind == stores.OME:
+            from .labelmeta import ome_label_metadata
+
+            volume.label_metadata = _label_metadata(ome_label_metadata,
+                                                    stores.ome_attributes(location), location.text)
+        return volume
     path = _check_input_file(path)
     exclude = label_list(exclude)  # a generator is read once
     for name, value in (("scale", scale), ("axis_order", axis_order), ("cache_bytes", cache_bytes)):
@@ -312,4 +325,19 @@ def read(path, background=0, exclude=(), dataset=None, progress=None, *, scale=N
     # The reader detects formats by content, so ask it rather than trusting the suffix.
     if reader.GetFileFormat() == "SVDAG":
         return SegmentationVolume(output, load_seconds=seconds)
-    return SegmentationVolume(output, build_seconds=seconds)
+    volume = SegmentationVolume(output, build_seconds=seconds)
+    if reader.GetFileFormat() == "NRRD":
+        from .labelmeta import nrrd_label_metadata
+
+        volume.label_metadata = _label_metadata(nrrd_label_metadata, path)  # a .seg.nrrd's segments
+    return volume
+
+
+def _label_metadata(read, *args):
+    """The label metadata of a file :func:`read` read, or None. Malformed metadata is warned
+    about and left out rather than raised: the volume itself was read correctly."""
+    try:
+        return read(*args)
+    except (ValueError, ImportError) as error:  # ImportError: pynrrd missing
+        warnings.warn(f"the label metadata is left out: {error}", UserWarning, stacklevel=3)
+        return None

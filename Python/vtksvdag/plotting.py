@@ -310,8 +310,13 @@ def add_segmentation(
         index name ``label``), or the path of a CSV file with a ``label`` column. It is joined
         on the label value with the volume's own label table (voxel counts, volume, bounds,
         ...; see :meth:`SegmentationVolume.label_table`); rows of labels the volume does not
-        hold are left out (with a warning). Attribute columns must not be named like the
-        computed ones (ValueError).
+        hold are left out (with a warning, except for tables from
+        :func:`vtksvdag.read_label_table`, which may also be given as a path). Attribute
+        columns must not be named like the computed ones (ValueError). A ``color`` column
+        (RGB tuples in 0-1, or any color pyvista accepts) colors the labels that have one,
+        unless ``cmap`` is given without ``color_by``; ``colors`` wins over it. A ``name``
+        column is queried like any other (``query="name.str.contains('Hippocampus')"``).
+        Default: the volume's ``label_metadata`` (from a ``.seg.nrrd`` or OME-Zarr file).
     color_by : str, optional
         A column of the joined table that colors the labels with ``cmap``: numbers on a
         continuous scale over the column's range (or ``clim``; default colormap viridis),
@@ -627,7 +632,15 @@ def _label_style(volume, props, attributes, colors, hidden_labels, color_by, cma
         values = list(colors)
         explicit = {k: _rgb(colors[v]) for k, v in zip(_label_keys(volume, values, "colors label"), values)}
     hidden = _label_keys(volume, list(hidden_labels), "hidden label") if hidden_labels is not None else []
-    style = LabelStyle(volume, props, attributes=attributes, colors=explicit, hidden=hidden)
+    # A volume read with label metadata (.seg.nrrd, OME-Zarr) is named and colored by it
+    # unless attributes are given; checked lazily: it came from the file, not from the caller.
+    metadata = getattr(volume, "label_metadata", None) if attributes is None else None
+    style = LabelStyle(volume, props, attributes=attributes if metadata is None else metadata,
+                       colors=explicit, hidden=hidden, check=metadata is None)
+    if cmap is None or color_by is not None:
+        # The table's colors are the labels' own: an explicit cmap (without color_by) recolors
+        # every label instead; colors= wins over both.
+        style.use_color_column()
     if color_by is not None:
         nan = _rgb(nan_color) if nan_color is not None else NAN_COLOR
         style.set_color_by(color_by, cmap=cmap, clim=clim, nan_color=nan)

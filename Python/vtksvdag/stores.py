@@ -144,6 +144,15 @@ LOOKED_FOR = (
 )
 
 
+def ome_attributes(location):
+    """The group attributes of the OME-Zarr at ``location``: its ``.zattrs`` (0.4), or the
+    ``attributes`` of its ``zarr.json`` (0.5)."""
+    attributes = location.read_json(".zattrs")
+    if not _ome_multiscales(attributes):
+        attributes = (location.read_json("zarr.json") or {}).get("attributes")
+    return attributes
+
+
 def detect(location):
     """The kind of store at ``location`` (a _Location): one of ZARR2, ZARR3, N5, PRECOMPUTED,
     OME, or None when it holds no store this module knows."""
@@ -340,10 +349,7 @@ def open_store(location, kind, scale=None, axis_order=None, cache_bytes=DEFAULT_
         raise ValueError(f"axis_order must be 'xyz' or 'zyx', not {axis_order!r}")
     context = context_spec(cache_bytes)
     if kind == OME:
-        attributes = location.read_json(".zattrs")
-        if not _ome_multiscales(attributes):
-            attributes = (location.read_json("zarr.json") or {}).get("attributes")
-        return _open_ome(ts, location, attributes, scale, axis_order, context)
+        return _open_ome(ts, location, ome_attributes(location), scale, axis_order, context)
     spec = {"driver": kind, "kvstore": location.kvstore_spec()}
     if kind == PRECOMPUTED:
         info = location.read_json("info")

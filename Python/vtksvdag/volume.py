@@ -65,6 +65,18 @@ class SegmentationVolume:
         Wall time the compression took, when known.
     load_seconds : float, optional
         Wall time reading an already compressed ``.svdag`` file took.
+    label_metadata : pandas.DataFrame, optional
+        Names, colors and other metadata of the labels, as
+        :func:`vtksvdag.read_label_table` returns them.
+
+    Attributes
+    ----------
+    label_metadata : pandas.DataFrame or None
+        The label metadata of the file the volume was read from (:func:`vtksvdag.read` fills
+        it from a 3D Slicer ``.seg.nrrd`` header or an OME-Zarr label image's
+        ``image-label``), or None. :func:`vtksvdag.add_segmentation` uses it as the attributes
+        by default (names and colors). It is pickled with the volume, not saved into
+        ``.svdag`` files.
 
     Examples
     --------
@@ -81,7 +93,7 @@ class SegmentationVolume:
     True
     """
 
-    def __init__(self, dataobject, *, build_seconds=None, load_seconds=None):
+    def __init__(self, dataobject, *, build_seconds=None, load_seconds=None, label_metadata=None):
         if not isinstance(dataobject, vtkSegmentationSVDAG):
             raise TypeError(f"expected a vtkSegmentationSVDAG, not {type(dataobject).__name__}")
         if not dataobject.HasVolume():
@@ -89,6 +101,7 @@ class SegmentationVolume:
         self._obj = dataobject
         self.build_seconds = build_seconds
         self.load_seconds = load_seconds
+        self.label_metadata = label_metadata
         self._dtype = numpy_dtype_of_vtk_type(dataobject.GetLabelScalarType())
         self._labels = None
         self._counts = None
@@ -820,8 +833,10 @@ class SegmentationVolume:
         return svdag_bytes(self, compression_level)
 
     def __reduce__(self):
-        # The timings are part of the object, not of the volume: they travel as well.
-        return (_unpickle, (svdag_bytes(self, 1), self.build_seconds, self.load_seconds))
+        # The timings and the label metadata are part of the object, not of the volume: they
+        # travel as well.
+        return (_unpickle, (svdag_bytes(self, 1), self.build_seconds, self.load_seconds,
+                            self.label_metadata))
 
     def __repr__(self):
         s = self.stats()
@@ -833,8 +848,8 @@ class SegmentationVolume:
         )
 
 
-def _unpickle(data, build_seconds, load_seconds):
-    volume = SegmentationVolume(dataobject_from_bytes(data))
+def _unpickle(data, build_seconds, load_seconds, label_metadata=None):
+    volume = SegmentationVolume(dataobject_from_bytes(data), label_metadata=label_metadata)
     volume.build_seconds = build_seconds
     volume.load_seconds = load_seconds
     return volume

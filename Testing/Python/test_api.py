@@ -268,7 +268,7 @@ def test_progress_is_reported(rng):
 @pytest.mark.parametrize(
     "module",
     ["vtksvdag", "vtksvdag.volume", "vtksvdag.build", "vtksvdag.fileio", "vtksvdag.export",
-     "vtksvdag.progress", "vtksvdag.cli"],
+     "vtksvdag.progress", "vtksvdag.cli", "vtksvdag.labelmeta"],
 )
 def test_docstring_examples(module, tmp_path, monkeypatch):
     import doctest
