@@ -13,6 +13,7 @@
 #include <cmath>
 #include <map>
 #include <optional>
+#include <utility>
 #include <set>
 
 vtkStandardNewMacro(vtkSegmentationSVDAGLabelProperties);
@@ -40,6 +41,15 @@ struct Appearance
   std::optional<double> roughness, metallic, transmission, ior, specular;
   std::optional<std::array<double, 3>> emission;
 };
+
+// The volume (null without one) and the index of `label` in its table (-1: none, or no volume).
+std::pair<const svdag::Volume*, int64_t> findLabel(vtkSegmentationSVDAG* volume, vtkTypeInt64 label)
+{
+  if (!volume || !volume->HasVolume())
+    return { nullptr, -1 };
+  const svdag::Volume* v = volume->GetVolume().get();
+  return { v, v->findLabel(uint64_t(label)) };
+}
 
 const svdag::render::Material& defaults()
 {
@@ -346,12 +356,10 @@ std::vector<svdag::shading::Material> vtkSegmentationSVDAGLabelProperties::Mater
 bool vtkSegmentationSVDAGLabelProperties::GetMaterial(
   vtkSegmentationSVDAG* volume, vtkTypeInt64 label, double material[16])
 {
-  if (!volume || !volume->HasVolume())
-    return false;
-  const svdag::Volume& v = *volume->GetVolume();
-  const int64_t index = v.findLabel(uint64_t(label));
+  const auto [found, index] = findLabel(volume, label);
   if (index < 0)
     return false;
+  const svdag::Volume& v = *found;
   // The whole table: a label's default color depends on its index.
   const svdag::render::Material m = this->MaterialsFor(v)[size_t(index)];
   const glm::vec4* parts[4] = { &m.baseColorVisibility, &m.emission, &m.params, &m.extra };
@@ -364,12 +372,10 @@ bool vtkSegmentationSVDAGLabelProperties::GetMaterial(
 bool vtkSegmentationSVDAGLabelProperties::GetDisplayColor(
   vtkSegmentationSVDAG* volume, vtkTypeInt64 label, double rgb[3])
 {
-  if (!volume || !volume->HasVolume())
-    return false;
-  const svdag::Volume& v = *volume->GetVolume();
-  const int64_t index = v.findLabel(uint64_t(label));
+  const auto [found, index] = findLabel(volume, label);
   if (index < 0)
     return false;
+  const svdag::Volume& v = *found;
   // The precedence of MaterialsFor, without its highlight dimming and the linear conversion
   // (one label: MaterialsFor builds the whole table).
   if (this->GetColor(label, rgb))

@@ -169,6 +169,39 @@ def interior(mask):
     return inner
 
 
+def two_boxes(n=40):
+    """(z, y, x) uint16 labels: two overlapping boxes, labels 3 and 7 (the mapper tests' volume)."""
+    labels = np.zeros((n, n, n), np.uint16)
+    labels[5:20, 8:30, 10:25] = 3
+    labels[15:35, 12:25, 20:38] = 7
+    return labels
+
+
+def tilted_slab():
+    """A flat green slab (ambient only) through two_boxes' volume, tilted against its voxel faces:
+    the mesh of the depth compositing tests."""
+    from vtkmodules.vtkFiltersSources import vtkCubeSource
+    from vtkmodules.vtkRenderingCore import vtkActor, vtkPolyDataMapper
+
+    cube = vtkCubeSource()
+    cube.SetCenter(0, 0, 0)
+    cube.SetXLength(60)
+    cube.SetYLength(4)
+    cube.SetZLength(60)
+    mesh_mapper = vtkPolyDataMapper()
+    mesh_mapper.SetInputConnection(cube.GetOutputPort())
+    actor = vtkActor()
+    actor.SetMapper(mesh_mapper)
+    actor.SetPosition(22, 18, 20)
+    actor.RotateZ(30)
+    prop = actor.GetProperty()
+    prop.SetColor(0.0, 1.0, 0.0)
+    prop.SetAmbient(1.0)
+    prop.SetDiffuse(0.0)
+    prop.SetSpecular(0.0)
+    return actor
+
+
 def mapper_scene(svdag, camera_position=(80, -60, 90), focal=(20, 20, 20), up=(0, 0, 1),
                  parallel=False, clipping=(20.0, 300.0), size=(200, 150)):
     """An off-screen VTK window with one volume drawn by vtkSegmentationSVDAGVolumeMapper and a

@@ -531,6 +531,12 @@ def label_color(actor, label):
     return tuple(rgb) if actor.GetMapper().GetLabelProperties().GetColor(label, rgb) else None
 
 
+def palette_color(actor, label):
+    """The default color of a label the table does not color: the volume's distinct palette."""
+    volume = actor.segmentation
+    return tuple(volume.distinct_colors()[list(volume.labels).index(label)])
+
+
 def test_add_segmentation_colors_and_queries_by_table(tmp_path, plotter):
     table = vtksvdag.read_label_table(freesurfer_lut(tmp_path / "FreeSurferColorLUT.txt"))
     lut_rgb = {i: (r / 255, g / 255, b / 255) for i, _, r, g, b, _ in FREESURFER_ROWS}
@@ -543,7 +549,7 @@ def test_add_segmentation_colors_and_queries_by_table(tmp_path, plotter):
                                           query="name.str.contains('Hippocampus')")
     for label in (2, 17, 18, 53):
         np.testing.assert_allclose(label_color(actor, label), lut_rgb[label], rtol=0, atol=1e-12)
-    assert label_color(actor, 77) is None  # no row: the default color
+    assert label_color(actor, 77) == palette_color(actor, 77)  # no row: the default color
     # The query on names: label 77 has no name (NaN), which does not match.
     assert actor.visible_labels == [17, 53]
     assert actor.set_query("name == 'Left-Amygdala' or name.isna()") == [18, 77]
@@ -555,7 +561,7 @@ def test_add_segmentation_colors_and_queries_by_table(tmp_path, plotter):
     assert label_color(actor, 17) != pytest.approx(lut_rgb[17])
     actor.set_color_by(None)
     np.testing.assert_allclose(label_color(actor, 17), lut_rgb[17], rtol=0, atol=1e-12)
-    assert label_color(actor, 77) is None
+    assert label_color(actor, 77) == palette_color(actor, 77)
 
     # colors= wins over the table; an explicit cmap recolors every label instead of it.
     red = vtksvdag.add_segmentation(plotter, atlas(), attributes=table, colors={17: "red"}, spp=1,
@@ -594,4 +600,5 @@ def test_add_segmentation_uses_the_volume_label_metadata(tmp_path, plotter):
     np.testing.assert_allclose(label_color(from_path, 2), SLICER_SEGMENTS[1][2], rtol=0, atol=1e-12)
     other = vtksvdag.add_segmentation(plotter, volume, spp=1, name="other",
                                       attributes=pd.DataFrame({"label": [1], "kind": ["x"]}))
-    assert label_color(other, 1) is None and "name" not in other.label_table.columns
+    assert label_color(other, 1) == palette_color(other, 1)
+    assert "name" not in other.label_table.columns

@@ -13,12 +13,11 @@ import textwrap
 import numpy as np
 import pytest
 import vtkmodules.vtkRenderingOpenGL2  # noqa: F401 (the OpenGL factory overrides)
-from conftest import mapper_scene, REPO, caster_pick, interior, compress_zyx, display_to_world, mapper_pick, pixel_ray
+from conftest import mapper_scene, REPO, tilted_slab, two_boxes, caster_pick, interior, compress_zyx, display_to_world, mapper_pick, pixel_ray
 from vtkmodules.util.numpy_support import vtk_to_numpy
 from vtkmodules.vtkCommonCore import vtkFloatArray
 from vtkmodules.vtkCommonMath import vtkMatrix4x4
-from vtkmodules.vtkFiltersSources import vtkCubeSource
-from vtkmodules.vtkRenderingCore import vtkActor, vtkPolyDataMapper, vtkWindowToImageFilter
+from vtkmodules.vtkRenderingCore import vtkWindowToImageFilter
 
 from vtksvdag.vtkSVDAGCore import vtkSegmentationSVDAGRayCaster
 from vtksvdag.vtkSVDAGRendering import vtkSegmentationSVDAGVolumeMapper
@@ -26,13 +25,6 @@ from vtksvdag.vtkSVDAGRendering import vtkSegmentationSVDAGVolumeMapper
 W, H = 200, 150
 DEPTH_STEP = 1.0 / (1 << 24)
 
-
-def two_boxes(n=40):
-    """(z, y, x) uint16 labels: two overlapping boxes, labels 3 and 7."""
-    labels = np.zeros((n, n, n), np.uint16)
-    labels[5:20, 8:30, 10:25] = 3
-    labels[15:35, 12:25, 20:38] = 7
-    return labels
 
 
 def make_scene(svdag, **options):
@@ -169,22 +161,7 @@ def test_depth_compositing_with_mesh(boxes, msaa, spp):
     props.SetColor(3, 1.0, 0.0, 0.0)
     props.SetColor(7, 0.0, 0.0, 1.0)
     # A slab through the middle of the volume, tilted with respect to the voxel faces.
-    cube = vtkCubeSource()
-    cube.SetCenter(0, 0, 0)
-    cube.SetXLength(60)
-    cube.SetYLength(4)
-    cube.SetZLength(60)
-    mesh_mapper = vtkPolyDataMapper()
-    mesh_mapper.SetInputConnection(cube.GetOutputPort())
-    actor = vtkActor()
-    actor.SetMapper(mesh_mapper)
-    actor.SetPosition(22, 18, 20)
-    actor.RotateZ(30)
-    prop = actor.GetProperty()
-    prop.SetColor(0.0, 1.0, 0.0)
-    prop.SetAmbient(1.0)
-    prop.SetDiffuse(0.0)
-    prop.SetSpecular(0.0)
+    actor = tilted_slab()
     renderer.AddActor(actor)
 
     volume.SetVisibility(0)

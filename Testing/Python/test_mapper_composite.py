@@ -10,20 +10,13 @@ Mesa (lavapipe with llvmpipe, as in CI) both exist and match, so the shared path
 import numpy as np
 import pytest
 import vtkmodules.vtkRenderingOpenGL2  # noqa: F401 (the OpenGL factory overrides)
-from conftest import compress_zyx, mapper_scene
+from conftest import compress_zyx, mapper_scene, tilted_slab, two_boxes
 from vtkmodules.util.numpy_support import vtk_to_numpy
 from vtkmodules.vtkCommonCore import vtkFloatArray
-from vtkmodules.vtkFiltersSources import vtkCubeSource
-from vtkmodules.vtkRenderingCore import vtkActor, vtkPolyDataMapper, vtkWindowToImageFilter
+from vtkmodules.vtkRenderingCore import vtkWindowToImageFilter
 
 W, H = 160, 120
 
-
-def two_boxes(n=40):
-    labels = np.zeros((n, n, n), np.uint16)
-    labels[5:20, 8:30, 10:25] = 3
-    labels[15:35, 12:25, 20:38] = 7
-    return labels
 
 
 @pytest.fixture(scope="module")
@@ -37,18 +30,7 @@ def scene(svdag, shared, size=(W, H)):
     mapper.SetSharedMemory(shared)
     mapper.SetTargetSamplesPerPixel(3)
     # A tilted slab through the volume: scene depth in, composited depth out.
-    cube = vtkCubeSource()
-    cube.SetXLength(60)
-    cube.SetYLength(4)
-    cube.SetZLength(60)
-    mesh = vtkPolyDataMapper()
-    mesh.SetInputConnection(cube.GetOutputPort())
-    actor = vtkActor()
-    actor.SetMapper(mesh)
-    actor.SetPosition(22, 18, 20)
-    actor.RotateZ(30)
-    actor.GetProperty().SetColor(0.0, 1.0, 0.0)
-    renderer.AddActor(actor)
+    renderer.AddActor(tilted_slab())
     return window, renderer, volume, mapper
 
 

@@ -9,7 +9,7 @@ center, its hit converted to window depth, against the window depth of the mesh 
 import numpy as np
 import pytest
 import vtkmodules.vtkRenderingOpenGL2  # noqa: F401 (the OpenGL factory overrides)
-from conftest import (caster_pick, capture_errors, compress_zyx, display_to_world, mapper_pick,
+from conftest import (two_boxes, caster_pick, capture_errors, compress_zyx, display_to_world, mapper_pick,
                       mapper_scene, pixel_ray)
 from vtkmodules.util.numpy_support import vtk_to_numpy
 from vtkmodules.vtkCommonCore import vtkFloatArray
@@ -23,12 +23,6 @@ from vtksvdag.vtkSVDAGCore import vtkSegmentationSVDAGRayCaster
 W, H = 200, 150
 LABELS = (3, 7)
 
-
-def two_boxes(n=40):
-    labels = np.zeros((n, n, n), np.uint16)
-    labels[5:20, 8:30, 10:25] = 3
-    labels[15:35, 12:25, 20:38] = 7
-    return labels
 
 
 @pytest.fixture(scope="module")
