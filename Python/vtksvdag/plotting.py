@@ -700,25 +700,30 @@ def _enable_refinement(plotter):
 
 def _refine_before_screenshots(plotter):
     """Make ``plotter.screenshot()`` (which ``show(screenshot=...)`` and pyvista's closing capture
-    call) refine every segmentation first: an on-screen plotter refines progressively while it is
-    shown, and a capture after it was shown would otherwise keep what it had reached.
+    call) and ``plotter.save_graphic()`` (whose PDF/EPS/PS output holds the 3-D props as a raster
+    of the window) refine every segmentation first: an on-screen plotter refines progressively
+    while it is shown, and a capture after it was shown would otherwise keep what it had reached.
 
-    pyvista has no hook before a capture, so the plotter's ``screenshot`` is wrapped, once.
+    pyvista has no hook before a capture, so these plotter methods are wrapped, once.
     """
     if getattr(plotter, "_vtksvdag_screenshot_refines", False):
         return
     plotter._vtksvdag_screenshot_refines = True
-    capture = plotter.screenshot
 
-    @functools.wraps(capture)
-    def screenshot(*args, **kwargs):
-        # Before the first render pyvista renders itself (and placed the camera only then); a
-        # closed plotter returns its last image.
-        if plotter.render_window is not None and not getattr(plotter, "_first_time", True):
-            refine(plotter)
-        return capture(*args, **kwargs)
+    def refining(capture):
+        @functools.wraps(capture)
+        def refined_capture(*args, **kwargs):
+            # Before the first render pyvista renders itself (and placed the camera only then);
+            # a closed plotter returns its last image.
+            if plotter.render_window is not None and not getattr(plotter, "_first_time", True):
+                refine(plotter)
+            return capture(*args, **kwargs)
 
-    plotter.screenshot = screenshot
+        return refined_capture
+
+    for name in ("screenshot", "save_graphic"):
+        if hasattr(plotter, name):
+            setattr(plotter, name, refining(getattr(plotter, name)))
 
 
 @_keywords_checked

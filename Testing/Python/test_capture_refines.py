@@ -154,3 +154,20 @@ def test_mapper_refine_still_renders_in_vtk():
     mapper.SetTargetSamplesPerPixel(500)
     window.Render()
     assert mapper.GetAccumulatedSamples() == 6
+
+
+def test_save_graphic_refines_first(tmp_path):
+    """pyvista's vector export (PDF here: Debian's GL2PS embeds no raster in SVG) holds the 3-D
+    props as a raster of the window: it is refined first."""
+    p, mapper = plotter(SPP, off_screen=False)
+    try:
+        p.show(auto_close=False, interactive=False)
+        p.camera.azimuth = 10
+        p.render_window.Render()
+        assert mapper.GetAccumulatedSamples() == 1
+        path = tmp_path / "figure.pdf"
+        p.save_graphic(str(path))
+        assert mapper.GetAccumulatedSamples() == SPP and mapper.IsConverged()
+        assert path.read_bytes().startswith(b"%PDF") and b"/Image" in path.read_bytes()
+    finally:
+        p.close()
