@@ -62,6 +62,11 @@ pip_install() {
                   block {print}' README.md)
   [ -n "$commands" ] || { echo "README.md has no install commands"; return 1; }
   (cd "$WORK/pip" && bash -euo pipefail -c "$commands")
+  # Debian's VTK and pandas are built against Debian's numpy: a newer one that pip put into the
+  # environment (a dependency asking for it) would shadow it.
+  "$WORK/pip/svdag-env/bin/python" -c "import numpy, sys
+if not numpy.__file__.startswith('/usr/lib/python3/'):
+    sys.exit('the environment has its own numpy ' + numpy.__version__ + ' (' + numpy.__file__ + '), not Debian\'s')"
 }
 
 run_check cmake-package cmake_package
