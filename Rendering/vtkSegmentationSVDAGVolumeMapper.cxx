@@ -732,7 +732,7 @@ void vtkSegmentationSVDAGVolumeMapper::Render(vtkRenderer* renderer, vtkVolume* 
       try
       {
         timed([&] {
-          in.Compositor.drawShared(window, vp, r.sharedColor().generation,
+          in.Compositor.drawShared(window, vp, r.sharedColorGeneration(),
             [&r] { return r.exportColor(); }, width, height, depth, exposure);
           return true;
         });

@@ -29,12 +29,7 @@ void sortUnique(std::vector<uint64_t>& pairs)
 
 uint64_t labelAdjacencyBytes(const Volume& v)
 {
-  const auto& d = v.geometry.dims;
-  uint64_t bytes = 0;
-  if (__builtin_mul_overflow(uint64_t(std::max(d[0], 0)), uint64_t(std::max(d[1], 0)), &bytes) ||
-    __builtin_mul_overflow(bytes, uint64_t(S + 1) * sizeof(uint32_t), &bytes))
-    return UINT64_MAX;
-  return bytes;
+  return layerSlicesBytes(v, S + 1);
 }
 
 std::vector<LabelPair> labelAdjacency(const Volume& v, const ParallelFor& parallel)

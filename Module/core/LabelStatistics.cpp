@@ -30,12 +30,7 @@ std::array<double, 3> LabelStatistics::centroid() const
 
 uint64_t labelStatisticsBytes(const Volume& v)
 {
-  const auto& d = v.geometry.dims;
-  uint64_t bytes = 0;
-  if (__builtin_mul_overflow(uint64_t(std::max(d[0], 0)), uint64_t(std::max(d[1], 0)), &bytes) ||
-    __builtin_mul_overflow(bytes, uint64_t(2 * S + 1) * sizeof(uint32_t), &bytes))
-    return UINT64_MAX;
-  return bytes;
+  return layerSlicesBytes(v, 2 * S + 1);
 }
 
 std::vector<LabelStatistics> labelStatistics(const Volume& v, const ParallelFor& parallel)

@@ -191,6 +191,16 @@ uint64_t boxBytes(const Box& box, uint64_t valueBytes)
   return __builtin_mul_overflow(boxVoxels(box), valueBytes, &bytes) ? UINT64_MAX : bytes;
 }
 
+uint64_t layerSlicesBytes(const Volume& v, uint64_t slices)
+{
+  const auto& d = v.geometry.dims;
+  uint64_t bytes = 0;
+  if (__builtin_mul_overflow(uint64_t(std::max(d[0], 0)), uint64_t(std::max(d[1], 0)), &bytes) ||
+    __builtin_mul_overflow(bytes, slices * sizeof(uint32_t), &bytes))
+    return UINT64_MAX;
+  return bytes;
+}
+
 void checkOutputMemory(uint64_t bytes, const std::string& what)
 {
   // Half the address space at most: vtkIdType, ptrdiff_t and numpy's sizes are signed.

@@ -228,17 +228,17 @@ const DeviceUuids& Renderer::deviceUuids() const
   return this->Device->context.uuids();
 }
 
-SharedColor Renderer::sharedColor() const
+uint64_t Renderer::sharedColorGeneration() const
 {
   const Gpu& g = *this->Device;
   if (!g.hdrShared || !g.hdr)
     throw std::logic_error("the color is not shared: setColorSharing(true), then render()");
-  return SharedColor{ g.hdrGeneration, uint64_t(g.outputPixels) * 4 * sizeof(float) };
+  return g.hdrGeneration;
 }
 
 ExportedMemory Renderer::exportColor() const
 {
-  this->sharedColor(); // the same checks
+  this->sharedColorGeneration(); // the same checks
   return this->Device->hdr.exportMemory();
 }
 

@@ -169,6 +169,15 @@ def interior(mask):
     return inner
 
 
+@pytest.fixture
+def plotter():
+    """A small off-screen pyvista plotter, closed after the test (skipped without pyvista)."""
+    pv = pytest.importorskip("pyvista")
+    p = pv.Plotter(off_screen=True, window_size=(64, 48))
+    yield p
+    p.close()
+
+
 def two_boxes(n=40):
     """(z, y, x) uint16 labels: two overlapping boxes, labels 3 and 7 (the mapper tests' volume)."""
     labels = np.zeros((n, n, n), np.uint16)
@@ -177,21 +186,28 @@ def two_boxes(n=40):
     return labels
 
 
+def mesh_actor(source):
+    """A vtkActor drawing a poly data source's output with a vtkPolyDataMapper."""
+    from vtkmodules.vtkRenderingCore import vtkActor, vtkPolyDataMapper
+
+    mesh_mapper = vtkPolyDataMapper()
+    mesh_mapper.SetInputConnection(source.GetOutputPort())
+    actor = vtkActor()
+    actor.SetMapper(mesh_mapper)
+    return actor
+
+
 def tilted_slab():
     """A flat green slab (ambient only) through two_boxes' volume, tilted against its voxel faces:
     the mesh of the depth compositing tests."""
     from vtkmodules.vtkFiltersSources import vtkCubeSource
-    from vtkmodules.vtkRenderingCore import vtkActor, vtkPolyDataMapper
 
     cube = vtkCubeSource()
     cube.SetCenter(0, 0, 0)
     cube.SetXLength(60)
     cube.SetYLength(4)
     cube.SetZLength(60)
-    mesh_mapper = vtkPolyDataMapper()
-    mesh_mapper.SetInputConnection(cube.GetOutputPort())
-    actor = vtkActor()
-    actor.SetMapper(mesh_mapper)
+    actor = mesh_actor(cube)
     actor.SetPosition(22, 18, 20)
     actor.RotateZ(30)
     prop = actor.GetProperty()

@@ -189,14 +189,6 @@ def test_tab20_fails_where_the_palette_does_not():
 
 
 # -- add_segmentation ---------------------------------------------------------------------------
-@pytest.fixture
-def plotter():
-    pv = pytest.importorskip("pyvista")
-    p = pv.Plotter(off_screen=True, window_size=(64, 48))
-    yield p
-    p.close()
-
-
 def test_default_colors_on_the_mapper_are_the_palette_assignment(plotter):
     labels = synthetic.voronoi((30, 30, 30), 25, seed=7).astype(np.int16) - 12  # negative values
     volume = vtksvdag.from_numpy(labels)

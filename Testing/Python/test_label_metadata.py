@@ -517,14 +517,6 @@ def atlas():
     return labels
 
 
-@pytest.fixture
-def plotter():
-    pv = pytest.importorskip("pyvista")
-    p = pv.Plotter(off_screen=True, window_size=(64, 48))
-    yield p
-    p.close()
-
-
 def label_color(actor, label):
     """The color the mapper's label properties hold for ``label``, or None."""
     rgb = [0.0] * 3

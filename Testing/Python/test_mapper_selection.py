@@ -9,13 +9,13 @@ center, its hit converted to window depth, against the window depth of the mesh 
 import numpy as np
 import pytest
 import vtkmodules.vtkRenderingOpenGL2  # noqa: F401 (the OpenGL factory overrides)
-from conftest import (two_boxes, caster_pick, capture_errors, compress_zyx, display_to_world, mapper_pick,
+from conftest import (two_boxes, mesh_actor, caster_pick, capture_errors, compress_zyx, display_to_world, mapper_pick,
                       mapper_scene, pixel_ray)
 from vtkmodules.util.numpy_support import vtk_to_numpy
 from vtkmodules.vtkCommonCore import vtkFloatArray
 from vtkmodules.vtkCommonDataModel import vtkDataObject, vtkPlane, vtkSelectionNode
 from vtkmodules.vtkFiltersSources import vtkSphereSource
-from vtkmodules.vtkRenderingCore import vtkActor, vtkPolyDataMapper, vtkPropPicker, vtkWindowToImageFilter
+from vtkmodules.vtkRenderingCore import vtkPropPicker, vtkWindowToImageFilter
 from vtkmodules.vtkRenderingOpenGL2 import vtkOpenGLHardwareSelector
 
 from vtksvdag.vtkSVDAGCore import vtkSegmentationSVDAGRayCaster
@@ -60,10 +60,7 @@ def scene_with_sphere(svdag, msaa=8):
     sphere.SetRadius(6)
     sphere.SetThetaResolution(48)
     sphere.SetPhiResolution(48)
-    mesh_mapper = vtkPolyDataMapper()
-    mesh_mapper.SetInputConnection(sphere.GetOutputPort())
-    actor = vtkActor()
-    actor.SetMapper(mesh_mapper)
+    actor = mesh_actor(sphere)
     renderer.AddActor(actor)
     return window, renderer, volume, mapper, actor
 

@@ -53,6 +53,9 @@ void decodeCellLabels(const Volume& volume, uint64_t cell, uint32_t empty, uint3
 // compressed form (label statistics, adjacency) walk the volume one layer at a time with it.
 void decodeLayerLabels(const Volume& volume, int32_t cz, uint32_t empty, std::vector<uint32_t>& out,
   const ParallelFor& parallel = sequentialFor);
+// Bytes of `slices` full z-slices of such 32-bit label indices: what a pass holding that many
+// slices at once needs (saturated at UINT64_MAX).
+uint64_t layerSlicesBytes(const Volume& volume, uint64_t slices);
 
 // Decodes the labels of `box` into `out` (boxVoxels(box) values of the volume's scalar type,
 // x fastest). Voxels of no block hold the background.

@@ -82,15 +82,6 @@ struct Image
   std::vector<float> variance;
 };
 
-// The shared HDR output (Renderer::setColorSharing): which allocation holds it now (a new
-// generation after each reallocation, which a new image size makes) and its size in bytes (4
-// floats per pixel, linear premultiplied RGBA in Image's pixel order).
-struct SharedColor
-{
-  uint64_t generation = 0;
-  uint64_t bytes = 0;
-};
-
 class Renderer
 {
 public:
@@ -253,11 +244,13 @@ public:
   bool colorSharing() const { return this->ShareColor; }
   bool canShareColor() const;
   const DeviceUuids& deviceUuids() const;
-  // After a render() with sharing on: the allocation holding the color, and a new file
-  // descriptor of its memory for the importer to own. std::logic_error otherwise. The memory is
-  // written by render() only, which returns when the writes are complete; the importer must have
-  // finished reading before it calls render() again (there are no shared semaphores here).
-  SharedColor sharedColor() const;
+  // After a render() with sharing on: which allocation holds the color (4 floats per pixel,
+  // linear premultiplied RGBA in Image's pixel order; a new generation after each reallocation,
+  // which a new image size makes), and a new file descriptor of its memory for the importer to
+  // own. std::logic_error otherwise. The memory is written by render() only, which returns when
+  // the writes are complete; the importer must have finished reading before it calls render()
+  // again (there are no shared semaphores here).
+  uint64_t sharedColorGeneration() const;
   ExportedMemory exportColor() const;
 
   // Traces one pass (samplesPerPixel samples per pixel, added to the accumulation) and reads
