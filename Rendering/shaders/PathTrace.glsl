@@ -51,11 +51,12 @@ SvdagMaterials gMaterials;
 bool gCameraRayHit;
 bool gFirstQuery;
 
-// The pixel-center ray's hit (writePrimaryOutputs), reused as the first camera path's first hit:
-// the first sample of an accumulation goes through the pixel center, so a frame that restarts
-// traces its primary rays once, not twice.
-PathHit gPrimaryHit;
-bool gReusePrimary = false;
+// The first sample of an accumulation goes through the pixel center: its camera ray's hit is the
+// pixel's label, depth and normal (writePrimaryOutputs), kept here by traceClosest when
+// gCapturePrimary is set. The primary rays are no trace of their own: the trace a compiler may
+// inline (the compute backend's grid walk) has one closest-hit site, in the path tracer.
+SvdagPayload gPrimaryPayload;
+bool gCapturePrimary = false;
 
 // Clipping planes and crop box (Clipping.h, the code the CPU ray caster runs): every ray below
 // is clipped to the kept region before it is traced, so cut-away parts are neither seen nor cast
@@ -113,29 +114,22 @@ PathHit payloadHit()
 // a ray continuing through a surface it has just crossed: the solid it starts in is skipped.
 PathHit traceClosest(vec3 origin, vec3 direction, float tmax, uint hitGroup)
 {
-  if (gFirstQuery && gReusePrimary)
-  {
-    gCameraRayHit = gPrimaryHit.hit;
-    gFirstQuery = false;
-    gReusePrimary = false;
-    return gPrimaryHit;
-  }
   traceClipped(origin, direction, tmax, hitGroup);
   PathHit h = payloadHit();
   if (gFirstQuery)
   {
     gCameraRayHit = h.hit;
     gFirstQuery = false;
+    if (gCapturePrimary)
+      gPrimaryPayload = payload;
   }
   return h;
 }
 
-// The hit group of occlusion rays: 0, or 1 (entry-only) for the shadow rays of smooth-shaded hits,
-// which start lifted above the voxel staircase and may start inside a voxel of a touching label
-// (SVDAG_TRACE_OCCLUDED_LIFTED): the solid they start in does not occlude.
-uint gOcclusionGroup = 0u;
-
-bool traceOccluded(vec3 origin, vec3 direction, float tmax)
+// hitGroup 1 (entry-only) for the shadow rays of smooth-shaded hits, which start lifted above the
+// voxel staircase and may start inside a voxel of a touching label: the solid they start in does
+// not occlude.
+bool traceOccluded(vec3 origin, vec3 direction, float tmax, uint hitGroup)
 {
   float tmin = 0.0;
   if (frame.clipping.x != 0u)
@@ -147,7 +141,7 @@ bool traceOccluded(vec3 origin, vec3 direction, float tmax)
     tmin = c.tmin;
     tmax = c.tmax;
   }
-  return svdagOccludedInterval(origin, direction, tmin, tmax, gOcclusionGroup);
+  return svdagOccludedInterval(origin, direction, tmin, tmax, hitGroup);
 }
 
 Material labelMaterial(uint labelIndex)
@@ -155,18 +149,11 @@ Material labelMaterial(uint labelIndex)
   return gMaterials.m[min(labelIndex, max(frame.sampling.w, 1u) - 1u)];
 }
 
-bool traceOccludedLifted(vec3 origin, vec3 direction, float tmax)
-{
-  gOcclusionGroup = 1u;
-  bool result = traceOccluded(origin, direction, tmax);
-  gOcclusionGroup = 0u;
-  return result;
-}
-
-#define SVDAG_TRACE_CLOSEST(hit, o, d, tmax) hit = traceClosest(o, d, tmax, 0u)
-#define SVDAG_TRACE_CLOSEST_THROUGH(hit, o, d, tmax) hit = traceClosest(o, d, tmax, 1u)
-#define SVDAG_TRACE_OCCLUDED(result, o, d, tmax) result = traceOccluded(o, d, tmax)
-#define SVDAG_TRACE_OCCLUDED_LIFTED(result, o, d, tmax) result = traceOccludedLifted(o, d, tmax)
+// hitGroup 1: the entry-only hit group (block.rint with SVDAG_ENTRY_ONLY), which skips the solid
+// the ray starts in.
+#define SVDAG_TRACE_CLOSEST(hit, o, d, tmax, skipStart) hit = traceClosest(o, d, tmax, (skipStart) ? 1u : 0u)
+#define SVDAG_TRACE_OCCLUDED(result, o, d, tmax, skipStart)                                        \
+  result = traceOccluded(o, d, tmax, (skipStart) ? 1u : 0u)
 #define SVDAG_MATERIAL(label) labelMaterial(label)
 #include "svdag_render/PathTracer.h"
 
@@ -206,22 +193,15 @@ CameraRay cameraRay(vec2 pixelPoint, uint index, uint width, uint height)
   return ray;
 }
 
-// The pixel-center ray's label, depth and normal.
-void writePrimaryOutputs(uvec2 pixel, uint index, uint width, uint height)
+// The pixel-center ray's label, depth and normal, from its hit in gPrimaryPayload.
+void writePrimaryOutputs(uint index, uint width, uint height)
 {
-  CameraRay ray = cameraRay(vec2(pixel) + 0.5, index, width, height);
-  payload.label = 0u;
-  payload.t = SVDAG_DEPTH_MISS;
-  payload.normal = vec3(0.0);
-  payload.shading = vec4(0.0);
-  if (ray.tmax > 0.0)
-    traceClipped(ray.origin, ray.direction, ray.tmax, 0u);
-  gPrimaryHit = payloadHit();
+  payload = gPrimaryPayload;
   SvdagUintOutput(frame.sceneOutputs.zw).v[index] = payload.label;
   SvdagFloatOutput(frame.outputs.xy).v[index] = payload.label != 0u ? payload.t : SVDAG_DEPTH_MISS;
   SvdagFloatOutput normals = SvdagFloatOutput(frame.outputs.zw);
   // The shading normal, then (from 3 * width * height on) the entry face normal (GpuLayout.h).
-  vec3 shading = payload.label != 0u ? gPrimaryHit.shading : vec3(0.0);
+  vec3 shading = payload.label != 0u ? shadingNormal() : vec3(0.0);
   normals.v[3u * index + 0u] = shading.x;
   normals.v[3u * index + 1u] = shading.y;
   normals.v[3u * index + 2u] = shading.z;
@@ -242,8 +222,6 @@ void svdagRenderPixel(uvec2 pixel)
   uint index = pixel.x + width * pixel.y;
   uint before = frame.sampling.x;
   uint samples = frame.sampling.y;
-  if (before == 0u)
-    writePrimaryOutputs(pixel, index, width, height);
 
   gEnvMarginal = SvdagFloats(frame.environmentMap.xy);
   gEnvConditional = SvdagFloats(frame.environmentMap.zw);
@@ -260,11 +238,17 @@ void svdagRenderPixel(uvec2 pixel)
     // One independent stream per (pixel, global sample index, seed).
     uint rng = pcgHash(index ^ pcgHash((before + s) ^ pcgHash(frame.sampling.z)));
     vec2 jitter = vec2(random01(rng), random01(rng));
-    if (before == 0u && s == 0u)
+    bool primary = before == 0u && s == 0u;
+    if (primary)
     {
       jitter = vec2(0.5);
-      gReusePrimary = true;
+      // A miss unless the path's camera ray hits (traceClosest).
+      gPrimaryPayload.label = 0u;
+      gPrimaryPayload.t = SVDAG_DEPTH_MISS;
+      gPrimaryPayload.normal = vec3(0.0);
+      gPrimaryPayload.shading = vec4(0.0);
     }
+    gCapturePrimary = primary;
     CameraRay ray = cameraRay(vec2(pixel) + jitter, index, width, height);
     gFirstQuery = true;
     gCameraRayHit = false;
@@ -272,7 +256,9 @@ void svdagRenderPixel(uvec2 pixel)
     vec3 radiance = ray.tmax > 0.0
       ? min(tracePath(params, ray.origin, ray.direction, ray.tmax, rng), vec3(1.0e30))
       : vec3(0.0);
-    gReusePrimary = false;
+    gCapturePrimary = false;
+    if (primary)
+      writePrimaryOutputs(index, width, height);
     vec4 value = gCameraRayHit ? vec4(radiance, 1.0) : frame.background;
     sum += value;
     float y = min(dot(value.rgb, luminance), 1.0e15);

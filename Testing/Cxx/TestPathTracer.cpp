@@ -28,11 +28,11 @@ thread_local const Scene* scene = nullptr;
 #define SVDAG_FEATURE_SUN true
 #define SVDAG_FEATURE_EMISSION true
 #define SVDAG_FEATURE_TRANSMISSION true
-#define SVDAG_TRACE_CLOSEST(hit, origin, direction, tmax) hit = traceScene(origin, direction, tmax)
 // traceScene already reports only entries (a ray inside a sphere leaves it without a hit), which
-// is what the renderer's entry-only trace does after a transmission event.
-#define SVDAG_TRACE_CLOSEST_THROUGH(hit, origin, direction, tmax) hit = traceScene(origin, direction, tmax)
-#define SVDAG_TRACE_OCCLUDED(result, origin, direction, tmax)                                     \
+// is what the renderer's entry-only trace (skipStart) does after a transmission event.
+#define SVDAG_TRACE_CLOSEST(hit, origin, direction, tmax, skipStart)                              \
+  hit = traceScene(origin, direction, tmax)
+#define SVDAG_TRACE_OCCLUDED(result, origin, direction, tmax, skipStart)                          \
   result = traceScene(origin, direction, tmax).hit
 #define SVDAG_MATERIAL(label) (materials[(label)])
 

@@ -19,14 +19,14 @@
  *
  * Its interface types (PathTracerParams, PathHit) are in Shading.h, so that the includer can
  * define its trace functions before including this file. The includer defines:
- *   SVDAG_TRACE_CLOSEST(hit, origin, direction, tmax)  fills a PathHit for the nearest surface
- *   SVDAG_TRACE_CLOSEST_THROUGH(hit, origin, direction, tmax)  the same for the ray that follows a
- *       transmission event (used only with SVDAG_FEATURE_TRANSMISSION): it starts just inside the
- *       solid it passed into, and must skip that solid and report the next surface it ENTERS
- *       (the renderer's entry-only hit group, Traversal.h "Entry only"); where a trace never
- *       reports a hit from inside anyway, it may be the plain trace
- *   SVDAG_TRACE_OCCLUDED(result, origin, direction, tmax)  sets result = true if anything is hit
- *   optionally SVDAG_TRACE_OCCLUDED_LIFTED (below)
+ *   SVDAG_TRACE_CLOSEST(hit, origin, direction, tmax, skipStart)  fills a PathHit for the nearest
+ *       surface; with skipStart the ray starts just inside a solid (after a transmission event) or
+ *       lifted above a smooth-shaded hit, possibly inside a voxel of a touching label, and must
+ *       skip the solid it starts in and report the next surface it ENTERS (the renderer's
+ *       entry-only hit group, Traversal.h "Entry only"); where a trace never reports a hit from
+ *       inside anyway, it may ignore skipStart
+ *   SVDAG_TRACE_OCCLUDED(result, origin, direction, tmax, skipStart)  sets result = true if
+ *       anything is hit (skipStart: the same, for shadow rays of smooth-shaded hits)
  *   SVDAG_MATERIAL(labelIndex)  the Material of a label
  *   and the environment macros of Shading.h.
  * Feature switches (specialization constants on the GPU, so a scene that does not use a feature
@@ -38,13 +38,8 @@
 
 #include "svdag_render/Shading.h"
 
-// Occlusion and closest-hit rays that leave a smooth-shaded hit start lifted above the voxel
-// staircase (PathHit.lift), possibly inside a voxel of a touching label: where the includer can,
-// these traces skip the solid they start in (the renderer: its entry-only hit group, like
-// SVDAG_TRACE_CLOSEST_THROUGH); by default the plain traces.
-#ifndef SVDAG_TRACE_OCCLUDED_LIFTED
-#define SVDAG_TRACE_OCCLUDED_LIFTED(result, o, d, tmax) SVDAG_TRACE_OCCLUDED(result, o, d, tmax)
-#endif
+// Each macro is expanded at one place only: an includer may inline its trace (the compute
+// backend inlines the whole grid walk), so every further site would be another copy of it.
 
 #ifdef __cplusplus
 namespace svdag
@@ -129,10 +124,7 @@ SHADING_FN vec3 tracePath(
   {
     PathHit h;
     float tmax = bounce == 0u ? cameraTmax : 1e30f;
-    if ((SVDAG_FEATURE_TRANSMISSION && through) || liftedPath)
-      SVDAG_TRACE_CLOSEST_THROUGH(h, o, d, tmax);
-    else
-      SVDAG_TRACE_CLOSEST(h, o, d, tmax);
+    SVDAG_TRACE_CLOSEST(h, o, d, tmax, (SVDAG_FEATURE_TRANSMISSION && through) || liftedPath);
     if (!h.hit)
     {
       bool weighted = nee && !previousDelta;
@@ -166,6 +158,12 @@ SHADING_FN vec3 tracePath(
     bool lifted = !h.inside && h.lift > 0.0f;
     vec3 shadowOrigin = lifted ? above + h.lift * ns : above;
 
+    // The event's shadow rays (at most two: the environment's or the last event's, and the
+    // sun's) are collected with what each adds where nothing is in the way, and traced by one
+    // loop below, after the samples are drawn (environment, sun, BSDF: the order of rng).
+    vec3 shadowDirection[2];
+    vec3 shadowRadiance[2];
+    uint shadows = 0u;
     // The last scattering event with a constant environment and nothing emissive (see above).
     bool lastEvent = nee && bounce + 1u == maxBounces && !(SVDAG_FEATURE_EMISSION) &&
       !(SVDAG_FEATURE_ENV_MAP);
@@ -176,37 +174,26 @@ SHADING_FN vec3 tracePath(
       vec3 f = bsdfEval(m, ns, wo, wl);
       if (lightPdf > 0.0f && max(f.x, max(f.y, f.z)) > 0.0f)
       {
-        bool blocked;
-        if (lifted)
-          SVDAG_TRACE_OCCLUDED_LIFTED(blocked, shadowOrigin, wl, 1e30f);
-        else
-          SVDAG_TRACE_OCCLUDED(blocked, shadowOrigin, wl, 1e30f);
-        if (!blocked)
-          radiance += throughput * f * environmentRadiance(p, wl) *
-            (powerHeuristic(lightPdf, bsdfPdf(m, ns, wo, wl)) / lightPdf);
+        shadowDirection[shadows] = wl;
+        shadowRadiance[shadows] = throughput * f * environmentRadiance(p, wl) *
+          (powerHeuristic(lightPdf, bsdfPdf(m, ns, wo, wl)) / lightPdf);
+        ++shadows;
       }
     }
-    if (nee)
+    if (nee && SVDAG_FEATURE_SUN && p.sunRadiance.a > 0.0f)
     {
-      if (SVDAG_FEATURE_SUN && p.sunRadiance.a > 0.0f)
+      float sunPdf;
+      vec3 ws = sunSample(p, vec2(random01(rng), random01(rng)), sunPdf);
+      vec3 fs = bsdfEval(m, ns, wo, ws);
+      if (max(fs.x, max(fs.y, fs.z)) > 0.0f)
       {
-        float sunPdf;
-        vec3 ws = sunSample(p, vec2(random01(rng), random01(rng)), sunPdf);
-        vec3 fs = bsdfEval(m, ns, wo, ws);
-        if (max(fs.x, max(fs.y, fs.z)) > 0.0f)
-        {
-          bool blocked;
-          if (lifted)
-            SVDAG_TRACE_OCCLUDED_LIFTED(blocked, shadowOrigin, ws, 1e30f);
-          else
-            SVDAG_TRACE_OCCLUDED(blocked, shadowOrigin, ws, 1e30f);
-          // Radiance E / omega over pdf 1 / omega is the irradiance E; a disk sun is MIS-weighted
-          // against BSDF sampling, a delta sun (pdf 0) only reachable here.
-          float w = sunPdf > 0.0f && !lastEvent ? powerHeuristic(sunPdf, bsdfPdf(m, ns, wo, ws)) : 1.0f;
-          vec3 contribution = w * fs * vec3(p.sunRadiance);
-          if (!blocked)
-            radiance += throughput * contribution;
-        }
+        // Radiance E / omega over pdf 1 / omega is the irradiance E; a disk sun is MIS-weighted
+        // against BSDF sampling, a delta sun (pdf 0) only reachable here.
+        float w = sunPdf > 0.0f && !lastEvent ? powerHeuristic(sunPdf, bsdfPdf(m, ns, wo, ws)) : 1.0f;
+        vec3 contribution = w * fs * vec3(p.sunRadiance);
+        shadowDirection[shadows] = ws;
+        shadowRadiance[shadows] = throughput * contribution;
+        ++shadows;
       }
     }
 
@@ -214,21 +201,25 @@ SHADING_FN vec3 tracePath(
     if (!SVDAG_FEATURE_TRANSMISSION)
       sm.params.z = 0.0f;
     BsdfSample s = bsdfSample(sm, ns, wo, !h.inside, vec3(random01(rng), random01(rng), random01(rng)));
-    if (max(s.weight.x, max(s.weight.y, s.weight.z)) <= 0.0f ||
-      (!s.transmitted && !lifted && !(dot(s.direction, n) > 0.0f)))
-      break;
-    if (lastEvent && !s.delta)
+    bool ends = max(s.weight.x, max(s.weight.y, s.weight.z)) <= 0.0f ||
+      (!s.transmitted && !lifted && !(dot(s.direction, n) > 0.0f));
+    // The last event: the environment along the BSDF sample, unless something is in the way.
+    bool lastShadow = !ends && lastEvent && !s.delta;
+    if (lastShadow)
     {
-      // The environment along the BSDF sample, unless something is in the way.
-      bool blocked;
-      if (lifted)
-        SVDAG_TRACE_OCCLUDED_LIFTED(blocked, shadowOrigin, s.direction, 1e30f);
-      else
-        SVDAG_TRACE_OCCLUDED(blocked, shadowOrigin, s.direction, 1e30f);
-      if (!blocked)
-        radiance += throughput * s.weight * environmentRadiance(p, s.direction);
-      break;
+      shadowDirection[shadows] = s.direction;
+      shadowRadiance[shadows] = throughput * s.weight * environmentRadiance(p, s.direction);
+      ++shadows;
     }
+    for (uint k = 0u; k < shadows; ++k)
+    {
+      bool blocked;
+      SVDAG_TRACE_OCCLUDED(blocked, shadowOrigin, shadowDirection[k], 1e30f, lifted);
+      if (!blocked)
+        radiance += shadowRadiance[k];
+    }
+    if (ends || lastShadow)
+      break;
     throughput *= s.weight;
     previousPdf = s.pdf;
     previousDelta = s.delta;
