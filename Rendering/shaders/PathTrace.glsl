@@ -8,10 +8,10 @@
 // The includer declares `SvdagPayload payload` (what a closest-hit query fills) and defines, for a
 // world ray (unit direction, relative to the scene's reference point) and an interval already
 // clipped to the clipping region:
-//   void svdagTraceInterval(vec3 origin, vec3 direction, float tmin, float tmax, uint hitGroup)
-//       the nearest hit into payload, left as a miss where there is none; hitGroup 1: entry only
-//   bool svdagOccludedInterval(vec3 origin, vec3 direction, float tmin, float tmax, uint hitGroup)
-//       whether anything is hit
+//   void svdagTraceInterval(vec3 origin, vec3 direction, float tmin, float tmax, uint hitGroup,
+//                           bool anyHit)
+//       the nearest hit into payload, left as a miss where there is none; hitGroup 1: entry
+//       only; with anyHit (shadow rays) only whether anything is hit (payload.label != 0)
 // and then calls svdagRenderPixel(pixel) for each pixel of the image.
 #ifndef SVDAG_RENDER_PATH_TRACE_GLSL
 #define SVDAG_RENDER_PATH_TRACE_GLSL
@@ -52,9 +52,9 @@ bool gCameraRayHit;
 bool gFirstQuery;
 
 // The first sample of an accumulation goes through the pixel center: its camera ray's hit is the
-// pixel's label, depth and normal (writePrimaryOutputs), kept here by traceClosest when
+// pixel's label, depth and normal (writePrimaryOutputs), kept here by traceRay when
 // gCapturePrimary is set. The primary rays are no trace of their own: the trace a compiler may
-// inline (the compute backend's grid walk) has one closest-hit site, in the path tracer.
+// inline (the compute backend's grid walk) has one site, in the path tracer.
 SvdagPayload gPrimaryPayload;
 bool gCapturePrimary = false;
 
@@ -65,7 +65,7 @@ bool gCapturePrimary = false;
 #include "svdag/Clipping.h"
 
 // Traces the part of [0, tmax] inside the clipping region into payload (a miss where none is).
-void traceClipped(vec3 origin, vec3 direction, float tmax, uint hitGroup)
+void traceClipped(vec3 origin, vec3 direction, float tmax, uint hitGroup, bool anyHit)
 {
   payload.label = 0u;
   payload.t = SVDAG_DEPTH_MISS;
@@ -80,10 +80,10 @@ void traceClipped(vec3 origin, vec3 direction, float tmax, uint hitGroup)
     c = svdagClipInterval(frame.clipping.x, origin, direction, 0.0, tmax);
   if (!c.kept)
     return;
-  svdagTraceInterval(origin, direction, c.tmin, c.tmax, hitGroup);
+  svdagTraceInterval(origin, direction, c.tmin, c.tmax, hitGroup, anyHit);
   // Inside a solid at the clipped tmin (zero normal, Traversal.h): the cut face of the plane the
   // ray entered the region through, with the region's outward normal, which faces the ray.
-  if (payload.label != 0u && c.enterPlane >= 0 && dot(payload.normal, payload.normal) == 0.0)
+  if (!anyHit && payload.label != 0u && c.enterPlane >= 0 && dot(payload.normal, payload.normal) == 0.0)
     payload.normal = -frame.clipPlanes[c.enterPlane].xyz;
 }
 
@@ -111,10 +111,24 @@ PathHit payloadHit()
 }
 
 // hitGroup 0: the first hit; 1: the entry-only hit group (block.rint with SVDAG_ENTRY_ONLY), for
-// a ray continuing through a surface it has just crossed: the solid it starts in is skipped.
-PathHit traceClosest(vec3 origin, vec3 direction, float tmax, uint hitGroup)
+// a ray continuing through a surface it has just crossed, or a ray (a shadow ray too) starting
+// lifted above a smooth-shaded hit, possibly inside a voxel of a touching label: the solid it
+// starts in is skipped. Shadow rays (anyHit) only say whether anything is hit.
+PathHit traceRay(vec3 origin, vec3 direction, float tmax, uint hitGroup, bool anyHit)
 {
-  traceClipped(origin, direction, tmax, hitGroup);
+  traceClipped(origin, direction, tmax, hitGroup, anyHit);
+  if (anyHit)
+  {
+    PathHit h;
+    h.hit = payload.label != 0u;
+    h.inside = false;
+    h.t = 0.0;
+    h.label = 0u;
+    h.normal = vec3(0.0);
+    h.shading = vec3(0.0);
+    h.lift = 0.0;
+    return h;
+  }
   PathHit h = payloadHit();
   if (gFirstQuery)
   {
@@ -126,34 +140,13 @@ PathHit traceClosest(vec3 origin, vec3 direction, float tmax, uint hitGroup)
   return h;
 }
 
-// hitGroup 1 (entry-only) for the shadow rays of smooth-shaded hits, which start lifted above the
-// voxel staircase and may start inside a voxel of a touching label: the solid they start in does
-// not occlude.
-bool traceOccluded(vec3 origin, vec3 direction, float tmax, uint hitGroup)
-{
-  float tmin = 0.0;
-  if (frame.clipping.x != 0u)
-  {
-    // Only the kept part of the shadow ray can be occluded.
-    SvdagClipInterval c = svdagClipInterval(frame.clipping.x, origin, direction, 0.0, tmax);
-    if (!c.kept)
-      return false;
-    tmin = c.tmin;
-    tmax = c.tmax;
-  }
-  return svdagOccludedInterval(origin, direction, tmin, tmax, hitGroup);
-}
-
 Material labelMaterial(uint labelIndex)
 {
   return gMaterials.m[min(labelIndex, max(frame.sampling.w, 1u) - 1u)];
 }
 
-// hitGroup 1: the entry-only hit group (block.rint with SVDAG_ENTRY_ONLY), which skips the solid
-// the ray starts in.
-#define SVDAG_TRACE_CLOSEST(hit, o, d, tmax, skipStart) hit = traceClosest(o, d, tmax, (skipStart) ? 1u : 0u)
-#define SVDAG_TRACE_OCCLUDED(result, o, d, tmax, skipStart)                                        \
-  result = traceOccluded(o, d, tmax, (skipStart) ? 1u : 0u)
+#define SVDAG_TRACE(hit, o, d, tmax, skipStart, anyHit)                                           \
+  hit = traceRay(o, d, tmax, (skipStart) ? 1u : 0u, anyHit)
 #define SVDAG_MATERIAL(label) labelMaterial(label)
 #include "svdag_render/PathTracer.h"
 
@@ -242,7 +235,7 @@ void svdagRenderPixel(uvec2 pixel)
     if (primary)
     {
       jitter = vec2(0.5);
-      // A miss unless the path's camera ray hits (traceClosest).
+      // A miss unless the path's camera ray hits (traceRay).
       gPrimaryPayload.label = 0u;
       gPrimaryPayload.t = SVDAG_DEPTH_MISS;
       gPrimaryPayload.normal = vec3(0.0);

@@ -72,13 +72,20 @@ SvdagGridHit castGrid(vec3 origin, vec3 direction, float tmin, float tmax, bool 
 }
 
 // The world direction has unit length and the index-space one is not renormalised, so the walk
-// parameter is the world distance, as in the ray tracing backend.
-void svdagTraceInterval(vec3 origin, vec3 direction, float tmin, float tmax, uint hitGroup)
+// parameter is the world distance, as in the ray tracing backend. Shadow rays (anyHit) go through
+// the same walk, stopping at the first hit: the walk is inlined once.
+void svdagTraceInterval(vec3 origin, vec3 direction, float tmin, float tmax, uint hitGroup,
+  bool anyHit)
 {
-  SvdagGridHit h = castGrid(origin, direction, tmin, tmax, hitGroup == 1u, false);
+  SvdagGridHit h = castGrid(origin, direction, tmin, tmax, hitGroup == 1u, anyHit);
   if (!h.hit)
   {
     payload = svdagMissPayload();
+    return;
+  }
+  if (anyHit)
+  {
+    payload.label = 1u;
     return;
   }
   vec3 o = indexPoint(origin);
@@ -89,11 +96,6 @@ void svdagTraceInterval(vec3 origin, vec3 direction, float tmin, float tmax, uin
     mat3(frame.worldToIndexX.xyz, frame.worldToIndexY.xyz, frame.worldToIndexZ.xyz));
   payload = svdagHitPayload(h.label, h.s, vec3(h.normal),
     h.lod == SVDAG_LOD_VOXEL ? h.block : SVDAG_NO_BLOCK, local, d, worldToIndex);
-}
-
-bool svdagOccludedInterval(vec3 origin, vec3 direction, float tmin, float tmax, uint hitGroup)
-{
-  return castGrid(origin, direction, tmin, tmax, hitGroup == 1u, true).hit;
 }
 
 #include "PathTrace.glsl"

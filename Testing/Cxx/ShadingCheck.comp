@@ -28,8 +28,7 @@ PathHit traceStandIn(vec3 o, vec3 d)
 #define SVDAG_FEATURE_SUN true
 #define SVDAG_FEATURE_EMISSION true
 #define SVDAG_FEATURE_TRANSMISSION true
-#define SVDAG_TRACE_CLOSEST(hit, origin, direction, tmax, skipStart) hit = traceStandIn(origin, direction)
-#define SVDAG_TRACE_OCCLUDED(result, origin, direction, tmax, skipStart) result = traceStandIn(origin, direction).hit
+#define SVDAG_TRACE(hit, origin, direction, tmax, skipStart, anyHit) hit = traceStandIn(origin, direction)
 #define SVDAG_MATERIAL(label) materials[(label)]
 #include "svdag_render/PathTracer.h"
 layout(std430, binding = 5) readonly buffer Params { PathTracerParams params; };

@@ -30,10 +30,8 @@ thread_local const Scene* scene = nullptr;
 #define SVDAG_FEATURE_TRANSMISSION true
 // traceScene already reports only entries (a ray inside a sphere leaves it without a hit), which
 // is what the renderer's entry-only trace (skipStart) does after a transmission event.
-#define SVDAG_TRACE_CLOSEST(hit, origin, direction, tmax, skipStart)                              \
+#define SVDAG_TRACE(hit, origin, direction, tmax, skipStart, anyHit)                              \
   hit = traceScene(origin, direction, tmax)
-#define SVDAG_TRACE_OCCLUDED(result, origin, direction, tmax, skipStart)                          \
-  result = traceScene(origin, direction, tmax).hit
 #define SVDAG_MATERIAL(label) (materials[(label)])
 
 #include "svdag_render/Shading.h"

@@ -19,14 +19,13 @@
  *
  * Its interface types (PathTracerParams, PathHit) are in Shading.h, so that the includer can
  * define its trace functions before including this file. The includer defines:
- *   SVDAG_TRACE_CLOSEST(hit, origin, direction, tmax, skipStart)  fills a PathHit for the nearest
+ *   SVDAG_TRACE(hit, origin, direction, tmax, skipStart, anyHit)  fills a PathHit for the nearest
  *       surface; with skipStart the ray starts just inside a solid (after a transmission event) or
  *       lifted above a smooth-shaded hit, possibly inside a voxel of a touching label, and must
  *       skip the solid it starts in and report the next surface it ENTERS (the renderer's
  *       entry-only hit group, Traversal.h "Entry only"); where a trace never reports a hit from
- *       inside anyway, it may ignore skipStart
- *   SVDAG_TRACE_OCCLUDED(result, origin, direction, tmax, skipStart)  sets result = true if
- *       anything is hit (skipStart: the same, for shadow rays of smooth-shaded hits)
+ *       inside anyway, it may ignore skipStart. With anyHit (shadow rays) only hit.hit counts:
+ *       whether anything is hit, so the trace may stop at the first hit it finds
  *   SVDAG_MATERIAL(labelIndex)  the Material of a label
  *   and the environment macros of Shading.h.
  * Feature switches (specialization constants on the GPU, so a scene that does not use a feature
@@ -38,7 +37,7 @@
 
 #include "svdag_render/Shading.h"
 
-// Each macro is expanded at one place only: an includer may inline its trace (the compute
+// SVDAG_TRACE is expanded at one place only: an includer may inline its trace (the compute
 // backend inlines the whole grid walk), so every further site would be another copy of it.
 
 #ifdef __cplusplus
@@ -116,15 +115,55 @@ SHADING_FN vec3 tracePath(
   bool nee = SVDAG_FEATURE_NEE && (p.config.w & FLAG_NEE) != 0u;
   uint maxBounces = min(p.config.z, MAX_BOUNCES_LIMIT);
   float epsilon = p.environment.w;
+  // The path's next segment.
   vec3 o = origin;
   vec3 d = direction;
-  bool through = false; // the ray continues through the surface it has just crossed
-  bool liftedPath = false; // the ray leaves a smooth-shaded hit from above the staircase
-  for (uint bounce = 0u; bounce <= maxBounces; ++bounce)
+  float tmax = cameraTmax;
+  // The segment starts through the surface it has just crossed, or above a smooth-shaded hit.
+  bool skipStart = false;
+  // The last event's shadow rays (at most two: the environment's or the last event's, and the
+  // sun's), with what each adds where nothing is in the way; `traced` of them are done.
+  vec3 shadowOrigin = vec3(0.0f);
+  bool shadowLifted = false;
+  vec3 shadowDirection[2];
+  vec3 shadowRadiance[2];
+  shadowDirection[0] = shadowDirection[1] = vec3(0.0f);
+  shadowRadiance[0] = shadowRadiance[1] = vec3(0.0f);
+  uint shadows = 0u;
+  uint traced = 0u;
+  bool ends = false; // no segment follows the last event's shadow rays
+  uint bounce = 0u;
+  // One trace for every ray of the path, as Volcanite does: each iteration traces the last
+  // event's next shadow ray or, when none is left, the path's next segment. The samples of an
+  // event are drawn before its shadow rays are traced (environment, sun, BSDF, roulette: the
+  // order of rng), which depend on nothing drawn after them.
+  for (;;)
   {
+    bool shadowRay = traced < shadows;
+    if (!shadowRay && ends)
+      break;
+    vec3 rayOrigin = o;
+    vec3 rayDirection = d;
+    float rayTmax = tmax;
+    bool raySkipStart = skipStart;
+    if (shadowRay)
+    {
+      rayOrigin = shadowOrigin;
+      rayDirection = shadowDirection[traced];
+      rayTmax = 1e30f;
+      raySkipStart = shadowLifted;
+    }
     PathHit h;
-    float tmax = bounce == 0u ? cameraTmax : 1e30f;
-    SVDAG_TRACE_CLOSEST(h, o, d, tmax, (SVDAG_FEATURE_TRANSMISSION && through) || liftedPath);
+    SVDAG_TRACE(h, rayOrigin, rayDirection, rayTmax, raySkipStart, shadowRay);
+    if (shadowRay)
+    {
+      if (!h.hit)
+        radiance += shadowRadiance[traced];
+      ++traced;
+      continue;
+    }
+    shadows = 0u;
+    traced = 0u;
     if (!h.hit)
     {
       bool weighted = nee && !previousDelta;
@@ -156,14 +195,9 @@ SHADING_FN vec3 tracePath(
     // shading normal: the voxel staircase next to the hit would otherwise shadow the smooth
     // surface it stands for (dark dots in every step's corner, stripes near the terminator).
     bool lifted = !h.inside && h.lift > 0.0f;
-    vec3 shadowOrigin = lifted ? above + h.lift * ns : above;
+    shadowLifted = lifted;
+    shadowOrigin = lifted ? above + h.lift * ns : above;
 
-    // The event's shadow rays (at most two: the environment's or the last event's, and the
-    // sun's) are collected with what each adds where nothing is in the way, and traced by one
-    // loop below, after the samples are drawn (environment, sun, BSDF: the order of rng).
-    vec3 shadowDirection[2];
-    vec3 shadowRadiance[2];
-    uint shadows = 0u;
     // The last scattering event with a constant environment and nothing emissive (see above).
     bool lastEvent = nee && bounce + 1u == maxBounces && !(SVDAG_FEATURE_EMISSION) &&
       !(SVDAG_FEATURE_ENV_MAP);
@@ -201,25 +235,18 @@ SHADING_FN vec3 tracePath(
     if (!SVDAG_FEATURE_TRANSMISSION)
       sm.params.z = 0.0f;
     BsdfSample s = bsdfSample(sm, ns, wo, !h.inside, vec3(random01(rng), random01(rng), random01(rng)));
-    bool ends = max(s.weight.x, max(s.weight.y, s.weight.z)) <= 0.0f ||
+    ends = max(s.weight.x, max(s.weight.y, s.weight.z)) <= 0.0f ||
       (!s.transmitted && !lifted && !(dot(s.direction, n) > 0.0f));
     // The last event: the environment along the BSDF sample, unless something is in the way.
-    bool lastShadow = !ends && lastEvent && !s.delta;
-    if (lastShadow)
+    if (!ends && lastEvent && !s.delta)
     {
       shadowDirection[shadows] = s.direction;
       shadowRadiance[shadows] = throughput * s.weight * environmentRadiance(p, s.direction);
       ++shadows;
+      ends = true;
     }
-    for (uint k = 0u; k < shadows; ++k)
-    {
-      bool blocked;
-      SVDAG_TRACE_OCCLUDED(blocked, shadowOrigin, shadowDirection[k], 1e30f, lifted);
-      if (!blocked)
-        radiance += shadowRadiance[k];
-    }
-    if (ends || lastShadow)
-      break;
+    if (ends)
+      continue;
     throughput *= s.weight;
     previousPdf = s.pdf;
     previousDelta = s.delta;
@@ -227,15 +254,17 @@ SHADING_FN vec3 tracePath(
     // rays.
     o = s.transmitted ? position - epsilon * n : shadowOrigin;
     d = s.direction;
-    through = s.transmitted;
-    liftedPath = lifted && !s.transmitted;
+    tmax = 1e30f;
+    skipStart = (SVDAG_FEATURE_TRANSMISSION && s.transmitted) || (lifted && !s.transmitted);
     if (bounce >= 2u)
     {
       float q = min(max(throughput.x, max(throughput.y, throughput.z)), 0.95f);
       if (random01(rng) >= q)
-        break;
-      throughput /= q;
+        ends = true;
+      else
+        throughput /= q;
     }
+    ++bounce;
   }
   return finiteOrZero(radiance);
 }
