@@ -1,6 +1,7 @@
 #include "svdag_render/Context.h"
 
 #include "svdag_render/Pipeline.h"
+#include "svdag_render/PipelineCacheFile.h"
 
 #include <algorithm>
 #include <cctype>
@@ -610,10 +611,74 @@ void Device::createDevice()
   if (this->MemoryExport)
     load(f.getMemoryFd, "vkGetMemoryFdKHR");
 
-  // One cache for every pipeline any user compiles (kept in memory, for the device's life).
+  // One cache for every pipeline any user compiles, started from the file an earlier process
+  // left (PipelineCacheFile.h) where there is one to trust.
+  this->VendorId = props.properties.vendorID;
+  this->DeviceId = props.properties.deviceID;
+  this->DriverVersion = props.properties.driverVersion;
+  std::copy(std::begin(props.properties.pipelineCacheUUID),
+    std::end(props.properties.pipelineCacheUUID), this->PipelineCacheUuid.begin());
+  const std::string directory = pipelineCacheDirectory();
+  std::vector<uint8_t> initial;
+  if (!directory.empty())
+  {
+    this->PipelineCacheFile = pipelineCacheFileName(directory, this->pipelineCacheKey());
+    initial = loadPipelineCache(this->PipelineCacheFile, this->pipelineCacheKey(),
+      this->PipelineCacheProblem);
+  }
   VkPipelineCacheCreateInfo cacheInfo{ VK_STRUCTURE_TYPE_PIPELINE_CACHE_CREATE_INFO };
-  check(vkCreatePipelineCache(this->Handle, &cacheInfo, nullptr, &this->PipelineCache),
-    "vkCreatePipelineCache");
+  cacheInfo.initialDataSize = initial.size();
+  cacheInfo.pInitialData = initial.empty() ? nullptr : initial.data();
+  if (vkCreatePipelineCache(this->Handle, &cacheInfo, nullptr, &this->PipelineCache) ==
+      VK_SUCCESS)
+    this->PipelineCacheLoaded = initial.size();
+  else
+  {
+    if (!initial.empty())
+      this->PipelineCacheProblem = "the driver refused its data";
+    cacheInfo.initialDataSize = 0;
+    cacheInfo.pInitialData = nullptr;
+    check(vkCreatePipelineCache(this->Handle, &cacheInfo, nullptr, &this->PipelineCache),
+      "vkCreatePipelineCache");
+  }
+}
+
+PipelineCacheKey Device::pipelineCacheKey() const
+{
+  PipelineCacheKey key;
+  key.vendorId = this->VendorId;
+  key.deviceId = this->DeviceId;
+  key.driverVersion = this->DriverVersion;
+  key.cacheUuid = this->PipelineCacheUuid;
+  key.shaderHash = PipelineLibrary::shaderHash();
+  return key;
+}
+
+std::string Device::pipelineCacheProblem() const
+{
+  std::lock_guard<std::mutex> lock(this->PipelineCacheLock);
+  return this->PipelineCacheProblem;
+}
+
+void Device::savePipelineCache()
+{
+  if (this->PipelineCacheFile.empty())
+    return;
+  std::lock_guard<std::mutex> lock(this->PipelineCacheLock);
+  size_t size = 0;
+  std::vector<uint8_t> data;
+  if (vkGetPipelineCacheData(this->Handle, this->PipelineCache, &size, nullptr) == VK_SUCCESS)
+  {
+    data.resize(size);
+    if (vkGetPipelineCacheData(this->Handle, this->PipelineCache, &size, data.data()) != VK_SUCCESS)
+      size = 0;
+    data.resize(size);
+  }
+  std::string why;
+  if (data.empty())
+    this->PipelineCacheProblem = "the driver returned no cache data";
+  else if (!render::savePipelineCache(this->PipelineCacheFile, this->pipelineCacheKey(), data, why))
+    this->PipelineCacheProblem = why;
 }
 
 uint32_t Context::memoryType(

@@ -1,10 +1,12 @@
 #include "svdag_render/Pipeline.h"
 
 #include "svdag_render/GpuLayout.h"
+#include "svdag_render/PipelineCacheFile.h"
 
 #include <cstdint>
 #include <cstring>
 #include <stdexcept>
+#include <utility>
 #include <vector>
 
 // SPIR-V of the shaders, generated at build time by glslangValidator --vn (Rendering/core/
@@ -135,6 +137,8 @@ const PipelineLibrary::Program& PipelineLibrary::program(const ShaderFeatures& f
   program->features = features;
   this->compile(*program);
   this->Programs.push_back(std::move(program));
+  // Kept on disk at once: a later process starts from it even if this one never exits cleanly.
+  this->Ctx.shared().savePipelineCache();
   return *this->Programs.back();
 }
 
@@ -198,6 +202,20 @@ void PipelineLibrary::compile(Program& program)
     program.handle = VK_NULL_HANDLE;
     throw;
   }
+}
+
+uint64_t PipelineLibrary::shaderHash()
+{
+  uint64_t hash = fnv1a64(nullptr, 0);
+  for (const auto& module : { std::make_pair(svdagShader_camera_rgen, sizeof(svdagShader_camera_rgen)),
+         std::make_pair(svdagShader_camera_comp, sizeof(svdagShader_camera_comp)),
+         std::make_pair(svdagShader_closest_rmiss, sizeof(svdagShader_closest_rmiss)),
+         std::make_pair(svdagShader_shadow_rmiss, sizeof(svdagShader_shadow_rmiss)),
+         std::make_pair(svdagShader_block_rchit, sizeof(svdagShader_block_rchit)),
+         std::make_pair(svdagShader_block_rint, sizeof(svdagShader_block_rint)),
+         std::make_pair(svdagShader_block_entry_rint, sizeof(svdagShader_block_entry_rint)) })
+    hash = fnv1a64(module.first, module.second, hash);
+  return hash;
 }
 
 Pipeline::Pipeline(Context& context, Backend backend, const ShaderFeatures& features)

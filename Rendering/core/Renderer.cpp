@@ -272,6 +272,13 @@ uint64_t Renderer::pipelineCompilations() const
   return this->Device->context.shared().pipelineCompilations();
 }
 
+Renderer::PipelineCacheStatus Renderer::pipelineCache() const
+{
+  const auto& device = this->Device->context.shared();
+  return { device.pipelineCacheFile(), device.pipelineCacheLoadedBytes(),
+    device.pipelineCacheProblem() };
+}
+
 bool Renderer::hasRayTracing() const
 {
   return this->Device->context.hasRayTracing();

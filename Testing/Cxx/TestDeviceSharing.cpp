@@ -9,9 +9,15 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
 #include <memory>
 #include <random>
+#include <string>
 #include <vector>
+
+#include <unistd.h>
 
 namespace
 {
@@ -186,4 +192,80 @@ TEST(DeviceSharing, AFailedDeviceIsReportedToEveryUserAndNotKept)
   unsetenv("SVDAG_VK_DEVICE");
   EXPECT_EQ(second.deviceSerial(), renderer.deviceSerial());
   EXPECT_EQ(svdag::render::Renderer::deviceUsers(), 2u);
+}
+
+// The device's pipeline cache outlives it on disk (PipelineCacheFile.h): the next device starts
+// from the file, a corrupt file is ignored (same image, a reason given) and replaced by the next
+// compilation, and VTKSVDAG_PIPELINE_CACHE=0 keeps it in memory only.
+TEST(DeviceSharing, PipelineCacheFileIsReusedAndABadOneIgnored)
+{
+  namespace fs = std::filesystem;
+  const fs::path home = fs::temp_directory_path() / ("svdag-xdg-" + std::to_string(::getpid()));
+  fs::remove_all(home);
+  setenv("XDG_CACHE_HOME", home.c_str(), 1);
+  unsetenv("VTKSVDAG_PIPELINE_CACHE");
+  const auto volume = randomVolume(7);
+  ASSERT_EQ(svdag::render::Renderer::deviceUsers(), 0u);
+
+  std::string file;
+  Frame reference;
+  {
+    auto r = makeRenderer(volume, svdag::render::Backend::Compute);
+    reference = renderTwice(*r);
+    const auto status = r->pipelineCache();
+    file = status.file;
+    EXPECT_EQ(file.rfind((home / "vtksvdag" / "pipelines-").string(), 0), 0u) << file;
+    EXPECT_EQ(status.loadedBytes, 0u);
+    EXPECT_EQ(status.problem, "");
+  }
+  ASSERT_TRUE(fs::is_regular_file(file)) << file;
+  const uintmax_t saved = fs::file_size(file);
+  {
+    auto r = makeRenderer(volume, svdag::render::Backend::Compute);
+    const auto status = r->pipelineCache();
+    EXPECT_EQ(status.file, file);
+    // The driver's data (at least its 32-byte header) behind our 64-byte header.
+    EXPECT_EQ(status.loadedBytes + 64, saved);
+    EXPECT_EQ(status.problem, "");
+    expectSameImage(renderTwice(*r).image, reference.image, 0);
+  }
+  // Garbage, then a file cut short: ignored with a reason; the image is the same; the next
+  // compilation writes a sound file again.
+  for (const size_t keep : { size_t(0), size_t(saved - 1) })
+  {
+    std::vector<char> bytes(saved);
+    {
+      std::ifstream in(file, std::ios::binary);
+      in.read(bytes.data(), std::streamsize(saved));
+    }
+    if (keep == 0)
+      for (size_t i = 0; i < bytes.size(); ++i)
+        bytes[i] = char(i * 31 + 5);
+    else
+      bytes.resize(keep);
+    {
+      std::ofstream out(file, std::ios::binary | std::ios::trunc);
+      out.write(bytes.data(), std::streamsize(bytes.size()));
+    }
+    auto r = makeRenderer(volume, svdag::render::Backend::Compute);
+    const auto status = r->pipelineCache();
+    EXPECT_EQ(status.loadedBytes, 0u) << keep;
+    EXPECT_NE(status.problem, "") << keep;
+    expectSameImage(renderTwice(*r).image, reference.image, 0);
+    EXPECT_EQ(r->pipelineCache().problem, status.problem) << "the save failed";
+    EXPECT_EQ(fs::file_size(file), saved) << "not rewritten";
+  }
+  {
+    auto r = makeRenderer(volume, svdag::render::Backend::Compute);
+    EXPECT_EQ(r->pipelineCache().loadedBytes + 64, saved);
+  }
+  setenv("VTKSVDAG_PIPELINE_CACHE", "0", 1);
+  {
+    auto r = makeRenderer(volume, svdag::render::Backend::Compute);
+    EXPECT_EQ(r->pipelineCache().file, "");
+    expectSameImage(renderTwice(*r).image, reference.image, 0);
+  }
+  unsetenv("VTKSVDAG_PIPELINE_CACHE");
+  unsetenv("XDG_CACHE_HOME");
+  fs::remove_all(home);
 }

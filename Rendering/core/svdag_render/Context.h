@@ -89,6 +89,7 @@ struct RayTracingLimits
 
 class Context;
 class PipelineLibrary;
+struct PipelineCacheKey;
 enum class Backend : uint32_t;
 
 // The process's Vulkan instance, device and queue, shared by every Context (one per renderer):
@@ -133,6 +134,14 @@ public:
   const VkPhysicalDeviceMemoryProperties& memoryProperties() const { return this->MemoryProperties; }
   uint64_t heapBytes() const { return this->HeapBytes; }
   VkPipelineCache pipelineCache() const { return this->PipelineCache; }
+  // The persistent pipeline cache (PipelineCacheFile.h): its file ("" when disabled), the bytes
+  // of driver data it gave the device when it was created (0: none, or none to trust), and why a
+  // file that exists was not used or could not be written ("" when all went well).
+  const std::string& pipelineCacheFile() const { return this->PipelineCacheFile; }
+  uint64_t pipelineCacheLoadedBytes() const { return this->PipelineCacheLoaded; }
+  std::string pipelineCacheProblem() const;
+  // Writes the cache's data to its file (after a compilation); a failure is noted, not thrown.
+  void savePipelineCache();
 
   // Device memory every user holds together, and the part the device holds for all of them
   // (the pipelines' shader binding tables).
@@ -154,6 +163,7 @@ private:
   void pickPhysicalDevice();
   void createDevice();
   void destroy();
+  PipelineCacheKey pipelineCacheKey() const;
 
   uint64_t Serial = 0;
   VkInstance Instance = VK_NULL_HANDLE;
@@ -163,6 +173,12 @@ private:
   VkQueue Queue = VK_NULL_HANDLE;
   uint32_t QueueFamily = 0;
   VkPipelineCache PipelineCache = VK_NULL_HANDLE;
+  std::string PipelineCacheFile;
+  uint64_t PipelineCacheLoaded = 0;
+  std::string PipelineCacheProblem;
+  std::array<uint8_t, 16> PipelineCacheUuid{};
+  uint32_t VendorId = 0, DeviceId = 0, DriverVersion = 0;
+  mutable std::mutex PipelineCacheLock;
   std::string DeviceName;
   bool CpuDevice = false;
   bool RayTracing = false;

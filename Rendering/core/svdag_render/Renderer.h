@@ -108,6 +108,16 @@ public:
   // Pipelines the device compiled so far, for every renderer (pipelineBuilds() counts this
   // renderer's feature sets, compiled by it or before it).
   uint64_t pipelineCompilations() const;
+  // The device's persistent pipeline cache (PipelineCacheFile.h): its file ("" when disabled),
+  // the bytes of driver data it started from (0: none, or none to trust) and why a file was not
+  // used or written ("" when all went well).
+  struct PipelineCacheStatus
+  {
+    std::string file;
+    uint64_t loadedBytes = 0;
+    std::string problem;
+  };
+  PipelineCacheStatus pipelineCache() const;
 
   // The backend (RenderSettings::backend; also part of setSettings). A change rebuilds what the
   // backends find blocks with (setupSeconds measures it) and restarts the accumulation. Throws

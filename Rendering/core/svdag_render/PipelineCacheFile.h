@@ -1,0 +1,55 @@
+// The device's Vulkan pipeline cache kept on disk between processes, so that a second process
+// (or the same one after its device went) does not compile the pipelines again where the driver
+// can reuse what its cache holds.
+//
+// Location: $XDG_CACHE_HOME/vtksvdag, else $HOME/.cache/vtksvdag; VTKSVDAG_PIPELINE_CACHE=0
+// (or off/false/no) keeps the cache in memory only. One file per key (device, driver, and the
+// hash of the embedded SPIR-V), so two builds or two GPUs never overwrite each other's file:
+//   pipelines-<vendor>-<device>-<driver version>-<pipeline cache UUID>-<shader hash>.bin
+//
+// File: a header of our own (magic, format version, the key, the data's size and FNV-1a 64-bit
+// checksum) and the driver's cache data. A file is used only when its header, key, size and
+// checksum all match and the driver's own header (VkPipelineCacheHeaderVersionOne) names this
+// device; anything else (truncated, corrupt, foreign, unreadable, a directory) is ignored with a
+// reason, never handed to the driver, and replaced by the next save. Saves write a temporary
+// file beside it and rename it, so a reader never sees half a file.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace svdag
+{
+namespace render
+{
+
+// What a cache file must have been written for.
+struct PipelineCacheKey
+{
+  uint32_t vendorId = 0;
+  uint32_t deviceId = 0;
+  uint32_t driverVersion = 0;
+  std::array<uint8_t, 16> cacheUuid{}; // VkPhysicalDeviceProperties::pipelineCacheUUID
+  uint64_t shaderHash = 0;             // of every SPIR-V module the pipelines are made of
+};
+
+// FNV-1a, 64 bits (the shader hash and the data checksum).
+uint64_t fnv1a64(const void* data, size_t bytes, uint64_t hash = 14695981039346656037ull);
+
+// The cache directory from the environment ("" when disabled or when neither variable is set).
+std::string pipelineCacheDirectory();
+// The file of this key in `directory`.
+std::string pipelineCacheFileName(const std::string& directory, const PipelineCacheKey& key);
+
+// The driver's cache data stored in `path` for `key`; empty (with `why` saying what was wrong,
+// "" for a file that does not exist) when there is none to trust.
+std::vector<uint8_t> loadPipelineCache(
+  const std::string& path, const PipelineCacheKey& key, std::string& why);
+// Writes `data` for `key` to `path` (creating its directory). False, with `why`, on failure.
+bool savePipelineCache(const std::string& path, const PipelineCacheKey& key,
+  const std::vector<uint8_t>& data, std::string& why);
+
+} // namespace render
+} // namespace svdag
