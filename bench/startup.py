@@ -1,0 +1,218 @@
+#!/usr/bin/env python3
+"""Time to the first image, with every shader cache empty and with warm caches, in one run.
+
+Run from the repository root, under Xvfb (VTK's OpenGL needs a display; llvmpipe here):
+
+    xvfb-run -a -s "-screen 0 1024x768x24" .venv/bin/python bench/startup.py [--quick]
+        [--volume fib_ts2_groundtruth250] [--size 512] [--repeats 3] [--out DIR]
+
+Every measurement is a new process, started by this one, timed from its start to the moment its
+first image is written (Python's start-up and imports included: what a user waits for):
+
+  cli-compute, cli-rt   the README's main job: `vtksvdag render build/cells.svdag -o OUT.png
+                        --sun 0 -20` (16 samples, 4 bounces, NEE, a sun) with --backend compute
+                        or rt; the whole command.
+  pyvista-compute, pyvista-rt
+                        a pyvista scene: off-screen Plotter of --size x --size, then
+                        `add_segmentation(plotter, VOLUME_FILE, spp=1, backend=...)` and
+                        `plotter.screenshot()` (reading and compressing the file included).
+  gpu-raycast           the same file into the same Plotter through vtkGPUVolumeRayCastMapper
+                        (labels read with vtksvdag.read and decoded, as bench/vtk.py does:
+                        Debian's VTK cannot read gzip NRRD; nearest interpolation, a categorical
+                        color per label, shading on), then `plotter.screenshot()`.
+
+Cache states, each in fresh folders of its own:
+  cold  Mesa's shader cache (MESA_SHADER_CACHE_DIR, for both lavapipe and llvmpipe) and ours
+        (XDG_CACHE_HOME: vtkSVDAG's pipeline cache) empty;
+  warm  the same folders after one run of the same route filled them.
+Routes alternate within each repeat, so all see the same machine. Prints the medians and the
+ratios to gpu-raycast in the same cache state (the issue's targets: pyvista cold <= 1x, the main
+job cold <= 2x, pyvista warm <= 0.5x); writes startup.csv (every run) to --out (default
+build/bench). --quick: a generated 48^3 volume, 128x128, one repeat (a smoke test).
+"""
+from __future__ import annotations
+
+import argparse
+import csv
+import os
+import pathlib
+import shutil
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+
+REPO = pathlib.Path(__file__).resolve().parents[1]
+SHARED_DATA = pathlib.Path(os.environ.get("VTKSVDAG_SHARED_DATA") or REPO.parent / "shared" / "data")
+ROUTES = ["cli-compute", "cli-rt", "pyvista-compute", "pyvista-rt", "gpu-raycast"]
+CACHES = ["cold", "warm"]
+FIELDS = ["route", "cache", "repeat", "first_image_s", "process_s"]
+
+# The child of the pyvista routes: argv = route, volume file, size, output .png. Prints the
+# wall-clock time (time.time()) at which the first image was written.
+CHILD = r"""
+import sys, time
+route, path, size, out = sys.argv[1], sys.argv[2], int(sys.argv[3]), sys.argv[4]
+import numpy as np
+import pyvista as pv
+import vtksvdag
+plotter = pv.Plotter(off_screen=True, window_size=(size, size))
+if route.startswith("pyvista-"):
+    vtksvdag.add_segmentation(plotter, path, spp=1, backend=route.split("-", 1)[1])
+else:
+    import vtkmodules.vtkRenderingVolumeOpenGL2  # noqa: F401
+    from vtkmodules.util.numpy_support import numpy_to_vtk
+    from vtkmodules.vtkCommonDataModel import vtkImageData, vtkPiecewiseFunction
+    from vtkmodules.vtkRenderingCore import vtkColorTransferFunction, vtkVolume, vtkVolumeProperty
+    from vtkmodules.vtkRenderingVolume import vtkGPUVolumeRayCastMapper
+    volume = vtksvdag.read(path)
+    values, inverse = np.unique(volume.to_numpy().ravel(order="F"), return_inverse=True)
+    indices = inverse.astype(np.uint16).reshape(-1)
+    image = vtkImageData()
+    image.SetDimensions(*volume.dims)
+    image.SetSpacing(*volume.spacing)
+    image.SetOrigin(*volume.origin)
+    image.GetPointData().SetScalars(numpy_to_vtk(indices, deep=False))
+    colors = np.random.default_rng(0).uniform(0.15, 1.0, size=(len(values), 3))
+    ctf = vtkColorTransferFunction()
+    for i, c in enumerate(colors):
+        ctf.AddRGBPoint(float(i), *c)
+    otf = vtkPiecewiseFunction()
+    first = 1 if values[0] == 0 else 0
+    if first:
+        otf.AddPoint(0.0, 0.0)
+    otf.AddPoint(float(first), 1.0)
+    otf.AddPoint(float(max(len(values) - 1, first)), 1.0)
+    prop = vtkVolumeProperty()
+    prop.SetColor(ctf)
+    prop.SetScalarOpacity(otf)
+    prop.SetInterpolationTypeToNearest()
+    prop.ShadeOn()
+    mapper = vtkGPUVolumeRayCastMapper()
+    mapper.SetInputData(image)
+    actor = vtkVolume()
+    actor.SetMapper(mapper)
+    actor.SetProperty(prop)
+    plotter.add_actor(actor, reset_camera=True)
+plotter.screenshot(out)
+print(f"FIRST_IMAGE {time.time():.6f}", flush=True)
+plotter.close()
+"""
+
+
+def generated_volume(path):
+    """A 48^3 gzip NRRD of nested boxes and a sphere (no ../shared needed)."""
+    import numpy as np
+
+    import vtksvdag
+
+    n = 48
+    z, y, x = np.mgrid[0:n, 0:n, 0:n]
+    labels = np.zeros((n, n, n), np.uint16)
+    labels[3:45, 5:43, 4:44] = 2
+    labels[15:30, 8:38, 15:30] = 9
+    labels[(x - 30) ** 2 + (y - 22) ** 2 + (z - 15) ** 2 < 11 ** 2] = 5
+    import nrrd
+
+    nrrd.write(str(path), np.ascontiguousarray(labels.transpose(2, 1, 0)),
+               {"encoding": "gzip"}, index_order="F")
+    vtksvdag.read(str(path))  # checks that the file reads
+    return path
+
+
+def run_once(route, volume, svdag, size, caches, out_png):
+    """One process of `route` with the cache folders `caches`; (first image s, process s)."""
+    env = os.environ.copy()
+    env.pop("MESA_SHADER_CACHE_DISABLE", None)
+    env.pop("VTKSVDAG_PIPELINE_CACHE", None)
+    env["MESA_SHADER_CACHE_DIR"] = str(caches / "mesa")
+    env["XDG_CACHE_HOME"] = str(caches / "xdg")
+    if route.startswith("cli-"):
+        command = [str(pathlib.Path(sys.executable).parent / "vtksvdag"), "render", str(svdag),
+                   "-o", str(out_png), "--sun", "0", "-20", "--backend", route.split("-", 1)[1]]
+    else:
+        command = [sys.executable, "-c", CHILD, route, str(volume), str(size), str(out_png)]
+    start = time.time()
+    completed = subprocess.run(command, capture_output=True, text=True, env=env, timeout=900)
+    end = time.time()
+    if completed.returncode != 0 or not out_png.is_file():
+        raise RuntimeError(f"{route} failed (exit {completed.returncode}):\n"
+                           f"{completed.stdout[-2000:]}{completed.stderr[-3000:]}")
+    first = end
+    for line in completed.stdout.splitlines():
+        if line.startswith("FIRST_IMAGE "):
+            first = float(line.split()[1])
+    return first - start, end - start
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--quick", action="store_true",
+                        help="a generated 48^3 volume, 128x128, one repeat (a smoke test)")
+    parser.add_argument("--volume", default="fib_ts2_groundtruth250",
+                        help="name of a volume in ../shared/data (the pyvista routes)")
+    parser.add_argument("--size", type=int, default=512, help="window width and height")
+    parser.add_argument("--repeats", type=int, default=3, help="runs per route and cache state")
+    parser.add_argument("--routes", nargs="+", default=ROUTES, choices=ROUTES)
+    parser.add_argument("--out", default=str(REPO / "build" / "bench"), help="folder for the CSV")
+    args = parser.parse_args(argv)
+    if args.quick:
+        args.size, args.repeats = 128, 1
+    out = pathlib.Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    work = pathlib.Path(tempfile.mkdtemp(prefix="svdag-startup-"))
+    try:
+        volume = SHARED_DATA / f"{args.volume}.nrrd"
+        if args.quick or not volume.is_file():
+            if not args.quick:
+                print(f"note: {volume} is missing; a generated 48^3 volume stands in")
+            volume = generated_volume(work / "generated.nrrd")
+        # The main job's input, compressed as the README's first command does.
+        svdag = work / "cells.svdag"
+        import vtksvdag
+
+        vtksvdag.read(str(REPO / "examples" / "data" / "cells.nrrd")).save(str(svdag))
+        print(f"machine: {os.cpu_count()} cores; pyvista routes on {volume.name} at "
+              f"{args.size}x{args.size}; {args.repeats} repeat(s)", flush=True)
+        rows = []
+        for repeat in range(args.repeats):
+            for route in args.routes:
+                caches = work / f"caches-{route}-{repeat}"
+                for cache in CACHES:  # cold fills the folders that warm then uses
+                    png = work / f"{route}-{cache}-{repeat}.png"
+                    first, process = run_once(route, volume, svdag, args.size, caches, png)
+                    rows.append(dict(route=route, cache=cache, repeat=repeat,
+                                     first_image_s=round(first, 3), process_s=round(process, 3)))
+                    print(f"  {route:16s} {cache}: first image {first:6.2f} s "
+                          f"(process {process:6.2f} s)", flush=True)
+                shutil.rmtree(caches, ignore_errors=True)
+    finally:
+        shutil.rmtree(work, ignore_errors=True)
+
+    median = {}
+    for route in args.routes:
+        for cache in CACHES:
+            values = [r["first_image_s"] for r in rows if r["route"] == route and r["cache"] == cache]
+            median[route, cache] = statistics.median(values)
+    print("\nmedian seconds to the first image")
+    print(f"{'route':16s} " + " ".join(f"{c:>8s}" for c in CACHES))
+    for route in args.routes:
+        print(f"{route:16s} " + " ".join(f"{median[route, c]:8.2f}" for c in CACHES))
+    if "gpu-raycast" in args.routes:
+        print("\nratio to gpu-raycast in the same cache state (targets: pyvista cold <= 1, "
+              "cli cold <= 2, pyvista warm <= 0.5)")
+        for route in args.routes:
+            if route != "gpu-raycast":
+                print(f"{route:16s} " + " ".join(
+                    f"{median[route, c] / median['gpu-raycast', c]:8.2f}" for c in CACHES))
+    with open(out / "startup.csv", "w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=FIELDS)
+        writer.writeheader()
+        writer.writerows(rows)
+    print(f"\nwrote {out / 'startup.csv'}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
