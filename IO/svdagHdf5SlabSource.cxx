@@ -185,9 +185,10 @@ svdagHdf5SlabSource::svdagHdf5SlabSource(
           H5O_INFO_BASIC) < 0)
       throw svdagReadError(vtkErrorCode::FileFormatError,
         fileName + ": cannot list the HDF5 datasets (corrupt file?)");
-    // Integer datasets first: a float one is chosen only where floats are allowed and the file
-    // holds no integer volume, so that allowing floats never changes how an integer file reads.
-    const bool floats = allowFloat && state.integers.empty();
+    // Integer datasets first: a float one is chosen only where the file holds no integer
+    // volume, so that allowing floats never changes how an integer file reads (and without
+    // them, the float volume is refused as floats are).
+    const bool floats = state.integers.empty();
     const std::vector<std::string>& found = floats ? state.floats : state.integers;
     if (found.size() != 1)
     {

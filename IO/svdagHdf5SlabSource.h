@@ -1,7 +1,7 @@
 // HDF5 through the HDF5 C library: a 3D integer dataset stored (z, y, x) in C order, the way
 // h5py writes a numpy array (the last axis is x). Each slab is one hyperslab read. The dataset
-// is the one named with SetDatasetName, or the only 3D integer dataset in the file (where floats
-// are allowed and there is none, the only 3D float dataset). Spacing is 1 and origin 0. A
+// is the one named with SetDatasetName, or the only 3D integer dataset in the file (where there
+// is none, the only 3D float dataset, which only a source allowing floats reads). Spacing is 1 and origin 0. A
 // chunked dataset's chunk index is checked when the source is opened (every chunk HDF5 would
 // read found, chunks never written reported as fill value warnings).
 #ifndef svdagHdf5SlabSource_h
