@@ -155,6 +155,16 @@ svdagExactCastSlabSource::svdagExactCastSlabSource(
   const int32_t nx = this->Geometry.dims[0], ny = this->Geometry.dims[1];
   const int32_t depth = this->Geometry.dims[2];
 
+  // The reader refuses a slab larger than the machine's memory before allocating it; the float
+  // slab of pass 1 is allocated here, before the reader sees the geometry.
+  const uint64_t slabBytes = uint64_t(nx) * uint64_t(ny) *
+    uint64_t(std::min(svdag::Builder::SlabDepth, depth)) * uint64_t(source->sampleSize());
+  const uint64_t memory = svdagPhysicalMemoryBytes();
+  if (memory > 0 && slabBytes > memory)
+    throw svdagReadError(vtkErrorCode::OutOfDiskSpaceError,
+      fileName + ": one slab of 16 z-slices takes " + std::to_string(slabBytes) +
+        " bytes, more than this machine's memory");
+
   // Pass 1, slab by slab as the reader reads, in the order the source needs.
   Scan scan;
   for (int32_t z0 = 0; z0 < depth; z0 += svdag::Builder::SlabDepth)
