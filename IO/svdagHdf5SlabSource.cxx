@@ -73,29 +73,36 @@ private:
   Closer Close = nullptr;
 };
 
-// True if `name` is a dataset of rank 3 with an integer element type.
-bool isIntegerVolume(hid_t file, const char* name)
+// The element type class of `name` if it is a dataset of rank 3, else H5T_NO_CLASS.
+H5T_class_t volumeClass(hid_t file, const char* name)
 {
   Handle dataset(H5Dopen2(file, name, H5P_DEFAULT), H5Dclose);
   if (!dataset.valid())
-    return false;
+    return H5T_NO_CLASS;
   Handle type(H5Dget_type(dataset.get()), H5Tclose);
   Handle space(H5Dget_space(dataset.get()), H5Sclose);
-  return type.valid() && space.valid() && H5Tget_class(type.get()) == H5T_INTEGER &&
-    H5Sget_simple_extent_ndims(space.get()) == 3;
+  if (!type.valid() || !space.valid() || H5Sget_simple_extent_ndims(space.get()) != 3)
+    return H5T_NO_CLASS;
+  return H5Tget_class(type.get());
 }
 
 struct VisitState
 {
   hid_t file;
-  std::vector<std::string> found;
+  std::vector<std::string> integers; // the 3D integer datasets
+  std::vector<std::string> floats;   // the 3D float datasets
 };
 
 herr_t collectVolumes(hid_t, const char* name, const H5O_info_t* info, void* data)
 {
   auto* state = static_cast<VisitState*>(data);
-  if (info->type == H5O_TYPE_DATASET && isIntegerVolume(state->file, name))
-    state->found.push_back(std::string("/") + name);
+  if (info->type != H5O_TYPE_DATASET)
+    return 0;
+  const H5T_class_t typeClass = volumeClass(state->file, name);
+  if (typeClass == H5T_INTEGER)
+    state->integers.push_back(std::string("/") + name);
+  else if (typeClass == H5T_FLOAT)
+    state->floats.push_back(std::string("/") + name);
   return 0;
 }
 
@@ -113,6 +120,19 @@ hid_t nativeType(svdag::ScalarType t)
     case svdag::ScalarType::UInt64: return H5T_NATIVE_UINT64;
   }
   return H5T_NATIVE_UINT8;
+}
+
+// The memory type HDF5 converts the dataset's elements to: the native type of the source's
+// samples (native float and double for floats, whatever their order and width in the file).
+hid_t nativeType(const svdagSlabSource& source)
+{
+  switch (source.sampleKind())
+  {
+    case svdagSampleKind::Float32: return H5T_NATIVE_FLOAT;
+    case svdagSampleKind::Float64: return H5T_NATIVE_DOUBLE;
+    case svdagSampleKind::Integer: break;
+  }
+  return nativeType(source.scalarType());
 }
 }
 
@@ -143,7 +163,8 @@ bool svdagHdf5SlabSource::hasMagic(const std::string& fileName)
   return found;
 }
 
-svdagHdf5SlabSource::svdagHdf5SlabSource(const std::string& fileName, const std::string& datasetName)
+svdagHdf5SlabSource::svdagHdf5SlabSource(
+  const std::string& fileName, const std::string& datasetName, bool allowFloat)
   : impl(new Impl)
 {
   QuietHdf5Errors quiet;
@@ -156,7 +177,7 @@ svdagHdf5SlabSource::svdagHdf5SlabSource(const std::string& fileName, const std:
   impl->datasetName = datasetName;
   if (impl->datasetName.empty())
   {
-    VisitState state{ impl->file.get(), {} };
+    VisitState state{ impl->file.get(), {}, {} };
     // Only the object type is needed: the full info (H5O_INFO_ALL, what plain H5Ovisit asks
     // for) also walks each group's B-tree for its size, and HDF5 1.10 reads out of bounds there
     // on a corrupt B-tree address (found by the fuzzer).
@@ -164,17 +185,22 @@ svdagHdf5SlabSource::svdagHdf5SlabSource(const std::string& fileName, const std:
           H5O_INFO_BASIC) < 0)
       throw svdagReadError(vtkErrorCode::FileFormatError,
         fileName + ": cannot list the HDF5 datasets (corrupt file?)");
-    if (state.found.size() != 1)
+    // Integer datasets first: a float one is chosen only where the file holds no integer
+    // volume, so that allowing floats never changes how an integer file reads (and without
+    // them, the float volume is refused as floats are).
+    const bool floats = state.integers.empty();
+    const std::vector<std::string>& found = floats ? state.floats : state.integers;
+    if (found.size() != 1)
     {
       std::string names;
-      for (const auto& n : state.found)
+      for (const auto& n : found)
         names += " " + n;
       throw svdagReadError(vtkErrorCode::FileFormatError,
-        fileName + " holds " + std::to_string(state.found.size()) +
-          " 3D integer datasets" + (names.empty() ? "" : " (" + names.substr(1) + ")") +
-          "; choose one with SetDatasetName");
+        fileName + " holds " + std::to_string(found.size()) + " 3D " +
+          (!floats ? "integer" : found.empty() ? "integer or float" : "float") + " datasets" +
+          (names.empty() ? "" : " (" + names.substr(1) + ")") + "; choose one with SetDatasetName");
     }
-    impl->datasetName = state.found[0];
+    impl->datasetName = found[0];
   }
   impl->dataset = Handle(H5Dopen2(impl->file.get(), impl->datasetName.c_str(), H5P_DEFAULT), H5Dclose);
   if (!impl->dataset.valid())
@@ -189,11 +215,12 @@ svdagHdf5SlabSource::svdagHdf5SlabSource(const std::string& fileName, const std:
   const H5T_class_t typeClass = H5Tget_class(type.get());
   const size_t bytes = H5Tget_size(type.get());
   if (typeClass == H5T_FLOAT)
-    svdagThrowNotIntegerLabels(fileName + ":" + impl->datasetName, "float" + std::to_string(8 * bytes));
-  if (typeClass != H5T_INTEGER)
+    this->setFloatSamples(allowFloat, int(8 * bytes), fileName + ":" + impl->datasetName);
+  else if (typeClass != H5T_INTEGER)
     svdagThrowNotIntegerLabels(fileName + ":" + impl->datasetName, "a non-numeric element type");
-  this->Type = svdagIntegerScalarType(H5Tget_sign(type.get()) == H5T_SGN_2, int(bytes),
-    fileName + ":" + impl->datasetName + " has " + std::to_string(8 * bytes) + "-bit integers");
+  else
+    this->Type = svdagIntegerScalarType(H5Tget_sign(type.get()) == H5T_SGN_2, int(bytes),
+      fileName + ":" + impl->datasetName + " has " + std::to_string(8 * bytes) + "-bit integers");
 
   const int rank = H5Sget_simple_extent_ndims(space.get());
   if (rank != 3)
@@ -321,7 +348,7 @@ void svdagHdf5SlabSource::checkChunkIndex(hid_t plist)
   {
     const int filters = std::max(0, H5Pget_nfilters(plist));
     const uint64_t unfilteredChunkBytes =
-      uint64_t(chunk[0]) * chunk[1] * chunk[2] * uint64_t(svdag::scalarSize(this->Type));
+      uint64_t(chunk[0]) * chunk[1] * chunk[2] * uint64_t(this->sampleSize());
     const uint64_t fileSize = svdagVoxelStream::fileSize(impl->fileName);
     struct Listed
     {
@@ -386,14 +413,29 @@ void svdagHdf5SlabSource::checkChunkIndex(hid_t plist)
     fail(std::to_string(unwritten) + " of its " + std::to_string(positions) +
       " chunks were never written and it defines no fill value for them (their voxels are "
       "undefined)");
-  uint64_t fill = 0;
-  if (H5Pget_fill_value(plist, nativeType(this->Type), &fill) < 0)
+  uint64_t fill = 0; // 8 bytes: room for any sample
+  if (H5Pget_fill_value(plist, nativeType(*this), &fill) < 0)
     fail("cannot read its fill value (corrupt file?)");
-  const uint64_t value = svdag::scalarLoad(this->Type, &fill, 0);
+  std::string fillText;
+  if (this->Kind == svdagSampleKind::Integer)
+  {
+    const uint64_t value = svdag::scalarLoad(this->Type, &fill, 0);
+    fillText = svdag::scalarSigned(this->Type) ? std::to_string(int64_t(value)) : std::to_string(value);
+  }
+  else
+  {
+    float single = 0;
+    double value = 0;
+    if (this->Kind == svdagSampleKind::Float32)
+      std::memcpy(&single, &fill, sizeof single);
+    else
+      std::memcpy(&value, &fill, sizeof value);
+    const bool isSingle = this->Kind == svdagSampleKind::Float32;
+    fillText = svdagFloatRepr(isSingle ? double(single) : value, isSingle);
+  }
   this->Warnings.push_back(name + ": " + std::to_string(unwritten) + " of its " +
     std::to_string(positions) + " chunks were never written; their " +
-    std::to_string(unwrittenVoxels) + " voxels read as the fill value " +
-    (svdag::scalarSigned(this->Type) ? std::to_string(int64_t(value)) : std::to_string(value)));
+    std::to_string(unwrittenVoxels) + " voxels read as the fill value " + fillText);
 }
 
 svdagHdf5SlabSource::~svdagHdf5SlabSource()
@@ -413,7 +455,7 @@ void svdagHdf5SlabSource::readSlab(int32_t z0, int32_t nz, void* dst)
   Handle memorySpace(H5Screate_simple(3, count, nullptr), H5Sclose);
   if (!fileSpace.valid() || !memorySpace.valid() ||
     H5Sselect_hyperslab(fileSpace.get(), H5S_SELECT_SET, start, nullptr, count, nullptr) < 0 ||
-    H5Dread(impl->dataset.get(), nativeType(this->Type), memorySpace.get(), fileSpace.get(),
+    H5Dread(impl->dataset.get(), nativeType(*this), memorySpace.get(), fileSpace.get(),
       H5P_DEFAULT, dst) < 0)
     throw svdagReadError(vtkErrorCode::PrematureEndOfFileError,
       impl->fileName + ":" + impl->datasetName + ": cannot read z-slices " + std::to_string(z0) +

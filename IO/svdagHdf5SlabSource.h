@@ -1,8 +1,9 @@
 // HDF5 through the HDF5 C library: a 3D integer dataset stored (z, y, x) in C order, the way
 // h5py writes a numpy array (the last axis is x). Each slab is one hyperslab read. The dataset
-// is the one named with SetDatasetName, or the only 3D integer dataset in the file. Spacing is
-// 1 and origin 0. A chunked dataset's chunk index is checked when the source is opened (every
-// chunk HDF5 would read found, chunks never written reported as fill value warnings).
+// is the one named with SetDatasetName, or the only 3D integer dataset in the file (where there
+// is none, the only 3D float dataset, which only a source allowing floats reads). Spacing is 1 and origin 0. A
+// chunked dataset's chunk index is checked when the source is opened (every chunk HDF5 would
+// read found, chunks never written reported as fill value warnings).
 #ifndef svdagHdf5SlabSource_h
 #define svdagHdf5SlabSource_h
 
@@ -13,7 +14,10 @@
 class svdagHdf5SlabSource : public svdagSlabSource
 {
 public:
-  svdagHdf5SlabSource(const std::string& fileName, const std::string& datasetName);
+  // With `allowFloat`, float datasets are read too (as native float or double samples, see
+  // svdagSampleKind).
+  svdagHdf5SlabSource(
+    const std::string& fileName, const std::string& datasetName, bool allowFloat = false);
   ~svdagHdf5SlabSource() override;
   const char* formatName() const override { return "HDF5"; }
   void readSlab(int32_t z0, int32_t nz, void* dst) override;

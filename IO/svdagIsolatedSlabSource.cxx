@@ -152,17 +152,20 @@ bool reportingErrors(int fd, Body&& body)
   const unsigned char ok = Ok;
   const svdag::Geometry geometry = source->geometry();
   const svdag::ScalarType type = source->scalarType();
+  const svdagSampleKind kind = source->sampleKind();
+  const size_t sampleSize = size_t(source->sampleSize());
   size_t warningsSent = 0;
   if (!sendAll(fd, &ok, 1) || !sendWarnings(fd, *source, warningsSent) ||
-    !sendAll(fd, &geometry, sizeof geometry) || !sendAll(fd, &type, sizeof type))
+    !sendAll(fd, &geometry, sizeof geometry) || !sendAll(fd, &type, sizeof type) ||
+    !sendAll(fd, &kind, sizeof kind))
     _exit(0);
   std::vector<char> slab;
   Request request{};
   while (receiveAll(fd, &request, sizeof request, -1) == Received::All)
   {
     const bool read = reportingErrors(fd, [&] {
-      slab.resize(size_t(request.nz) * size_t(geometry.dims[0]) * size_t(geometry.dims[1]) *
-        size_t(svdag::scalarSize(type)));
+      slab.resize(
+        size_t(request.nz) * size_t(geometry.dims[0]) * size_t(geometry.dims[1]) * sampleSize);
       source->readSlab(request.z0, request.nz, slab.data());
     });
     if (read &&
@@ -296,10 +299,12 @@ svdagIsolatedSlabSource::svdagIsolatedSlabSource(
   impl->receiveStatus("opening it", this->Warnings);
   impl->receive(&this->Geometry, sizeof this->Geometry, "opening it");
   impl->receive(&this->Type, sizeof this->Type, "opening it");
+  impl->receive(&this->Kind, sizeof this->Kind, "opening it");
 #else
   impl->source = open();
   this->Geometry = impl->source->geometry();
   this->Type = impl->source->scalarType();
+  this->Kind = impl->source->sampleKind();
   this->Warnings = impl->source->warnings();
 #endif
 }
@@ -320,7 +325,7 @@ void svdagIsolatedSlabSource::readSlab(int32_t z0, int32_t nz, void* dst)
   impl->receiveStatus(what, this->Warnings);
   impl->receive(dst,
     size_t(nz) * size_t(this->Geometry.dims[0]) * size_t(this->Geometry.dims[1]) *
-      size_t(svdag::scalarSize(this->Type)),
+      size_t(this->sampleSize()),
     what);
 #else
   impl->source->readSlab(z0, nz, dst);

@@ -1,9 +1,10 @@
 // A slab source run in a child process. Some formats are parsed by third-party C libraries that
 // are not hardened against corrupt files (HDF5 1.10 reads out of bounds on a damaged B-tree or
 // heap address); a crash there must become an error for that file, not the end of the
-// application. The child opens the real source and sends its geometry, scalar type and slabs
-// back over a socket; the parent reports a crash, an early exit or a silent child (no byte for
-// a long time) as svdagReadError naming the file.
+// application. The child opens the real source and sends its geometry, scalar type, sample kind
+// (integer labels or floats, svdagSampleKind) and slabs back over a socket; the parent reports
+// a crash, an early exit or a silent child (no byte for a long time) as svdagReadError naming
+// the file.
 //
 // The slabs cross the socket once (a copy at memory speed) and the child holds one slab of its
 // own while it sends it. POSIX only (fork); elsewhere the source runs in the process.

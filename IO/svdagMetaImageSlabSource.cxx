@@ -74,7 +74,7 @@ struct svdagMetaImageSlabSource::Impl
   std::unique_ptr<svdagVoxelStream> voxels;
 };
 
-svdagMetaImageSlabSource::svdagMetaImageSlabSource(const std::string& fileName)
+svdagMetaImageSlabSource::svdagMetaImageSlabSource(const std::string& fileName, bool allowFloat)
   : impl(new Impl)
 {
   std::FILE* f = std::fopen(fileName.c_str(), "rb");
@@ -143,8 +143,9 @@ svdagMetaImageSlabSource::svdagMetaImageSlabSource(const std::string& fileName)
   if (!metType(typeName, isSigned, bytes))
     formatError(fileName + ": MetaImage element type '" + typeName + "' is not supported");
   if (bytes == 0)
-    svdagThrowNotIntegerLabels(fileName, typeName == "MET_FLOAT" ? "float" : "double");
-  this->Type = svdagIntegerScalarType(isSigned, bytes, fileName + " has " + typeName);
+    this->setFloatSamples(allowFloat, typeName == "MET_FLOAT" ? 32 : 64, fileName);
+  else
+    this->Type = svdagIntegerScalarType(isSigned, bytes, fileName + " has " + typeName);
   if (const std::string* channels = field("elementnumberofchannels"))
   {
     const auto n = numbers(*channels, "ElementNumberOfChannels");
@@ -237,7 +238,7 @@ svdagMetaImageSlabSource::svdagMetaImageSlabSource(const std::string& fileName)
       if (v[0] == -1)
       {
         // -1: the data is the last bytes of the data file.
-        const uint64_t total = this->Geometry.voxelCount() * uint64_t(bytes);
+        const uint64_t total = this->Geometry.voxelCount() * uint64_t(this->sampleSize());
         const uint64_t size = svdagVoxelStream::fileSize(dataFileName);
         if (compressed || size < total)
           formatError(fileName + ": HeaderSize -1 needs raw data that fits in " + dataFileName);
@@ -262,7 +263,7 @@ svdagMetaImageSlabSource::svdagMetaImageSlabSource(const std::string& fileName)
   }
   impl->voxels.reset(new svdagVoxelStream(dataFileName,
     compressed ? svdagVoxelStream::Encoding::Compressed : svdagVoxelStream::Encoding::Raw, offset,
-    this->Geometry, this->Type, bigEndian));
+    this->Geometry, this->sampleSize(), bigEndian));
 }
 
 svdagMetaImageSlabSource::~svdagMetaImageSlabSource() = default;

@@ -16,7 +16,8 @@
 class svdagMetaImageSlabSource : public svdagSlabSource
 {
 public:
-  explicit svdagMetaImageSlabSource(const std::string& fileName);
+  // Throws svdagReadError on float data unless `allowFloat` (see svdagSampleKind).
+  explicit svdagMetaImageSlabSource(const std::string& fileName, bool allowFloat = false);
   ~svdagMetaImageSlabSource() override;
   const char* formatName() const override { return "MetaImage"; }
   void readSlab(int32_t z0, int32_t nz, void* dst) override;

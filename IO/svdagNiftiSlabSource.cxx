@@ -58,11 +58,14 @@ struct HeaderBytes
   }
 };
 
-// NIfTI datatype codes -> (signed, bytes), or the type's name when it is not an integer type.
-bool niftiType(int code, bool& isSigned, int& bytes, std::string& other)
+// NIfTI datatype codes -> (signed, bytes) of an integer type, (isFloat, bytes) of float32 and
+// float64, or the name of any other type.
+bool niftiType(int code, bool& isSigned, int& bytes, bool& isFloat, std::string& other)
 {
   switch (code)
   {
+    case 16: isFloat = true; bytes = 4; return true;
+    case 64: isFloat = true; bytes = 8; return true;
     case 2: isSigned = false; bytes = 1; return true;
     case 4: isSigned = true; bytes = 2; return true;
     case 8: isSigned = true; bytes = 4; return true;
@@ -72,8 +75,6 @@ bool niftiType(int code, bool& isSigned, int& bytes, std::string& other)
     case 1024: isSigned = true; bytes = 8; return true;
     case 1280: isSigned = false; bytes = 8; return true;
     case 1: other = "1-bit binary"; return false;
-    case 16: other = "float32"; return false;
-    case 64: other = "float64"; return false;
     case 1536: other = "float128"; return false;
     case 32: other = "complex64"; return false;
     case 1792: other = "complex128"; return false;
@@ -90,7 +91,7 @@ struct svdagNiftiSlabSource::Impl
   std::unique_ptr<svdagVoxelStream> voxels;
 };
 
-svdagNiftiSlabSource::svdagNiftiSlabSource(const std::string& fileName)
+svdagNiftiSlabSource::svdagNiftiSlabSource(const std::string& fileName, bool allowFloat)
   : impl(new Impl)
 {
   unsigned char h[544] = {};
@@ -158,19 +159,22 @@ svdagNiftiSlabSource::svdagNiftiSlabSource(const std::string& fileName)
   // Datatype and bitpix.
   const int datatype = nifti2 ? hb.get<int16_t>(12) : hb.get<int16_t>(70);
   const int bitpix = nifti2 ? hb.get<int16_t>(14) : hb.get<int16_t>(72);
-  bool isSigned = false;
+  bool isSigned = false, isFloat = false;
   int bytes = 0;
   std::string other;
-  if (!niftiType(datatype, isSigned, bytes, other))
+  if (!niftiType(datatype, isSigned, bytes, isFloat, other))
   {
     if (other.empty())
       formatError(fileName + ": unknown NIfTI datatype " + std::to_string(datatype));
     svdagThrowNotIntegerLabels(fileName, other);
   }
+  if (isFloat)
+    this->setFloatSamples(allowFloat, 8 * bytes, fileName);
   if (bitpix != 8 * bytes)
     formatError(fileName + ": NIfTI bitpix " + std::to_string(bitpix) + " does not match datatype " +
       std::to_string(datatype) + " (" + std::to_string(8 * bytes) + " bits)");
-  this->Type = svdagIntegerScalarType(isSigned, bytes, fileName);
+  if (!isFloat)
+    this->Type = svdagIntegerScalarType(isSigned, bytes, fileName);
 
   // Scaled values are not labels. A slope of 0 (or NaN, as nibabel writes) means no scaling.
   const double slope = nifti2 ? hb.get<double>(176) : hb.get<float>(112);
@@ -268,10 +272,10 @@ svdagNiftiSlabSource::svdagNiftiSlabSource(const std::string& fileName)
   const bool bigEndian = svdagHostIsLittleEndian() == swap;
   if (isGzip(dataFileName))
     impl->voxels.reset(new svdagVoxelStream(dataFileName, svdagVoxelStream::Encoding::Compressed,
-      0, this->Geometry, this->Type, bigEndian, uint64_t(voxOffset)));
+      0, this->Geometry, this->sampleSize(), bigEndian, uint64_t(voxOffset)));
   else
     impl->voxels.reset(new svdagVoxelStream(dataFileName, svdagVoxelStream::Encoding::Raw,
-      uint64_t(voxOffset), this->Geometry, this->Type, bigEndian));
+      uint64_t(voxOffset), this->Geometry, this->sampleSize(), bigEndian));
 }
 
 svdagNiftiSlabSource::~svdagNiftiSlabSource() = default;

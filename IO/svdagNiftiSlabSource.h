@@ -4,8 +4,9 @@
 //
 // Voxels come out in the file's order, which is nibabel's array order (x fastest). The header
 // is checked against the specification: sizeof_hdr 348 (540), the magic, dim[0] in 1..7 with
-// every dimension past the third of size 1, dimensions >= 1, a known integer datatype whose
-// bitpix matches, vox_offset >= 352 (544) in single files, no scaling (scl_slope).
+// every dimension past the third of size 1, dimensions >= 1, a known integer datatype (or
+// float32/float64, when allowed) whose bitpix matches, vox_offset >= 352 (544) in single
+// files, no scaling (scl_slope).
 // Geometry is the file's affine as nibabel reads it: the sform if its code is set, else the
 // qform, else the voxel sizes alone; spacing is the length of each column, direction the
 // normalised columns, origin the translation (world = RAS+ as NIfTI defines it).
@@ -19,7 +20,8 @@
 class svdagNiftiSlabSource : public svdagSlabSource
 {
 public:
-  explicit svdagNiftiSlabSource(const std::string& fileName);
+  // Throws svdagReadError on float32/float64 data unless `allowFloat` (see svdagSampleKind).
+  explicit svdagNiftiSlabSource(const std::string& fileName, bool allowFloat = false);
   ~svdagNiftiSlabSource() override;
   const char* formatName() const override { return "NIfTI"; }
   void readSlab(int32_t z0, int32_t nz, void* dst) override;

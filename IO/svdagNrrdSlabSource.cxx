@@ -134,10 +134,18 @@ std::array<double, 3> parseVector(const std::string& item, const std::string& fi
   return v;
 }
 
-// NRRD type spellings (teem's list) -> signedness and bytes; 0 bytes for non-integer types.
-bool nrrdType(const std::string& spelling, bool& isSigned, int& bytes)
+// A NRRD type: integers by signedness and bytes; floats by bytes; 0 bytes for "block".
+struct NrrdType
 {
-  static const std::map<std::string, std::pair<bool, int>> types = {
+  bool isSigned = false;
+  int bytes = 0;
+  bool isFloat = false;
+};
+
+// NRRD type spellings (teem's list) -> their type.
+bool nrrdType(const std::string& spelling, NrrdType& type)
+{
+  static const std::map<std::string, NrrdType> types = {
     { "signed char", { true, 1 } }, { "int8", { true, 1 } }, { "int8_t", { true, 1 } },
     { "uchar", { false, 1 } }, { "unsigned char", { false, 1 } }, { "uint8", { false, 1 } },
     { "uint8_t", { false, 1 } },
@@ -156,13 +164,12 @@ bool nrrdType(const std::string& spelling, bool& isSigned, int& bytes)
     { "ulonglong", { false, 8 } }, { "unsigned long long", { false, 8 } },
     { "unsigned long long int", { false, 8 } }, { "uint64", { false, 8 } },
     { "uint64_t", { false, 8 } },
-    { "float", { true, 0 } }, { "double", { true, 0 } }, { "block", { true, 0 } },
+    { "float", { true, 4, true } }, { "double", { true, 8, true } }, { "block", { true, 0 } },
   };
   const auto it = types.find(svdagLower(spelling));
   if (it == types.end())
     return false;
-  isSigned = it->second.first;
-  bytes = it->second.second;
+  type = it->second;
   return true;
 }
 
@@ -202,7 +209,7 @@ bool svdagNrrdSlabSource::hasMagic(const std::string& fileName)
   return f && std::fread(magic, 1, 7, f.get()) == 7 && std::memcmp(magic, "NRRD000", 7) == 0;
 }
 
-svdagNrrdSlabSource::svdagNrrdSlabSource(const std::string& fileName)
+svdagNrrdSlabSource::svdagNrrdSlabSource(const std::string& fileName, bool allowFloat)
   : impl(new Impl)
 {
   FilePtr header(std::fopen(fileName.c_str(), "rb"));
@@ -259,13 +266,16 @@ svdagNrrdSlabSource::svdagNrrdSlabSource(const std::string& fileName)
 
   // Scalar type.
   const std::string& typeName = required("type");
-  bool isSigned = false;
-  int bytes = 0;
-  if (!nrrdType(typeName, isSigned, bytes))
+  NrrdType type;
+  if (!nrrdType(typeName, type))
     formatError(fileName + ": unknown NRRD type '" + typeName + "'");
-  if (bytes == 0)
+  const int bytes = type.bytes;
+  if (type.isFloat)
+    this->setFloatSamples(allowFloat, 8 * bytes, fileName);
+  else if (bytes == 0)
     svdagThrowNotIntegerLabels(fileName, typeName);
-  this->Type = svdagIntegerScalarType(isSigned, bytes, fileName + " has " + typeName);
+  else
+    this->Type = svdagIntegerScalarType(type.isSigned, bytes, fileName + " has " + typeName);
 
   // Dimension and sizes.
   const long long dimension = parseInteger(required("dimension"), "dimension");
@@ -420,7 +430,7 @@ svdagNrrdSlabSource::svdagNrrdSlabSource(const std::string& fileName)
       offset = size - total;
     }
     impl->voxels.reset(new svdagVoxelStream(dataFileName, svdagVoxelStream::Encoding::Raw,
-      offset, this->Geometry, this->Type, bigEndian));
+      offset, this->Geometry, this->sampleSize(), bigEndian));
   }
   else if (encoding == "gzip" || encoding == "gz")
   {
@@ -428,7 +438,7 @@ svdagNrrdSlabSource::svdagNrrdSlabSource(const std::string& fileName)
     if (byteSkip == -1)
       formatError(fileName + ": 'byte skip: -1' is only allowed with raw encoding");
     impl->voxels.reset(new svdagVoxelStream(dataFileName,
-      svdagVoxelStream::Encoding::Compressed, here, this->Geometry, this->Type, bigEndian,
+      svdagVoxelStream::Encoding::Compressed, here, this->Geometry, this->sampleSize(), bigEndian,
       uint64_t(byteSkip)));
   }
   else

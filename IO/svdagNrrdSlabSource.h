@@ -16,8 +16,9 @@
 class svdagNrrdSlabSource : public svdagSlabSource
 {
 public:
-  // Parses the header; throws svdagReadError on a missing file or a bad header.
-  explicit svdagNrrdSlabSource(const std::string& fileName);
+  // Parses the header; throws svdagReadError on a missing file or a bad header, and on float
+  // data unless `allowFloat` (then the samples are floats, see svdagSampleKind).
+  explicit svdagNrrdSlabSource(const std::string& fileName, bool allowFloat = false);
   ~svdagNrrdSlabSource() override;
   const char* formatName() const override { return "NRRD"; }
   void readSlab(int32_t z0, int32_t nz, void* dst) override;

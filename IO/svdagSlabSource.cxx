@@ -6,6 +6,8 @@
 
 #include <algorithm>
 #include <cctype>
+#include <charconv>
+#include <cmath>
 #include <cstring>
 #include <unistd.h>
 
@@ -40,6 +42,30 @@ void svdagSlabSource::checkSlab(int32_t z0, int32_t nz) const
   }
 }
 
+int svdagSlabSource::sampleSize() const
+{
+  switch (this->Kind)
+  {
+    case svdagSampleKind::Float32:
+      return 4;
+    case svdagSampleKind::Float64:
+      return 8;
+    case svdagSampleKind::Integer:
+      break;
+  }
+  return svdag::scalarSize(this->Type);
+}
+
+void svdagSlabSource::setFloatSamples(bool allowFloat, int bits, const std::string& fileName)
+{
+  if (allowFloat && (bits == 32 || bits == 64))
+  {
+    this->Kind = bits == 32 ? svdagSampleKind::Float32 : svdagSampleKind::Float64;
+    return;
+  }
+  svdagThrowNotIntegerLabels(fileName, "float" + std::to_string(bits));
+}
+
 svdag::ScalarType svdagIntegerScalarType(bool isSigned, int bytes, const std::string& what)
 {
   switch (bytes)
@@ -65,6 +91,42 @@ void svdagThrowNotIntegerLabels(const std::string& fileName, const std::string& 
   const std::string name = type == "float" ? "float32" : type == "double" ? "float64" : type;
   throw svdagReadError(vtkErrorCode::FileFormatError,
     "label volumes need integer scalars; " + fileName + " has " + name);
+}
+
+std::string svdagFloatRepr(double value, bool single)
+{
+  if (std::isnan(value))
+    return "nan";
+  if (std::isinf(value))
+    return value < 0 ? "-inf" : "inf";
+  // The shortest round-trip digits, as d.ddde+X; then laid out by repr's rule.
+  char text[64];
+  const std::to_chars_result written = single
+    ? std::to_chars(text, text + sizeof text, float(value), std::chars_format::scientific)
+    : std::to_chars(text, text + sizeof text, value, std::chars_format::scientific);
+  std::string s(text, written.ptr);
+  std::string sign;
+  if (s[0] == '-')
+  {
+    sign = "-";
+    s.erase(0, 1);
+  }
+  const size_t e = s.find('e');
+  const int exponent = std::stoi(s.substr(e + 1));
+  std::string digits = s.substr(0, e);
+  digits.erase(std::remove(digits.begin(), digits.end(), '.'), digits.end());
+  const int n = int(digits.size());
+  if (exponent < -4 || exponent >= 16)
+  {
+    const std::string power = std::to_string(std::abs(exponent));
+    return sign + digits[0] + (n > 1 ? "." + digits.substr(1) : "") + "e" +
+      (exponent < 0 ? "-" : "+") + (power.size() < 2 ? "0" : "") + power;
+  }
+  if (exponent < 0)
+    return sign + "0." + std::string(size_t(-exponent - 1), '0') + digits;
+  if (n <= exponent + 1)
+    return sign + digits + std::string(size_t(exponent + 1 - n), '0') + ".0";
+  return sign + digits.substr(0, size_t(exponent + 1)) + "." + digits.substr(size_t(exponent + 1));
 }
 
 void svdagSwapBytes(void* data, size_t count, int size)

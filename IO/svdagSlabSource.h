@@ -30,6 +30,16 @@ private:
   unsigned long Code;
 };
 
+// What readSlab writes: integer labels of scalarType(), or floats. Sources report floats only
+// when they are opened with floats allowed (svdagSlabSourceOptions::castFloatLabels), and the
+// factory then wraps them in svdagExactCastSlabSource: the reader always receives labels.
+enum class svdagSampleKind : uint8_t
+{
+  Integer,
+  Float32,
+  Float64
+};
+
 class svdagSlabSource
 {
 public:
@@ -40,10 +50,14 @@ public:
   // Short name of the format ("NRRD", "NIfTI", ...).
   virtual const char* formatName() const = 0;
   const svdag::Geometry& geometry() const { return this->Geometry; }
+  // The label type; meaningless while sampleKind() is not Integer.
   svdag::ScalarType scalarType() const { return this->Type; }
+  svdagSampleKind sampleKind() const { return this->Kind; }
+  // Bytes of one sample: scalarSize(scalarType()) for labels, 4 or 8 for floats.
+  int sampleSize() const;
 
-  // Writes z-slices [z0, z0 + nz) into dst: dims[0] * dims[1] * nz values of scalarType(),
-  // x fastest, native byte order. Slabs are requested in increasing z without gaps (sources
+  // Writes z-slices [z0, z0 + nz) into dst: dims[0] * dims[1] * nz samples (sampleKind(),
+  // sampleSize()), x fastest, native byte order. Slabs are requested in increasing z without gaps (sources
   // that decompress a stream rely on it). Throws svdagReadError.
   virtual void readSlab(int32_t z0, int32_t nz, void* dst) = 0;
 
@@ -65,9 +79,14 @@ protected:
   void checkGeometry(const std::string& fileName) const;
   // Throws a FileFormatError when (z0, nz) is not a slab inside the volume.
   void checkSlab(int32_t z0, int32_t nz) const;
+  // For a file of floats of `bits` bits: sets Kind to Float32 or Float64 when `allowFloat`,
+  // else (and for other widths: float16, float128) throws svdagThrowNotIntegerLabels naming
+  // `fileName` and the type ("float32").
+  void setFloatSamples(bool allowFloat, int bits, const std::string& fileName);
 
   svdag::Geometry Geometry;
   svdag::ScalarType Type = svdag::ScalarType::UInt8;
+  svdagSampleKind Kind = svdagSampleKind::Integer;
   std::vector<std::string> Warnings;
 };
 
@@ -79,6 +98,11 @@ constexpr uint64_t svdagMaxVoxels = uint64_t(1) << 40;
 svdag::ScalarType svdagIntegerScalarType(bool isSigned, int bytes, const std::string& what);
 // "label volumes need integer scalars; FILE has TYPE".
 [[noreturn]] void svdagThrowNotIntegerLabels(const std::string& fileName, const std::string& type);
+// `value` as Python's repr() writes a float (numpy's for a float32 when `single`): the shortest
+// digits that read back as the value, positional from 1e-4 to 1e16, else with an exponent
+// ("0.5", "70000.0", "1.8446744073709552e+19", "nan", "-inf"), so that C++ messages name a
+// value as vtksvdag's Python messages do.
+std::string svdagFloatRepr(double value, bool single);
 // Header-text helpers of the text-header formats (NRRD, MetaImage): `s` without leading and
 // trailing blanks (space, tab, CR), and `s` in lower case (ASCII).
 std::string svdagTrim(const std::string& s);

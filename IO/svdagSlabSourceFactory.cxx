@@ -1,5 +1,6 @@
 #include "svdagSlabSourceFactory.h"
 
+#include "svdagExactCastSlabSource.h"
 #include "svdagHdf5SlabSource.h"
 #include "svdagIsolatedSlabSource.h"
 #include "svdagMetaImageSlabSource.h"
@@ -18,6 +19,8 @@ namespace
 // One entry per format: its name (GetFileFormat()), how its files are recognised from their
 // content, and how they are opened. Detection tries the entries in this order: binary
 // signatures first, text headers last. To add a format, add its source and one line here.
+// `open` opens the format's own source: with options.castFloatLabels, one that may hand out
+// floats (svdagOpenSlabSource then casts them).
 struct Format
 {
   const char* name;
@@ -27,9 +30,16 @@ struct Format
 };
 
 template <typename Source>
-std::unique_ptr<svdagSlabSource> openPlain(const std::string& fileName, const svdagSlabSourceOptions&)
+std::unique_ptr<svdagSlabSource> openPlain(
+  const std::string& fileName, const svdagSlabSourceOptions& options)
 {
-  return std::unique_ptr<svdagSlabSource>(new Source(fileName));
+  return std::unique_ptr<svdagSlabSource>(new Source(fileName, options.castFloatLabels));
+}
+
+// .svdag files hold integer labels only.
+std::unique_ptr<svdagSlabSource> openSvdag(const std::string& fileName, const svdagSlabSourceOptions&)
+{
+  return std::unique_ptr<svdagSlabSource>(new svdagSVDAGFileSlabSource(fileName));
 }
 
 std::unique_ptr<svdagSlabSource> openHdf5(
@@ -38,14 +48,16 @@ std::unique_ptr<svdagSlabSource> openHdf5(
   // In a child process: HDF5 1.10 is not hardened against corrupt metadata (the fuzzer crashes
   // it in its metadata cache), and a crash must be an error for the file.
   const std::string datasetName = options.datasetName;
+  const bool allowFloat = options.castFloatLabels;
   return std::unique_ptr<svdagSlabSource>(new svdagIsolatedSlabSource(fileName, "HDF5", [=] {
-    return std::unique_ptr<svdagSlabSource>(new svdagHdf5SlabSource(fileName, datasetName));
+    return std::unique_ptr<svdagSlabSource>(
+      new svdagHdf5SlabSource(fileName, datasetName, allowFloat));
   }));
 }
 
 const Format Formats[] = {
   { "NRRD", svdagNrrdSlabSource::hasMagic, openPlain<svdagNrrdSlabSource> },
-  { "SVDAG", svdagSVDAGFileSlabSource::hasMagic, openPlain<svdagSVDAGFileSlabSource> },
+  { "SVDAG", svdagSVDAGFileSlabSource::hasMagic, openSvdag },
   { "HDF5", svdagHdf5SlabSource::hasMagic, openHdf5 },
   { "TIFF", svdagTiffSlabSource::hasMagic, openPlain<svdagTiffSlabSource> },
   { "NIfTI", svdagNiftiSlabSource::canRead, openPlain<svdagNiftiSlabSource> },
@@ -93,5 +105,11 @@ std::unique_ptr<svdagSlabSource> svdagOpenSlabSource(
     throw svdagReadError(vtkErrorCode::UnrecognizedFileTypeError,
       fileName + " is not a label volume in a known format (NRRD, MetaImage, VTK image data, "
                  "NIfTI, TIFF, HDF5, .svdag)");
-  return format->open(fileName, options);
+  std::unique_ptr<svdagSlabSource> source = format->open(fileName, options);
+  if (source->sampleKind() == svdagSampleKind::Integer)
+    return source;
+  // Floats, which a source hands out only with castFloatLabels: checked and cast here, one
+  // wrapper for every format. Its second pass reads the file through a source of its own.
+  return std::unique_ptr<svdagSlabSource>(new svdagExactCastSlabSource(
+    std::move(source), [=] { return format->open(fileName, options); }, fileName));
 }

@@ -11,14 +11,20 @@
 struct svdagSlabSourceOptions
 {
   std::string datasetName; // HDF5: the dataset to read; empty: the only 3D integer dataset
+  // Float data (float32, float64) is read as integer labels, value for value, when every value
+  // is a whole number (svdagExactCastSlabSource); off, it is refused. Integer files read the same
+  // either way.
+  bool castFloatLabels = false;
 };
 
 // The format a file holds ("NRRD", "MetaImage", "VTKImageData", "NIfTI", "TIFF", "HDF5",
 // "SVDAG"), or an empty string when it is none of them or cannot be read. Never throws.
 std::string svdagDetectFileFormat(const std::string& fileName);
 
-// Opens the file with the source for its format and reads its header. Throws svdagReadError:
-// FileNotFoundError, UnrecognizedFileTypeError, FileFormatError, PrematureEndOfFileError, ...
+// Opens the file with the source for its format and reads its header (with castFloatLabels and
+// float data, the whole file: the check pass). The source returned always hands out integer
+// labels. Throws svdagReadError: FileNotFoundError, UnrecognizedFileTypeError,
+// FileFormatError, PrematureEndOfFileError, ...
 std::unique_ptr<svdagSlabSource> svdagOpenSlabSource(
   const std::string& fileName, const svdagSlabSourceOptions& options);
 

@@ -193,7 +193,7 @@ bool svdagTiffSlabSource::hasMagic(const std::string& fileName)
     (m[0] == 'M' && m[1] == 'M' && m[2] == 0 && (m[3] == 42 || m[3] == 43));
 }
 
-svdagTiffSlabSource::svdagTiffSlabSource(const std::string& fileName)
+svdagTiffSlabSource::svdagTiffSlabSource(const std::string& fileName, bool allowFloat)
   : impl(new Impl)
 {
   impl->fileName = fileName;
@@ -229,18 +229,19 @@ svdagTiffSlabSource::svdagTiffSlabSource(const std::string& fileName)
     TIFFGetFieldDefaulted(impl->tiff, TIFFTAG_SAMPLEFORMAT, &format);
     if (page == 0)
     {
-      if (format == SAMPLEFORMAT_IEEEFP || format == SAMPLEFORMAT_COMPLEXIEEEFP ||
-        format == SAMPLEFORMAT_COMPLEXINT)
-        svdagThrowNotIntegerLabels(fileName,
-          (format == SAMPLEFORMAT_IEEEFP ? "float" : "complex") + std::to_string(bits));
-      if (format != SAMPLEFORMAT_UINT && format != SAMPLEFORMAT_INT &&
+      if (format == SAMPLEFORMAT_COMPLEXIEEEFP || format == SAMPLEFORMAT_COMPLEXINT)
+        svdagThrowNotIntegerLabels(fileName, "complex" + std::to_string(bits));
+      if (format == SAMPLEFORMAT_IEEEFP)
+        this->setFloatSamples(allowFloat, bits, fileName);
+      else if (format != SAMPLEFORMAT_UINT && format != SAMPLEFORMAT_INT &&
         format != SAMPLEFORMAT_VOID)
         impl->fail(vtkErrorCode::FileFormatError, "unknown sample format " + std::to_string(format));
       if (samples != 1)
         impl->fail(vtkErrorCode::FileFormatError,
           "label volumes need one sample per pixel; the file has " + std::to_string(samples));
-      this->Type = svdagIntegerScalarType(format == SAMPLEFORMAT_INT, bits / 8,
-        fileName + " has " + std::to_string(bits) + "-bit samples");
+      if (format != SAMPLEFORMAT_IEEEFP)
+        this->Type = svdagIntegerScalarType(format == SAMPLEFORMAT_INT, bits / 8,
+          fileName + " has " + std::to_string(bits) + "-bit samples");
       if (bits % 8 != 0)
         impl->fail(vtkErrorCode::FileFormatError,
           std::to_string(bits) + "-bit samples are not supported");
@@ -258,7 +259,7 @@ svdagTiffSlabSource::svdagTiffSlabSource(const std::string& fileName)
     impl->fail(vtkErrorCode::FileFormatError, "absurd page size");
   this->Geometry.dims = { { int32_t(width0), int32_t(height0), int32_t(pages) } };
   this->checkGeometry(fileName);
-  impl->sampleBytes = svdag::scalarSize(this->Type);
+  impl->sampleBytes = this->sampleSize();
   impl->fileSize = svdagVoxelStream::fileSize(fileName);
 }
 
@@ -267,7 +268,7 @@ svdagTiffSlabSource::~svdagTiffSlabSource() = default;
 void svdagTiffSlabSource::readSlab(int32_t z0, int32_t nz, void* dst)
 {
   this->checkSlab(z0, nz);
-  const size_t size = size_t(svdag::scalarSize(this->Type));
+  const size_t size = size_t(this->sampleSize());
   const size_t width = size_t(this->Geometry.dims[0]);
   const size_t height = size_t(this->Geometry.dims[1]);
   TIFF* tiff = impl->tiff;

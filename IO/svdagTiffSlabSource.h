@@ -1,7 +1,7 @@
 // Multi-page TIFF through libtiff: page k is z-slice k. Every page must have the same size and
-// one integer sample per pixel (8, 16, 32 or 64 bits, signed or unsigned); stripped and tiled
-// pages, any compression libtiff decodes. Spacing is 1 and origin 0 (TIFF resolution tags are
-// not voxel sizes one can trust).
+// one integer sample per pixel (8, 16, 32 or 64 bits, signed or unsigned; or float32/float64,
+// when allowed); stripped and tiled pages, any compression libtiff decodes. Spacing is 1 and
+// origin 0 (TIFF resolution tags are not voxel sizes one can trust).
 #ifndef svdagTiffSlabSource_h
 #define svdagTiffSlabSource_h
 
@@ -12,7 +12,9 @@
 class svdagTiffSlabSource : public svdagSlabSource
 {
 public:
-  explicit svdagTiffSlabSource(const std::string& fileName);
+  // Throws svdagReadError on float samples unless `allowFloat` (32 or 64 bits then; see
+  // svdagSampleKind).
+  explicit svdagTiffSlabSource(const std::string& fileName, bool allowFloat = false);
   ~svdagTiffSlabSource() override;
   const char* formatName() const override { return "TIFF"; }
   void readSlab(int32_t z0, int32_t nz, void* dst) override;

@@ -465,12 +465,12 @@ private:
 };
 } // namespace
 
-svdagVTIImageSlabSource::svdagVTIImageSlabSource(const std::string& fileName)
+svdagVTIImageSlabSource::svdagVTIImageSlabSource(const std::string& fileName, bool allowFloat)
   : svdagVTKImageSlabSource(vtkSmartPointer<vtkXMLImageDataReader>::New(), fileName)
 {
   HeaderCheck(fileName).run();
   vtkXMLImageDataReader::SafeDownCast(this->reader())->SetFileName(fileName.c_str());
-  this->open();
+  this->open(allowFloat);
   this->checkGeometry(fileName);
 }
 

@@ -9,7 +9,8 @@
 class svdagVTIImageSlabSource : public svdagVTKImageSlabSource
 {
 public:
-  explicit svdagVTIImageSlabSource(const std::string& fileName);
+  // Throws svdagReadError on float or double scalars unless `allowFloat` (see svdagSampleKind).
+  explicit svdagVTIImageSlabSource(const std::string& fileName, bool allowFloat = false);
   const char* formatName() const override { return "VTKImageData"; }
   // True if the file is VTK XML with type="ImageData".
   static bool canRead(const std::string& fileName);

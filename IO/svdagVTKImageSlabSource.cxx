@@ -127,7 +127,7 @@ void svdagVTKImageSlabSource::Impl::throwReaderError(const char* during)
     message);
 }
 
-void svdagVTKImageSlabSource::open()
+void svdagVTKImageSlabSource::open(bool allowFloat)
 {
   impl->reader->UpdateInformation();
   impl->observeReporters();
@@ -175,13 +175,17 @@ void svdagVTKImageSlabSource::open()
     ? scalars->Get(vtkDataObject::FIELD_NUMBER_OF_COMPONENTS())
     : 1;
   const int coreType = vtkSegmentationSVDAG::FromVTKScalarType(impl->vtkScalarType);
-  if (coreType < 0)
+  const bool isFloat = impl->vtkScalarType == VTK_FLOAT || impl->vtkScalarType == VTK_DOUBLE;
+  if (isFloat)
+    this->setFloatSamples(allowFloat, impl->vtkScalarType == VTK_FLOAT ? 32 : 64, impl->fileName);
+  else if (coreType < 0)
     svdagThrowNotIntegerLabels(impl->fileName, vtkImageScalarTypeNameMacro(impl->vtkScalarType));
   if (components != 1)
     throw svdagReadError(vtkErrorCode::FileFormatError,
       "label volumes need one component per voxel; " + impl->fileName + " has " +
         std::to_string(components));
-  this->Type = static_cast<svdag::ScalarType>(coreType);
+  if (!isFloat)
+    this->Type = static_cast<svdag::ScalarType>(coreType);
 }
 
 vtkAlgorithm* svdagVTKImageSlabSource::reader() const
@@ -216,7 +220,7 @@ void svdagVTKImageSlabSource::readSlab(int32_t z0, int32_t nz, void* dst)
         std::to_string(z0 + nz - 1) + " as its header describes them");
 
   const size_t sliceBytes = size_t(this->Geometry.dims[0]) * size_t(this->Geometry.dims[1]) *
-    size_t(svdag::scalarSize(this->Type));
+    size_t(this->sampleSize());
   const auto* source = static_cast<const uint8_t*>(array->GetVoidPointer(0));
   auto* out = static_cast<uint8_t*>(dst);
   for (int32_t z = 0; z < nz; ++z)

@@ -24,9 +24,10 @@ public:
 protected:
   // `reader` gets its file name from the subclass, which then calls open().
   svdagVTKImageSlabSource(vtkSmartPointer<vtkAlgorithm> reader, const std::string& fileName);
-  // Runs the information pass and fills Geometry and Type. Subclasses call it from their
-  // constructor, adjust the geometry if their format needs to, then call checkGeometry().
-  void open();
+  // Runs the information pass and fills Geometry and Type (Kind for float or double scalars,
+  // which throw unless `allowFloat`). Subclasses call it from their constructor, adjust the
+  // geometry if their format needs to, then call checkGeometry().
+  void open(bool allowFloat);
   // The wrapped reader.
   vtkAlgorithm* reader() const;
 

@@ -40,7 +40,7 @@ uint64_t svdagVoxelStream::fileSize(const std::string& fileName)
 }
 
 svdagVoxelStream::svdagVoxelStream(const std::string& fileName, Encoding encoding,
-  uint64_t dataOffset, const svdag::Geometry& geometry, svdag::ScalarType type, bool bigEndian,
+  uint64_t dataOffset, const svdag::Geometry& geometry, int valueSize, bool bigEndian,
   uint64_t skipAfterInflate)
   : impl(new Impl)
 {
@@ -48,7 +48,7 @@ svdagVoxelStream::svdagVoxelStream(const std::string& fileName, Encoding encodin
   impl->dataOffset = dataOffset;
   impl->sliceValues = uint64_t(geometry.dims[0]) * uint64_t(geometry.dims[1]);
   impl->depth = geometry.dims[2];
-  impl->size = svdag::scalarSize(type);
+  impl->size = valueSize;
   impl->swap = impl->size > 1 && bigEndian == svdagHostIsLittleEndian();
   impl->file = std::fopen(fileName.c_str(), "rb");
   if (!impl->file)

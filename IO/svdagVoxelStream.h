@@ -1,6 +1,7 @@
 // The voxels of a volume stored as one block of binary values in a file, raw or compressed
 // (gzip or zlib), in x-fastest order: what NRRD and MetaImage files hold after their text
-// header. Hands out slabs of z-slices in native byte order.
+// header. Hands out slabs of z-slices in native byte order; values are of `valueSize` bytes
+// (integers or floats: only their size matters here).
 #ifndef svdagVoxelStream_h
 #define svdagVoxelStream_h
 
@@ -26,7 +27,7 @@ public:
   // reaches the last z-slice also reads the stream to its end and verifies it (checksums,
   // sizes, nothing after it: svdagInflateStream). Throws svdagReadError.
   svdagVoxelStream(const std::string& fileName, Encoding encoding, uint64_t dataOffset,
-    const svdag::Geometry& geometry, svdag::ScalarType type, bool bigEndian,
+    const svdag::Geometry& geometry, int valueSize, bool bigEndian,
     uint64_t skipAfterInflate = 0);
   ~svdagVoxelStream();
   svdagVoxelStream(const svdagVoxelStream&) = delete;

@@ -67,11 +67,12 @@ std::string withoutFileName(const std::string& message, const char* fileName)
   return message.compare(0, prefix.size(), prefix) == 0 ? message.substr(prefix.size()) : message;
 }
 
-svdagSlabSourceOptions sourceOptions(const char* datasetName)
+svdagSlabSourceOptions sourceOptions(const char* datasetName, bool castFloatLabels)
 {
   svdagSlabSourceOptions options;
   if (datasetName)
     options.datasetName = datasetName;
+  options.castFloatLabels = castFloatLabels;
   return options;
 }
 
@@ -109,7 +110,8 @@ bool vtkSegmentationVolumeReader::CheckInputGiven()
 std::unique_ptr<svdagSlabSource> vtkSegmentationVolumeReader::OpenSource()
 {
   if (!this->ReadFromInputString)
-    return svdagOpenSlabSource(this->FileName, sourceOptions(this->DatasetName));
+    return svdagOpenSlabSource(
+      this->FileName, sourceOptions(this->DatasetName, this->CastFloatLabels));
   const auto* bytes = this->InputArray->GetPointer(0);
   return std::unique_ptr<svdagSlabSource>(new svdagSVDAGFileSlabSource(
     bytes, size_t(this->InputArray->GetNumberOfValues()), InputArrayName));
@@ -256,6 +258,7 @@ void vtkSegmentationVolumeReader::PrintSelf(ostream& os, vtkIndent indent)
   this->Superclass::PrintSelf(os, indent);
   os << indent << "FileName: " << (this->FileName ? this->FileName : "(none)") << "\n";
   os << indent << "DatasetName: " << (this->DatasetName ? this->DatasetName : "(none)") << "\n";
+  os << indent << "CastFloatLabels: " << (this->CastFloatLabels ? "On" : "Off") << "\n";
   os << indent << "ReadFromInputString: " << (this->ReadFromInputString ? "On" : "Off") << "\n";
   os << indent << "InputArray: " << this->InputArray << "\n";
   os << indent << "FileFormat: " << this->FileFormat << "\n";

@@ -22,7 +22,8 @@
  * - .svdag files (the project's own format).
  *
  * Label volumes need one integer component (8 to 64 bits, signed or unsigned); other files are
- * rejected with an error naming their type. Errors set the error code (FileNotFoundError,
+ * rejected with an error naming their type, except float32 and float64 files with
+ * CastFloatLabels on. Errors set the error code (FileNotFoundError,
  * UnrecognizedFileTypeError, FileFormatError, PrematureEndOfFileError, ...) and are reported with
  * vtkErrorMacro; RequestInformation already checks the header.
  */
@@ -74,6 +75,22 @@ public:
 
   ///@{
   /**
+   * When on, float labels (float32 or float64 voxels, in any of the formats above) are read as
+   * integer labels, value for value, if every value is finite and a whole number: the labels
+   * get the narrowest integer type that holds all of them (unsigned when none is negative),
+   * the rule of vtksvdag's cast="exact". Otherwise the read fails naming the first offending
+   * value and its (x, y, z) index (the least x, then y, then z) and why. The file is read twice,
+   * slab by slab (a check pass in RequestInformation, then the conversion in RequestData), so
+   * memory stays one slab. Integer files read the same either way. Default off: float files
+   * are refused.
+   */
+  vtkSetMacro(CastFloatLabels, bool);
+  vtkGetMacro(CastFloatLabels, bool);
+  vtkBooleanMacro(CastFloatLabels, bool);
+  ///@}
+
+  ///@{
+  /**
    * When on, the reader parses InputArray (the bytes of a .svdag file, as
    * vtkSegmentationSVDAGWriter gives them with WriteToOutputString) instead of FileName: to
    * receive a volume from another process. Default off. Only the .svdag format is read this way.
@@ -99,6 +116,7 @@ protected:
 
   char* FileName = nullptr;
   char* DatasetName = nullptr;
+  bool CastFloatLabels = false;
   bool ReadFromInputString = false;
   vtkUnsignedCharArray* InputArray = nullptr;
   std::string FileFormat;

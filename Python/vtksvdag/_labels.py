@@ -70,10 +70,108 @@ def _smallest_integer_dtype(low, high):
     return None
 
 
+def float_labels_error(dtype, what):
+    """The FloatLabelsError for float labels without ``cast``."""
+    return FloatLabelsError(
+        f"the {what} has dtype {dtype}; segmentation labels must be integers "
+        f"(int8..int64, uint8..uint64 or bool); cast='exact' accepts floats that are whole "
+        f"numbers")
+
+
+#: The ending of every message refusing a value with ``cast="exact"``, here and in the C++
+#: readers (svdagExactCastSlabSource::RefusalEnding), which vtksvdag.read recognises it by.
+EXACT_CAST_REFUSAL = "only whole numbers that an integer type holds are accepted"
+
+
+class ExactCast:
+    """``cast="exact"`` for a float array seen in pieces (the slabs of a store), never whole:
+    :meth:`check` every piece, then :meth:`dtype`, then :meth:`convert` each piece again.
+    :func:`cast_labels` is the case of one piece; svdagExactCastSlabSource (IO/) applies the
+    same rule to float files.
+
+    The rule: every value finite and whole, stored as the narrowest integer dtype holding all
+    of them (unsigned when none is negative). A refusal names the first offending value in C
+    order of the whole array (pieces may come in any order) and its index.
+    """
+
+    # Powers of two, exact as floats (float(2**63 - 1) would round up to 2**63).
+    _BOUNDS = (-2.0**63, 2.0**63, 2.0**64)
+
+    def __init__(self, dtype, what="label array"):
+        self.float_dtype, self.what = np.dtype(dtype), what
+        self.low = self.high = None
+        self.not_whole = None  # (index, value): the first value not finite or not whole
+        # The first value below -2**63, from 2**63 on, from 2**64 on: offenders once the range
+        # says which of them no integer type holds.
+        self.beyond = [None, None, None]
+
+    @staticmethod
+    def _first(current, mask, piece, offset):
+        """The earlier (in C order) of ``current`` and the first True of ``mask``, if any."""
+        if not mask.any():
+            return current
+        local = np.unravel_index(int(np.argmax(mask)), mask.shape)
+        index = tuple(int(i) + int(o) for i, o in zip(local, offset))
+        if current is not None and current[0] <= index:
+            return current
+        return index, piece[local]
+
+    def check(self, piece, offset=None):
+        """Check ``piece``, the part of the array from index ``offset`` on (default: 0s)."""
+        piece = np.asarray(piece)
+        offset = (0,) * piece.ndim if offset is None else offset
+        if not piece.size:
+            return
+        # trunc of nan/inf is nan/inf: the finite mask keeps them out of `whole`.
+        bad = ~(np.isfinite(piece) & (np.trunc(piece) == piece))
+        self.not_whole = self._first(self.not_whole, bad, piece, offset)
+        if self.not_whole is not None:
+            return  # refused whatever the range: the range is not needed any more
+        low, high = piece.min(), piece.max()
+        self.low = low if self.low is None else min(self.low, low)
+        self.high = high if self.high is None else max(self.high, high)
+        below, from63, from64 = self._BOUNDS
+        if low < below:
+            self.beyond[0] = self._first(self.beyond[0], piece < below, piece, offset)
+        if high >= from63:
+            self.beyond[1] = self._first(self.beyond[1], piece >= from63, piece, offset)
+            self.beyond[2] = self._first(self.beyond[2], piece >= from64, piece, offset)
+
+    def dtype(self):
+        """The integer dtype of the labels; FloatLabelsError naming the first value refused."""
+        if self.not_whole is not None:
+            index, value = self.not_whole
+            reason = "not finite" if not np.isfinite(value) else "not a whole number"
+        elif self.low is None:
+            return np.dtype(np.uint8)  # an empty array
+        else:
+            low = int(self.low)
+            dtype = _smallest_integer_dtype(low, int(self.high))
+            if dtype is not None:
+                return dtype
+            # Below -2**63 or from 2**64 on, or, with negative values (int64 then), from 2**63 on.
+            candidates = self.beyond[:2] if low < 0 else self.beyond[2:]
+            index, value = min((c for c in candidates if c is not None), key=lambda c: c[0])
+            reason = "outside every integer type (with the other values)"
+        raise FloatLabelsError(
+            f"cast='exact': the {self.what} ({self.float_dtype}) holds {value!r} at index "
+            f"{index}, {reason}; {EXACT_CAST_REFUSAL}")
+
+    def convert(self, piece):
+        """``piece`` as labels of :meth:`dtype`; ValueError where a value is not one the check
+        saw (the data changed in between)."""
+        labels = np.asarray(piece).astype(self.dtype())
+        if not np.array_equal(labels, piece):
+            raise ValueError(f"the {self.what} changed while it was read: a piece holds values "
+                             f"the check did not find")
+        return labels
+
+
 def cast_labels(array, cast, what="label array"):
     """``array`` as integer labels following ``cast`` (see CASTS): integer and bool arrays are
     returned as they are; a float array with ``cast="exact"`` becomes the narrowest integer
-    dtype holding its values (unsigned when none is negative), value for value.
+    dtype holding its values (unsigned when none is negative), value for value (see
+    :class:`ExactCast`).
 
     Raises FloatLabelsError for a float array without ``cast``, and for ``cast="exact"`` when a
     value is not finite, not whole, or outside every integer type, naming the first such value
@@ -84,33 +182,10 @@ def cast_labels(array, cast, what="label array"):
     if array.dtype.kind != "f":
         return array
     if cast is None:
-        raise FloatLabelsError(
-            f"the {what} has dtype {array.dtype}; segmentation labels must be integers "
-            f"(int8..int64, uint8..uint64 or bool); cast='exact' accepts floats that are whole "
-            f"numbers")
-    finite = np.isfinite(array)
-    # trunc of nan/inf is nan/inf: the finite mask keeps them out of `whole`.
-    bad = ~(finite & (np.trunc(array) == array))
-    if not bad.any() and array.size:
-        low, high = int(array.min()), int(array.max())
-        dtype = _smallest_integer_dtype(low, high)
-        if dtype is None:
-            # The first value no integer type holds: below -2**63 or from 2**64 on, or, with
-            # negative values (int64 then), from 2**63 on. The bounds are powers of two, exact
-            # as floats (float(2**63 - 1) would round up to 2**63).
-            bad = (array < -2.0**63) | (array >= (2.0**63 if low < 0 else 2.0**64))
-    else:
-        dtype = np.dtype(np.uint8)
-    if bad.any():
-        index = tuple(int(i) for i in np.unravel_index(int(np.argmax(bad)), array.shape))
-        value = array[index]
-        reason = ("not finite" if not np.isfinite(value) else
-                  "not a whole number" if np.trunc(value) != value else
-                  "outside every integer type (with the other values)")
-        raise FloatLabelsError(
-            f"cast='exact': the {what} ({array.dtype}) holds {value!r} at index {index}, "
-            f"{reason}; only whole numbers that an integer type holds are accepted")
-    return array.astype(dtype)
+        raise float_labels_error(array.dtype, what)
+    checker = ExactCast(array.dtype, what)
+    checker.check(array)
+    return array.astype(checker.dtype())
 
 
 def check_label_dtype(dtype, what="label array"):

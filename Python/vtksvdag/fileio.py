@@ -6,8 +6,8 @@ import warnings
 import numpy as np
 
 from ._labels import (
-    FloatLabelsError, LabelRangeError, check_cast, label_list, label_pattern, label_patterns,
-    numpy_dtype_of_vtk_type,
+    EXACT_CAST_REFUSAL, FloatLabelsError, LabelRangeError, check_cast, label_list, label_pattern,
+    label_patterns, numpy_dtype_of_vtk_type,
 )
 from ._options import keywords_checked
 from ._svdagfile import dataobject_from_bytes
@@ -115,35 +115,6 @@ def check_cache_bytes(cache_bytes):
     return int(cache_bytes)
 
 
-def _read_float_nrrd(path, background, exclude, progress, cast):
-    """A float NRRD file through pynrrd, cast by from_numpy: the C++ readers stream integer
-    voxels only. The whole array is read into memory (a float volume is read once to be cast).
-    The geometry is the C++ NRRD reader's: ``space directions`` (spacing = their lengths,
-    direction = their unit vectors), else ``spacings``; ``space origin``."""
-    try:
-        import nrrd
-    except ImportError:
-        raise ImportError(f"{path}: cast='exact' reads float NRRD files with pynrrd "
-                          f"(pip install pynrrd)") from None
-    from .build import from_numpy
-
-    array, header = nrrd.read(path)  # [x, y, z], as the C++ reader's index order
-    if array.ndim != 3:
-        raise ValueError(f"{path}: label volumes need 3 dimensions, the file has {array.ndim}")
-    spacing = np.ones(3)
-    direction = np.eye(3)
-    directions = header.get("space directions")
-    if directions is not None:
-        vectors = np.asarray(directions, float)  # one row per axis
-        spacing = np.linalg.norm(vectors, axis=1)
-        direction = (vectors / spacing[:, None]).T  # columns are the axes
-    elif header.get("spacings") is not None:
-        spacing = np.asarray(header["spacings"], float)
-    origin = np.asarray(header.get("space origin", np.zeros(3)), float)
-    return from_numpy(array, spacing=spacing, origin=origin, direction=direction,
-                      background=background, exclude=exclude, progress=progress, cast=cast)
-
-
 @keywords_checked
 def read(path, background=0, exclude=(), dataset=None, progress=None, *, scale=None,
          axis_order=None, cache_bytes=None, cast=None):
@@ -193,12 +164,14 @@ def read(path, background=0, exclude=(), dataset=None, progress=None, *, scale=N
         is none where the slabs read keep to the store's chunks along z (each chunk is then
         read once), and 256 MiB where they do not.
     cast : {None, "exact"}, default: None
-        Float voxels: ``None`` refuses them (ValueError); ``"exact"`` accepts them when every
-        value is a whole number, stored as the narrowest integer dtype that holds them (see
-        :func:`from_numpy`). Supported for NRRD files (read whole into memory with pynrrd,
-        not streamed) and ``.npy`` files; other float files are refused with a ValueError that
-        says so (read the array with the format's library and pass it to
-        :func:`from_numpy`). Integer files are read as they are either way.
+        Float voxels (float32 or float64): ``None`` refuses them (FloatLabelsError, a
+        ValueError); ``"exact"`` accepts them when every value is finite and a whole number,
+        stored as the narrowest integer dtype that holds them all (unsigned when none is
+        negative; see :func:`from_numpy`). Works for every format: label volume files
+        (``vtkSegmentationVolumeReader.CastFloatLabels``), ``.npy`` files and chunked stores.
+        Files and stores are read twice, slab by slab (a check pass, then the conversion), so
+        memory stays one slab as for integer files. Integer files are read as they are either
+        way.
 
     Returns
     -------
@@ -222,8 +195,9 @@ def read(path, background=0, exclude=(), dataset=None, progress=None, *, scale=N
     OSError
         The file cannot be read (unknown format, truncated, corrupt).
     ValueError
-        The file holds float voxels (without ``cast="exact"``, or with it a value that is not a
-        whole number: the message names the first one and its index), the file holds no
+        The file holds float voxels (FloatLabelsError: without ``cast="exact"``, or with it a
+        value that is not finite, not whole or outside every integer type: the message names
+        the first one and its (x, y, z) index), the file holds no
         integer label volume, ``cast`` is not one of its values, ``background`` or an excluded label does not
         fit the file's dtype, ``dataset`` is given for a file that is not HDF5, ``scale`` or
         ``axis_order`` for a file that is no chunked store, ``scale`` is out of range, or a
@@ -246,13 +220,10 @@ def read(path, background=0, exclude=(), dataset=None, progress=None, *, scale=N
         from . import stores
         from .stores import read_store
 
-        if cast is not None:
-            raise ValueError(f"cast={cast!r} is not supported for chunked stores yet (only "
-                             f"NRRD and .npy files); a store's float array is refused")
         exclude = label_list(exclude)
         volume = read_store(*store, background=background, exclude=exclude, scale=scale,
                             axis_order=axis_order, progress=progress,
-                            cache_bytes=check_cache_bytes(cache_bytes))
+                            cache_bytes=check_cache_bytes(cache_bytes), cast=cast)
         location, kind = store
         if kind == stores.OME:
             from .labelmeta import ome_label_metadata
@@ -288,20 +259,18 @@ def read(path, background=0, exclude=(), dataset=None, progress=None, *, scale=N
         reader.AddExcludedLabel(value)
     if dataset is not None:
         reader.SetDatasetName(dataset)
+    reader.SetCastFloatLabels(cast == "exact")
     start = time.perf_counter()
     try:
         run_algorithm(reader, progress=progress, error=ValueError, what=path)
     except OSError as error:
+        # The reader reports both with the file-format error code, which is an OSError.
+        if EXACT_CAST_REFUSAL in str(error):
+            raise FloatLabelsError(f"cast={cast!r}: {error}") from None
         if _NOT_INTEGER_LABELS not in str(error):
             raise
-        # The header check fails before the reader names the format: NRRD by its magic.
-        with open(path, "rb") as f:
-            is_nrrd = f.read(4) == b"NRRD"
-        if cast is not None and is_nrrd:
-            return _read_float_nrrd(path, background, exclude, progress, cast)
         hint = ("cast='exact' accepts whole-number floats" if cast is None else
-                f"cast={cast!r} reads float NRRD and .npy files only: read the array with the "
-                f"format's library and pass it to vtksvdag.from_numpy(..., cast={cast!r})")
+                f"cast={cast!r} accepts float32 and float64 voxels only")
         raise FloatLabelsError(f"{error}; {hint}") from None
     seconds = time.perf_counter() - start
     output = reader.GetOutput()

@@ -423,9 +423,9 @@ def add_segmentation(
     axis_order : {"xyz", "zyx"}, optional
         numpy input: ``array[x, y, z]`` (the default, pyvista's order) or ``array[z, y, x]``.
     cast : {None, "exact"}, optional
-        Float labels (numpy arrays, images, NRRD and ``.npy`` files): refused by default;
-        ``"exact"`` accepts them when every value is a whole number (see
-        :func:`vtksvdag.from_numpy`).
+        Float labels (numpy arrays, images, and files and stores of every format
+        :func:`vtksvdag.read` reads): refused by default; ``"exact"`` accepts them when every
+        value is a whole number (see :func:`vtksvdag.from_numpy` and :func:`vtksvdag.read`).
     show_scalar_bar : bool, optional
         Add the label legend (:func:`vtksvdag.add_label_legend`: label names or values with
         their colors, visible labels first). Default False: unlike a continuous scalar bar, a

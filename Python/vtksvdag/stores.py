@@ -25,6 +25,8 @@ import time
 
 import numpy as np
 
+from ._labels import ExactCast, float_labels_error
+
 #: URL schemes handed to tensorstore's kvstores (only file:// is tested here).
 URL_SCHEMES = ("file://", "gs://", "s3://", "http://", "https://")
 #: Bound of tensorstore's chunk cache (bytes) where slabs do not keep to the chunks along z.
@@ -193,8 +195,9 @@ class StoreArray:
 
     Attributes: ``store`` (the tensorstore.TensorStore, its domain translated to start at 0),
     ``kind``, ``roles`` (per store dimension: "x", "y", "z" or another axis name, which must
-    have size 1), ``dims`` (nx, ny, nz), ``dtype`` (numpy), ``spacing``/``origin`` (x, y, z),
-    ``direction`` (3x3 or None), ``context`` (the context JSON it was opened with).
+    have size 1), ``dims`` (nx, ny, nz), ``dtype`` (numpy: integer, bool or float; open_store
+    refuses float unless asked), ``spacing``/``origin`` (x, y, z), ``direction`` (3x3 or None),
+    ``context`` (the context JSON it was opened with).
     """
 
     def __init__(self, store, kind, roles, spacing, origin, direction, context, where):
@@ -213,7 +216,7 @@ class StoreArray:
         self.axis = {r: self.roles.index(r) for r in ("x", "y", "z")}
         self.dims = tuple(int(shape[self.axis[r]]) for r in ("x", "y", "z"))
         self.dtype = np.dtype(store.dtype.numpy_dtype)
-        if self.dtype.kind not in "iub":
+        if self.dtype.kind not in "iubf":
             raise ValueError(
                 f"{where}: the array has dtype {self.dtype}; segmentation labels must be integers "
                 f"(int8..int64, uint8..uint64)"
@@ -249,6 +252,10 @@ class StoreArray:
             return array
         kept = [r for r in self.roles if r in ("x", "y", "z")]
         return np.transpose(array, [kept.index(r) for r in ("z", "y", "x")])
+
+    def as_xyz(self, slab):
+        """A slab of :meth:`read_slab` as an (nx, ny, n) view, indexed as the volume is."""
+        return slab if self.slab_order == "xyz" else slab.transpose(2, 1, 0)
 
 
 def _spatial_roles(rank, kind, where, axis_order):
@@ -341,8 +348,17 @@ def _open_ome(ts, location, attributes, scale, axis_order, context):
     return StoreArray(store, kind, roles, spacing, origin, direction, context, where)
 
 
-def open_store(location, kind, scale=None, axis_order=None, cache_bytes=DEFAULT_CACHE_BYTES):
-    """Open the store ``kind`` at ``location`` (from :func:`find_store`) as a StoreArray."""
+def open_store(location, kind, scale=None, axis_order=None, cache_bytes=DEFAULT_CACHE_BYTES,
+               floats=False):
+    """Open the store ``kind`` at ``location`` (from :func:`find_store`) as a StoreArray; a float
+    array is refused (FloatLabelsError) unless ``floats`` (for ``cast="exact"``)."""
+    array = _open_store(location, kind, scale, axis_order, cache_bytes)
+    if array.dtype.kind == "f" and not floats:
+        raise float_labels_error(array.dtype, f"array of {array.where}")
+    return array
+
+
+def _open_store(location, kind, scale, axis_order, cache_bytes):
     ts = _tensorstore()
     where = location.text
     if axis_order is not None and axis_order not in ("xyz", "zyx"):
@@ -416,18 +432,18 @@ def slab_slices_for(array, slab_slices=None):
 
 
 def open_for_reading(location, kind, scale=None, axis_order=None, cache_bytes=None,
-                     slab_slices=None, z0=0):
+                     slab_slices=None, z0=0, floats=False):
     """(array, slab thickness) for one streaming pass over the store from slice ``z0``.
     Without an explicit ``cache_bytes``, the chunk cache is off when the slabs keep to the
     chunks along z (each chunk is read once: a cache would only hold memory) and
-    DEFAULT_CACHE_BYTES otherwise."""
+    DEFAULT_CACHE_BYTES otherwise. ``floats``: see :func:`open_store`."""
     array = open_store(location, kind, scale=scale, axis_order=axis_order,
-                       cache_bytes=0 if cache_bytes is None else cache_bytes)
+                       cache_bytes=0 if cache_bytes is None else cache_bytes, floats=floats)
     thickness = slab_slices_for(array, slab_slices)
     unit, aligned = z_unit(array)
     if cache_bytes is None and not (aligned and thickness % unit == 0 and z0 % unit == 0):
         array = open_store(location, kind, scale=scale, axis_order=axis_order,
-                           cache_bytes=DEFAULT_CACHE_BYTES)
+                           cache_bytes=DEFAULT_CACHE_BYTES, floats=floats)
     return array, thickness
 
 
@@ -451,26 +467,41 @@ _malloc_trim = None
 
 
 def read_store(location, kind, background=0, exclude=(), scale=None, axis_order=None,
-               progress=None, cache_bytes=None, slab_slices=None):
-    """Compress the store ``kind`` at ``location`` (see :func:`find_store`) slab by slab."""
+               progress=None, cache_bytes=None, slab_slices=None, cast=None):
+    """Compress the store ``kind`` at ``location`` (see :func:`find_store`) slab by slab.
+
+    A float array with ``cast="exact"`` is read twice, slab by slab: a pass that checks every
+    value (:class:`vtksvdag._labels.ExactCast`) and finds the integer dtype, then the pass that
+    converts and compresses; each takes half of the progress."""
     from .streaming import Builder
     from .volume import SegmentationVolume
 
     array, thickness = open_for_reading(location, kind, scale, axis_order, cache_bytes,
-                                        slab_slices)
+                                        slab_slices, floats=cast == "exact")
     nz = array.dims[2]
     start = time.perf_counter()
     if min(array.dims) < 1:
         raise ValueError(f"{location.text}: the array is empty (dimensions {array.dims})")
-    with Builder(array.dims, array.dtype, spacing=array.spacing, origin=array.origin,
-                 direction=array.direction, background=background, exclude=exclude,
-                 axis_order=array.slab_order) as builder:
-        for z0 in range(0, nz, thickness):
-            z1 = min(nz, z0 + thickness)
-            builder.add_slab(array.read_slab(z0, z1))
+    slabs = [(z0, min(nz, z0 + thickness)) for z0 in range(0, nz, thickness)]
+    dtype, convert, done = array.dtype, None, 0.0
+    if array.dtype.kind == "f":
+        check = ExactCast(array.dtype, f"array of {location.text}")
+        for z0, z1 in slabs:
+            check.check(array.as_xyz(array.read_slab(z0, z1)), (0, 0, z0))
             release_freed_memory()
             if progress is not None:
-                progress(z1 / nz)
+                progress(z1 / nz / 2)
+        dtype, convert, done = check.dtype(), check.convert, 0.5
+    with Builder(array.dims, dtype, spacing=array.spacing, origin=array.origin,
+                 direction=array.direction, background=background, exclude=exclude,
+                 axis_order=array.slab_order) as builder:
+        for z0, z1 in slabs:
+            slab = array.read_slab(z0, z1)
+            builder.add_slab(slab if convert is None else convert(slab))
+            del slab
+            release_freed_memory()
+            if progress is not None:
+                progress(done + (1 - done) * z1 / nz)
         volume = builder.finish()
     seconds = time.perf_counter() - start
     return SegmentationVolume(volume.dataobject, build_seconds=seconds)

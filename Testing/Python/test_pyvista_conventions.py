@@ -222,10 +222,12 @@ def test_read_float_npy_and_other_formats(tmp_path):
     with pytest.raises(ValueError, match="cast='exact'"):
         vtksvdag.read(npy)
     np.testing.assert_array_equal(vtksvdag.read(npy, cast="exact").to_numpy(), labels)
+    # Every other format too (Testing/Python/test_cast_files.py has them all).
     tif = tmp_path / "f.tif"
-    tifffile.imwrite(tif, labels.astype(np.float32), photometric="minisblack")
-    with pytest.raises(ValueError, match=r"cast='exact' reads float NRRD and .npy files only"):
-        vtksvdag.read(tif, cast="exact")
+    tifffile.imwrite(tif, labels.astype(np.float32).transpose(2, 1, 0), photometric="minisblack")
+    with pytest.raises(ValueError, match=r"f.tif has float32; cast='exact' accepts"):
+        vtksvdag.read(tif)
+    np.testing.assert_array_equal(vtksvdag.read(tif, cast="exact").to_numpy(), labels)
 
 
 def test_add_segmentation_cast(plotter):
