@@ -168,6 +168,16 @@ bool vtkSegmentationSVDAGRenderSettings::GetNextEventEstimation() const
   return this->Settings->nextEventEstimation;
 }
 
+void vtkSegmentationSVDAGRenderSettings::SetDenoise(bool on)
+{
+  assign(this, this->Settings->denoise, on);
+}
+
+bool vtkSegmentationSVDAGRenderSettings::GetDenoise() const
+{
+  return this->Settings->denoise;
+}
+
 void vtkSegmentationSVDAGRenderSettings::SetExposure(double exposure)
 {
   assign(this, this->Settings->exposure, float(clampTo(exposure, 1e-6, 1e6)));
@@ -362,6 +372,7 @@ void vtkSegmentationSVDAGRenderSettings::PrintSelf(ostream& os, vtkIndent indent
   os << indent << "MaximumBounces: " << s.maximumBounces << "\n";
   os << indent << "Seed: " << s.seed << "\n";
   os << indent << "NextEventEstimation: " << s.nextEventEstimation << "\n";
+  os << indent << "Denoise: " << s.denoise << "\n";
   os << indent << "Exposure: " << s.exposure << "\n";
   os << indent << "Background: ";
   triple(s.background);

@@ -9,7 +9,7 @@
  *
  * Defaults (the core struct's member initializers, the one definition; a new object reports
  * them, e.g. GetLODAsString()): LOD auto, AutoLODPixels 1, SamplesPerPixel 1 (added per render
- * pass), MaximumBounces 4, Seed 0, NextEventEstimation on, Exposure 1, Background (0.1, 0.1,
+ * pass), MaximumBounces 4, Seed 0, NextEventEstimation on, Denoise on, Exposure 1, Background (0.1, 0.1,
  * 0.12, 1) linear RGBA (the volume mapper draws misses transparent instead), EnvironmentColor
  * (1, 1, 1), no EnvironmentMap, Sun off with direction (0.3, 0.4, 0.866), irradiance (3, 3, 3)
  * and angular radius 0.27 degrees, MaximumBlocksPerBLAS 0 (the device's limit),
@@ -94,6 +94,13 @@ public:
   void SetNextEventEstimation(bool on);
   bool GetNextEventEstimation() const;
   vtkBooleanMacro(NextEventEstimation, bool);
+  /** The label-aware denoiser on the displayed image (on by default): an edge-avoiding filter
+   * guided by the traced label, depth and normal that never mixes radiance across labels and
+   * fades out by itself as samples accumulate (DenoiseLayout.h). The accumulated samples, the
+   * variance and the error estimate stay the raw path tracer's. */
+  void SetDenoise(bool on);
+  bool GetDenoise() const;
+  vtkBooleanMacro(Denoise, bool);
   /** Scale of the linear color before the tone curve (1e-6 .. 1e6). */
   void SetExposure(double exposure);
   double GetExposure() const;

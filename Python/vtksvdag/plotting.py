@@ -252,6 +252,7 @@ def add_segmentation(
     bounces=None,
     seed=None,
     next_event_estimation=None,
+    denoise=None,
     exposure=None,
     sun=None,
     environment=None,
@@ -375,6 +376,11 @@ def add_segmentation(
     next_event_estimation : bool, optional
         Next-event estimation with multiple importance sampling (default True); False: light
         is found only where paths escape (same mean, slower to converge).
+    denoise : bool, optional
+        The label-aware denoiser (default True): an edge-avoiding filter guided by the traced
+        label, depth and normal, which never mixes colors of different labels and fades out by
+        itself as samples accumulate, so interactive one-sample frames look smooth and a
+        converged image is left as it is.
     exposure : float, optional
         Scale of the linear color before the tone curve (1e-6 .. 1e6; default 1).
     sun : bool, sequence of 3 floats or dict, optional
@@ -496,6 +502,8 @@ def add_segmentation(
         settings.SetExposure(value)
     if next_event_estimation is not None:
         settings.SetNextEventEstimation(bool(next_event_estimation))
+    if denoise is not None:
+        settings.SetDenoise(bool(denoise))
     if write_depth is not None:
         mapper.SetWriteDepth(bool(write_depth))
     if auto_adjust is not None:

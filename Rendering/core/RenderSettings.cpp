@@ -169,7 +169,8 @@ bool tracesSameImage(const RenderSettings& a, const RenderSettings& b)
     a.sun.angularRadiusDegrees == b.sun.angularRadiusDegrees &&
     a.maximumBlocksPerBlas == b.maximumBlocksPerBlas &&
     a.deviceMemoryLimit == b.deviceMemoryLimit && a.shading == b.shading &&
-    a.clipPlanes == b.clipPlanes && a.crop == b.crop && a.backend == b.backend;
+    a.clipPlanes == b.clipPlanes && a.crop == b.crop && a.backend == b.backend &&
+    a.denoise == b.denoise;
 }
 
 void validate(const RenderSettings& s)

@@ -2,6 +2,7 @@
 
 #include "svdag_render/Buffer.h"
 #include "svdag_render/Context.h"
+#include "svdag_render/DenoisePass.h"
 #include "svdag_render/EnvironmentMap.h"
 #include "svdag_render/GpuLayout.h"
 #include "svdag_render/Pipeline.h"
@@ -138,6 +139,8 @@ struct Renderer::Gpu
   Buffer label, depth, normal, hdr, color, variance, accumulation, squares;
   // The per-pixel ray limits (host-visible, written before each frame that has them).
   Buffer rayLimits;
+  // The denoiser, made on the first frame that uses it.
+  std::unique_ptr<DenoisePass> denoiser;
   uint32_t outputPixels = 0;
   // Whether hdr is a Shared buffer (Renderer::setColorSharing), and how often it was allocated.
   bool hdrShared = false;
@@ -162,7 +165,8 @@ struct Renderer::Gpu
   uint64_t imageBytes() const
   {
     return label.size() + depth.size() + normal.size() + hdr.size() + color.size() +
-      variance.size() + accumulation.size() + squares.size() + rayLimits.size();
+      variance.size() + accumulation.size() + squares.size() + rayLimits.size() +
+      (denoiser ? denoiser->bytes() : 0);
   }
 
   void resizeOutputs(uint32_t pixels, bool shareColor)
@@ -847,9 +851,38 @@ const Image& Renderer::render()
   std::memcpy(g.uniforms.mapped(), &u, sizeof(u));
   pipeline.updateDescriptors(g.uniforms.handle(), g.scene->tlas());
 
+  if (settings.denoise && !g.denoiser)
+    g.denoiser = std::make_unique<DenoisePass>(g.context);
+  gpu::DenoiseParams denoise{};
+  DenoisePass::Frame denoised;
+  if (settings.denoise)
+  {
+    denoise.rayOrigin = u.rayOrigin;
+    denoise.rayOriginU = u.rayOriginU;
+    denoise.rayOriginV = u.rayOriginV;
+    denoise.rayDirection = u.rayDirection;
+    denoise.rayDirectionU = u.rayDirectionU;
+    denoise.rayDirectionV = u.rayDirectionV;
+    // Luminance against 4 standard deviations (SVGF's), a tangent plane distance of one voxel
+    // side (a voxel staircase's step is one).
+    denoise.weights = glm::vec4(4.0f, 0.0f, u.autoLod.x, settings.exposure);
+    denoised.width = this->Width;
+    denoised.height = this->Height;
+    denoised.samples = this->Accumulated + settings.samplesPerPixel;
+    denoised.label = g.label.address();
+    denoised.depth = g.depth.address();
+    denoised.normal = g.normal.address();
+    denoised.variance = g.variance.address();
+    denoised.hdr = g.hdr.address();
+    denoised.color = g.color.address();
+  }
+
   const auto start = Clock::now();
-  g.context.submitAndWait(
-    [&](VkCommandBuffer cmd) { pipeline.record(cmd, this->Width, this->Height); });
+  g.context.submitAndWait([&](VkCommandBuffer cmd) {
+    pipeline.record(cmd, this->Width, this->Height);
+    if (settings.denoise)
+      g.denoiser->record(cmd, denoised, denoise);
+  });
   this->FrameMilliseconds =
     std::chrono::duration<double, std::milli>(Clock::now() - start).count();
   this->RenderSeconds += this->FrameMilliseconds / 1000;

@@ -75,4 +75,25 @@ struct SvdagHitAttributes
   uint cell;
 };
 
+// The color output's encoding (GpuLayout.h): the sRGB transfer function, then RGBA8 with R in
+// the lowest byte.
+float srgbEncode(float linear)
+{
+  float c = clamp(linear, 0.0, 1.0);
+  return c <= 0.0031308 ? 12.92 * c : 1.055 * pow(c, 1.0 / 2.4) - 0.055;
+}
+
+uint packRGBA8(vec4 srgb)
+{
+  uvec4 b = uvec4(clamp(srgb, 0.0, 1.0) * 255.0 + 0.5);
+  return b.r | (b.g << 8u) | (b.b << 16u) | (b.a << 24u);
+}
+
+// The color output of a pixel's linear RGBA (tone curve, sRGB, RGBA8).
+uint svdagDisplayColor(vec4 hdr, float exposure)
+{
+  vec3 display = svdagToneMap(hdr.rgb, exposure);
+  return packRGBA8(vec4(srgbEncode(display.r), srgbEncode(display.g), srgbEncode(display.b), hdr.a));
+}
+
 #endif

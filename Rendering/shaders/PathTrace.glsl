@@ -150,18 +150,6 @@ Material labelMaterial(uint labelIndex)
 #define SVDAG_MATERIAL(label) labelMaterial(label)
 #include "svdag_render/PathTracer.h"
 
-float srgbEncode(float linear)
-{
-  float c = clamp(linear, 0.0, 1.0);
-  return c <= 0.0031308 ? 12.92 * c : 1.055 * pow(c, 1.0 / 2.4) - 0.055;
-}
-
-uint packRGBA8(vec4 srgb)
-{
-  uvec4 b = uvec4(clamp(srgb, 0.0, 1.0) * 255.0 + 0.5);
-  return b.r | (b.g << 8u) | (b.b << 16u) | (b.a << 24u);
-}
-
 struct CameraRay
 {
   vec3 origin;
@@ -270,9 +258,7 @@ void svdagRenderPixel(uvec2 pixel)
     : max(totalSquares / float(n) - meanLuminance * meanLuminance, 0.0) / float(n - 1u);
   vec4 hdr = total / float(max(n, 1u));
   SvdagVec4Output(frame.outputs2.xy).v[index] = hdr;
-  vec3 display = svdagToneMap(hdr.rgb, frame.display.x);
-  SvdagUintOutput(frame.outputs2.zw).v[index] =
-    packRGBA8(vec4(srgbEncode(display.r), srgbEncode(display.g), srgbEncode(display.b), hdr.a));
+  SvdagUintOutput(frame.outputs2.zw).v[index] = svdagDisplayColor(hdr, frame.display.x);
 }
 
 #endif

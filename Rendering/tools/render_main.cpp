@@ -50,6 +50,7 @@ struct Options
   int frames = 1;
   uint32_t spp = 1, bounces = defaults.maximumBounces, seed = defaults.seed;
   bool nee = defaults.nextEventEstimation;
+  bool denoise = defaults.denoise;
   std::string environment;
   bool sun = false;
   double sunAzimuth = 0, sunElevation = 0;
@@ -103,6 +104,11 @@ Options parse(int argc, char** argv)
     if (arg == "--no-nee")
     {
       o.nee = false;
+      continue;
+    }
+    if (arg == "--denoise" || arg == "--no-denoise")
+    {
+      o.denoise = arg == "--denoise";
       continue;
     }
     if (arg == "--restart")
@@ -201,7 +207,7 @@ int main(int argc, char** argv)
               << svdag::render::lodNames("|") << "] "
               << "[--azimuth DEG] [--elevation DEG] [--zoom F] [--view-angle DEG] "
               << "[--hide I,J,...] [--frames N] [--spp N] [--bounces N] [--seed N] [--no-nee] "
-              << "[--environment MAP.exr] [--sun AZ,EL] [--backend "
+              << "[--denoise|--no-denoise] [--environment MAP.exr] [--sun AZ,EL] [--backend "
               << svdag::render::backendNames("|") << "] [--restart]\n";
     return 1;
   }
@@ -221,6 +227,7 @@ int main(int argc, char** argv)
     renderer.setMaximumBounces(o.bounces);
     renderer.setSeed(o.seed);
     renderer.setNextEventEstimation(o.nee);
+    renderer.setDenoise(o.denoise);
     if (!o.environment.empty())
       renderer.setEnvironmentMap(o.environment);
     if (o.sun)
@@ -256,7 +263,7 @@ int main(int argc, char** argv)
       svdag::render::writeExr(renderer.image(), o.output);
     auto u = [](uint64_t v) { return (unsigned long long)v; };
     std::printf("{\"device\": %s, \"backend\": \"%s\", \"width\": %u, \"height\": %u, "
-                "\"lod\": \"%s\", \"spp\": %u, \"bounces\": %u, \"nee\": %s, \"restart\": %s, "
+                "\"lod\": \"%s\", \"spp\": %u, \"bounces\": %u, \"nee\": %s, \"denoise\": %s, \"restart\": %s, "
                 "\"setup_seconds\": %.6f, \"render_seconds\": %.6f, \"ms_per_frame\": %.3f, "
                 "\"ms_median\": %.3f, \"bytes_blas\": %llu, \"bytes_tlas\": %llu, "
                 "\"visible_blocks\": %llu, \"bytes_device\": {\"encoding\": %llu, "
@@ -264,7 +271,7 @@ int main(int argc, char** argv)
                 "\"images\": %llu, \"other\": %llu, \"total\": %llu}}\n",
       jsonString(renderer.deviceName()).c_str(), svdag::render::backendName(renderer.backend()),
       o.width, o.height, svdag::render::lodName(o.lod), renderer.accumulatedSamples(), o.bounces,
-      o.nee ? "true" : "false", o.restart ? "true" : "false", renderer.setupSeconds(),
+      o.nee ? "true" : "false", o.denoise ? "true" : "false", o.restart ? "true" : "false", renderer.setupSeconds(),
       renderer.renderSeconds(), msPerFrame, msMedian, u(renderer.blasBytes()),
       u(renderer.tlasBytes()), u(renderer.visibleBlocks()), u(bytes.encoding),
       u(bytes.acceleration), u(bytes.materials), u(bytes.neighbours), u(bytes.images),

@@ -312,7 +312,10 @@ def test_outputs_are_consistent(real_volume):
     assert renderer.GetAccelerationBytes() > 0 and renderer.GetEncodingBytes() > 0
     assert renderer.GetDeviceBytes() >= (renderer.GetEncodingBytes() + renderer.GetAccelerationBytes()
                                          + renderer.GetMaterialBytes() + renderer.GetImageBytes())
-    assert renderer.GetImageBytes() == WIDTH * HEIGHT * 80  # 20 floats or words a pixel
+    # 20 floats or words a pixel, and the denoiser's working images (on by default): two RGBA
+    # and two guide records of 16 bytes.
+    assert renderer.GetSettings().GetDenoise()
+    assert renderer.GetImageBytes() == WIDTH * HEIGHT * (80 + 64)
     assert renderer.GetSetupSeconds() > 0 and renderer.GetLastFrameMilliseconds() > 0
     assert renderer.GetDeviceName() != ""
 
@@ -499,7 +502,8 @@ def test_command_line_renders_a_file(real_volume, tmp_path):
     assert report["backend"] in ("rt", "compute") and report["device"]
     assert (report["bytes_blas"] > 0) == (report["backend"] == "rt")
     parts = report["bytes_device"]
-    assert parts["encoding"] > 0 and parts["acceleration"] > 0 and parts["images"] == 40 * 30 * 80
+    assert parts["encoding"] > 0 and parts["acceleration"] > 0
+    assert parts["images"] == 40 * 30 * (80 + 64)  # with the denoiser's working images
     assert parts["total"] == sum(v for k, v in parts.items() if k != "total")
     assert report["setup_seconds"] > 0 and report["ms_per_frame"] > 0
     image = np.asarray(Image.open(png))

@@ -90,6 +90,9 @@ def add_arguments(parser):
                         help="label VALUES left out of the image")
     parser.add_argument("--no-nee", action="store_true",
                         help="no next-event estimation (light only where paths escape)")
+    parser.add_argument("--denoise", action=argparse.BooleanOptionalAction, default=None,
+                        help="the label-aware denoiser on the image (default: on; it fades out "
+                             "as samples accumulate)")
     parser.add_argument("--environment", metavar="EXR", help="equirectangular OpenEXR environment map")
     parser.add_argument("--sun", type=finite_float(), nargs=2, metavar=("AZ", "EL"),
                         help="a sun at azimuth AZ (degrees from +x towards +y) and elevation EL "
@@ -183,6 +186,8 @@ def run(args):
     settings.SetMaximumBounces(args.bounces)
     settings.SetSeed(args.seed)
     settings.SetNextEventEstimation(not args.no_nee)
+    if args.denoise is not None:
+        settings.SetDenoise(args.denoise)
     settings.SetSamplesPerPixel(1)
     if args.environment:
         settings.SetEnvironmentMap(args.environment)
@@ -231,6 +236,7 @@ def run(args):
         "spp": renderer.GetAccumulatedSamples(),
         "bounces": settings.GetMaximumBounces(),
         "nee": not args.no_nee,
+        "denoise": settings.GetDenoise(),
         "seed": settings.GetSeed(),
         "lod": settings.GetLODAsString(),
         "backend": renderer.GetBackendInUse(),
@@ -267,7 +273,8 @@ def run(args):
             ("device", result["device"]),
             ("image", f"{args.width} x {args.height}, {result['spp']} spp, LOD {result['lod']}, "
                       f"{result['shading']} shading, "
-                      f"{result['bounces']} bounces, NEE {'on' if result['nee'] else 'off'}"),
+                      f"{result['bounces']} bounces, NEE {'on' if result['nee'] else 'off'}, "
+                      f"denoiser {'on' if result['denoise'] else 'off'}"),
             ("backend", result["backend"]),
             ("setup", f"{result['setup_seconds']:.3f} s (upload + "
                       f"{'BVH' if result['backend'] == 'rt' else 'cell grid'})"),

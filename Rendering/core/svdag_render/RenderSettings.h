@@ -141,6 +141,11 @@ struct RenderSettings
   uint64_t deviceMemoryLimit = 0;
   // Voxel face normals or smooth normals for shading (path tracer and the Normal output).
   Shading shading = Shading::Voxel;
+  // The label-aware denoiser (DenoiseLayout.h) on the displayed image (hdr and color; the
+  // accumulated sums, the variance output and the error estimate stay the raw estimator's): an
+  // edge-avoiding filter that never mixes radiance across labels and fades out by itself as the
+  // accumulated samples converge. It costs no trace: label, depth and normal are traced anyway.
+  bool denoise = true;
   // What is drawn is the intersection of the clipping planes' half-spaces and the crop box: every
   // ray (camera, shadow, bounce) is clipped to it, so cut-away parts cast no shadow, and where a
   // ray enters the region inside a solid voxel it hits the cut face (the plane's or box face's

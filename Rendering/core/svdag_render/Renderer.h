@@ -189,6 +189,9 @@ public:
   // a path escapes (the paper authors' estimator).
   void setNextEventEstimation(bool on) { this->Settings.nextEventEstimation = on; }
   bool nextEventEstimation() const { return this->Settings.nextEventEstimation; }
+  // The label-aware denoiser (RenderSettings::denoise) on the next frames.
+  void setDenoise(bool on) { this->Settings.denoise = on; }
+  bool denoise() const { return this->Settings.denoise; }
   // Scale of the linear color before the tone curve (> 0, finite).
   void setExposure(float exposure);
   float exposure() const { return this->Settings.exposure; }

@@ -1,0 +1,37 @@
+// A compute pipeline whose only input is a push constant (the device address of its parameters):
+// the depth pass and the denoiser. Compiled through the device's pipeline cache.
+#pragma once
+
+#include "svdag_render/Context.h"
+
+#include <cstddef>
+#include <cstdint>
+
+namespace svdag
+{
+namespace render
+{
+
+class ComputePipeline
+{
+public:
+  // `code`: SPIR-V of `bytes` bytes, whose push constant is a uvec2 (the address). Throws
+  // std::runtime_error naming `what` where Vulkan refuses.
+  ComputePipeline(Context& context, const uint32_t* code, size_t bytes, const char* what);
+  ~ComputePipeline();
+  ComputePipeline(const ComputePipeline&) = delete;
+  ComputePipeline& operator=(const ComputePipeline&) = delete;
+
+  // Binds the pipeline, pushes the parameters' address and dispatches groups of
+  // groupSize x groupSize over width x height.
+  void dispatch(VkCommandBuffer cmd, VkDeviceAddress params, uint32_t width, uint32_t height,
+    uint32_t groupSize) const;
+
+private:
+  Context& Ctx;
+  VkPipelineLayout Layout = VK_NULL_HANDLE;
+  VkPipeline Handle = VK_NULL_HANDLE;
+};
+
+} // namespace render
+} // namespace svdag

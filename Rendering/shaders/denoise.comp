@@ -1,0 +1,199 @@
+#version 460
+// The denoiser (DenoiseLayout.h says what it computes): the prepass, or one a-trous iteration.
+#extension GL_GOOGLE_include_directive : require
+#include "Common.glsl"
+#include "svdag_render/DenoiseLayout.h"
+
+layout(local_size_x = SVDAG_DENOISE_GROUP_SIZE, local_size_y = SVDAG_DENOISE_GROUP_SIZE) in;
+
+layout(push_constant) uniform DenoisePush
+{
+  uvec2 params; // the address of the DenoiseParams
+} push;
+
+layout(buffer_reference, std430, buffer_reference_align = 4) readonly buffer DenoiseUints
+{
+  uint v[];
+};
+layout(buffer_reference, std430, buffer_reference_align = 4) buffer DenoiseFloats
+{
+  float v[];
+};
+layout(buffer_reference, std430, buffer_reference_align = 16) buffer DenoiseVec4s
+{
+  vec4 v[];
+};
+// Per pixel: label + 1, packed shading normal, depth bits, variance bits.
+layout(buffer_reference, std430, buffer_reference_align = 16) buffer DenoiseGuides
+{
+  uvec4 v[];
+};
+layout(buffer_reference, std430, buffer_reference_align = 4) writeonly buffer DenoiseColor
+{
+  uint v[];
+};
+
+const vec3 LUMINANCE = vec3(0.2126, 0.7152, 0.0722);
+
+DenoiseParams p;
+
+// A unit normal in 32 bits (octahedral, two snorm16), so that a tap reads its guides in one load.
+uint packNormal(vec3 n)
+{
+  vec2 o = n.xy / (abs(n.x) + abs(n.y) + abs(n.z) + 1e-20);
+  if (n.z < 0.0)
+    o = (1.0 - abs(o.yx)) * vec2(o.x >= 0.0 ? 1.0 : -1.0, o.y >= 0.0 ? 1.0 : -1.0);
+  return packSnorm2x16(o);
+}
+
+vec3 unpackNormal(uint bits)
+{
+  vec2 o = unpackSnorm2x16(bits);
+  vec3 n = vec3(o, 1.0 - abs(o.x) - abs(o.y));
+  if (n.z < 0.0)
+    n.xy = (1.0 - abs(n.yx)) * vec2(n.x >= 0.0 ? 1.0 : -1.0, n.y >= 0.0 ? 1.0 : -1.0);
+  float length2 = dot(n, n);
+  return length2 > 0.0 ? n * inversesqrt(length2) : n;
+}
+
+// The world position of pixel (x, y)'s pixel-center hit at distance t.
+vec3 position(int x, int y, float t)
+{
+  float u = 2.0 * (float(x) + 0.5) / float(p.sizes.x) - 1.0;
+  float v = 2.0 * (float(y) + 0.5) / float(p.sizes.y) - 1.0;
+  vec3 origin = p.rayOrigin.xyz + u * p.rayOriginU.xyz + v * p.rayOriginV.xyz;
+  vec3 span = p.rayDirection.xyz + u * p.rayDirectionU.xyz + v * p.rayDirectionV.xyz;
+  return origin + t * normalize(span);
+}
+
+// Pixel (x, y)'s guides (label, packed shading normal, depth bits) and variance estimate.
+void prepare(uint x, uint y)
+{
+  uint width = p.sizes.x, height = p.sizes.y;
+  uint i = x + width * y;
+  DenoiseUints labels = DenoiseUints(p.guides.xy);
+  DenoiseVec4s colors = DenoiseVec4s(p.colors.xy);
+  uint label = labels.v[i];
+  float variance = 0.0;
+  vec3 n = vec3(0.0);
+  float t = 0.0;
+  if (label != 0u)
+  {
+    uint samples = max(p.samples.x, 1u);
+    // A pixel on a label edge: its samples cover two labels, and their mean (the edge's
+    // antialiasing) is what the filter would remove. Left as it is once samples accumulate
+    // (variance 0: unfiltered), filtered only while a few samples are all noise.
+    bool edge = false;
+    for (int k = 0; k < 4; ++k)
+    {
+      ivec2 q = ivec2(x, y) + ivec2(k == 0 ? -1 : k == 1 ? 1 : 0, k == 2 ? -1 : k == 3 ? 1 : 0);
+      if (q.x >= 0 && q.y >= 0 && q.x < int(width) && q.y < int(height) &&
+        labels.v[uint(q.x) + width * uint(q.y)] != label)
+        edge = true;
+    }
+    if (samples >= SVDAG_DENOISE_TEMPORAL_SAMPLES)
+      variance = edge ? 0.0 : DenoiseFloats(p.guides2.zw).v[i];
+    else
+    {
+      float sum = 0.0, squares = 0.0, count = 0.0;
+      for (int dy = -2; dy <= 2; ++dy)
+      {
+        for (int dx = -2; dx <= 2; ++dx)
+        {
+          ivec2 q = ivec2(x, y) + ivec2(dx, dy);
+          if (q.x < 0 || q.y < 0 || q.x >= int(width) || q.y >= int(height))
+            continue;
+          uint j = uint(q.x) + width * uint(q.y);
+          if (labels.v[j] != label)
+            continue;
+          float l = dot(colors.v[j].rgb, LUMINANCE);
+          sum += l;
+          squares += l * l;
+          count += 1.0;
+        }
+      }
+      float mean = sum / count;
+      variance = max(squares / count - mean * mean, 0.0) / float(samples);
+    }
+    DenoiseFloats normals = DenoiseFloats(p.guides2.xy);
+    n = vec3(normals.v[3u * i], normals.v[3u * i + 1u], normals.v[3u * i + 2u]);
+    t = DenoiseFloats(p.guides.zw).v[i];
+  }
+  DenoiseGuides(p.variances.zw).v[i] =
+    uvec4(label, packNormal(n), floatBitsToUint(t), floatBitsToUint(variance));
+}
+
+// One a-trous iteration at pixel (x, y).
+void filterPixel(uint x, uint y)
+{
+  uint width = p.sizes.x, height = p.sizes.y;
+  int step = int(p.sizes.w);
+  uint i = x + width * y;
+  DenoiseVec4s colors = DenoiseVec4s(p.colors.xy);
+  DenoiseGuides guides = DenoiseGuides(p.variances.xy);
+  vec4 center = colors.v[i];
+  uvec4 g = guides.v[i];
+  float centerVariance = uintBitsToFloat(g.w);
+  vec4 result = center;
+  float resultVariance = centerVariance;
+  if (g.x != 0u && centerVariance > 0.0)
+  {
+    vec3 n = unpackNormal(g.y);
+    // The tangent plane n . x = plane through the center's hit.
+    float plane = dot(n, position(int(x), int(y), uintBitsToFloat(g.z)));
+    float luma = dot(center.rgb, LUMINANCE);
+    float lumaScale = 1.0 / (p.weights.x * sqrt(centerVariance) + 1e-10);
+    float planeScale = 1.0 / p.weights.z;
+    const float kernel[3] = float[3](0.25, 0.5, 0.25);
+    vec4 sum = vec4(0.0);
+    float weights = 0.0, varianceSum = 0.0;
+    for (int dy = -1; dy <= 1; ++dy)
+    {
+      for (int dx = -1; dx <= 1; ++dx)
+      {
+        ivec2 q = ivec2(x, y) + step * ivec2(dx, dy);
+        if (q.x < 0 || q.y < 0 || q.x >= int(width) || q.y >= int(height))
+          continue;
+        uint j = uint(q.x) + width * uint(q.y);
+        uvec4 gq = guides.v[j];
+        if (gq.x != g.x)
+          continue;
+        vec4 c = colors.v[j];
+        float w = kernel[dx + 1] * kernel[dy + 1];
+        if (j != i)
+        {
+          // facing^32 by squaring, and one exp for the plane and luminance terms: the filter's
+          // cost is in these taps.
+          float facing = max(dot(n, unpackNormal(gq.y)), 0.0);
+          for (uint k = 0u; k < SVDAG_DENOISE_NORMAL_POWER_LOG2; ++k)
+            facing *= facing;
+          float distance = abs(dot(n, position(q.x, q.y, uintBitsToFloat(gq.z))) - plane);
+          w *= facing * exp(-distance * planeScale -
+            abs(dot(c.rgb, LUMINANCE) - luma) * lumaScale);
+        }
+        sum += w * c;
+        weights += w;
+        varianceSum += w * w * uintBitsToFloat(gq.w);
+      }
+    }
+    // The center's own weight is never 0, so weights > 0.
+    result = sum / weights;
+    resultVariance = varianceSum / (weights * weights);
+  }
+  DenoiseVec4s(p.colors.zw).v[i] = result;
+  DenoiseGuides(p.variances.zw).v[i] = uvec4(g.xyz, floatBitsToUint(resultVariance));
+  if (p.samples.y != 0u)
+    DenoiseColor(p.geometry.zw).v[i] = svdagDisplayColor(result, p.weights.w);
+}
+
+void main()
+{
+  p = DenoiseParams(push.params);
+  uvec2 pixel = gl_GlobalInvocationID.xy;
+  if (pixel.x >= p.sizes.x || pixel.y >= p.sizes.y)
+    return;
+  if (p.sizes.z == SVDAG_DENOISE_PASS_PREPARE)
+    prepare(pixel.x, pixel.y);
+  else
+    filterPixel(pixel.x, pixel.y);
+}
