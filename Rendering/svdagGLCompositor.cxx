@@ -109,9 +109,10 @@ struct Import
     this->buffer = this->memory = 0;
     this->generation = 0;
   }
-  // The buffer object of `shared` (imported now unless it is the allocation imported last).
-  // `what` names the data in messages.
-  GLuint of(const SharedBuffer& shared, size_t bytes, const char* what)
+  // The buffer object of `shared` (imported now unless it is the allocation imported last),
+  // created on `target`, the binding point it is used at (a driver may choose how it keeps a
+  // buffer from the first one). `what` names the data in messages.
+  GLuint of(const SharedBuffer& shared, GLenum target, size_t bytes, const char* what)
   {
     if (this->buffer && this->generation == shared.generation)
       return this->buffer;
@@ -134,11 +135,10 @@ struct Import
       throw std::runtime_error(std::string("importing the Vulkan memory of the ") + what +
         " into OpenGL failed (OpenGL error " + std::to_string(error) + ")");
     }
-    // Buffer objects have no type: the binding point only names the one to create it on.
     glGenBuffers(1, &this->buffer);
-    glBindBuffer(GL_COPY_WRITE_BUFFER, this->buffer);
-    glBufferStorageMemEXT(GL_COPY_WRITE_BUFFER, GLsizeiptr(bytes), this->memory, 0);
-    glBindBuffer(GL_COPY_WRITE_BUFFER, 0);
+    glBindBuffer(target, this->buffer);
+    glBufferStorageMemEXT(target, GLsizeiptr(bytes), this->memory, 0);
+    glBindBuffer(target, 0);
     error = glGetError();
     if (error != GL_NO_ERROR)
     {
@@ -278,8 +278,8 @@ void Compositor::readDepthShared(
   vtkOpenGLRenderWindow* window, const Viewport& vp, int slot, const SharedBuffer& depth)
 {
   Internals& in = *this->Internal;
-  const GLuint buffer = in.SceneDepth[slot & 1].of(
-    depth, size_t(vp.width) * size_t(vp.height) * sizeof(float), "scene depth");
+  const GLuint buffer = in.SceneDepth[slot & 1].of(depth, GL_PIXEL_PACK_BUFFER,
+    size_t(vp.width) * size_t(vp.height) * sizeof(float), "scene depth");
   // glReadPixels writes into the bound pack buffer, at offset 0 (the null pointer): no host copy.
   glBindBuffer(GL_PIXEL_PACK_BUFFER, buffer);
   try
@@ -382,10 +382,10 @@ void Compositor::drawSharedColor(vtkOpenGLRenderWindow* window, const Viewport& 
   const SharedBuffer* sharedDepth, float exposure)
 {
   Internals& in = *this->Internal;
-  const GLuint colorBuffer = in.SharedColor.of(
-    color, size_t(colorWidth) * size_t(colorHeight) * 4 * sizeof(float), "traced image");
+  const GLuint colorBuffer = in.SharedColor.of(color, GL_TEXTURE_BUFFER,
+    size_t(colorWidth) * size_t(colorHeight) * 4 * sizeof(float), "traced image");
   const GLuint depthBuffer = sharedDepth
-    ? in.CompositedDepth.of(*sharedDepth, size_t(vp.width) * size_t(vp.height) * sizeof(float),
+    ? in.CompositedDepth.of(*sharedDepth, GL_PIXEL_UNPACK_BUFFER, size_t(vp.width) * size_t(vp.height) * sizeof(float),
         "composited depth")
     : 0;
   this->waitForSharedReads(); // a fence of an earlier draw, if any, is replaced below
