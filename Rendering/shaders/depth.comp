@@ -33,6 +33,12 @@ layout(buffer_reference, std430, buffer_reference_align = 4) writeonly buffer De
   float v[];
 };
 
+layout(buffer_reference, std430, buffer_reference_align = 32) readonly buffer DepthParamsBuffer
+{
+  DepthParams params;
+};
+
+// The parameters, loaded once per invocation (a member of the buffer would be a load per use).
 DepthParams p;
 
 // The mapper's imageCoordinate: pixel center i of n in [-1, 1].
@@ -146,7 +152,7 @@ void compositeDepth(uvec2 pixel)
 
 void main()
 {
-  p = DepthParams(push.params);
+  p = DepthParamsBuffer(push.params).params;
   uvec2 pixel = gl_GlobalInvocationID.xy;
   if (p.pass.x == SVDAG_DEPTH_PASS_LIMITS)
   {

@@ -11,9 +11,10 @@
  *   SVDAG_DEPTH_PASS_COMPOSITE  per viewport pixel, the nearer of the scene depth and the
  *                               window depth of the traced hit covering it (the mapper's
  *                               compositedDepth, of the depths Renderer::image() holds)
- * The parameters live in a buffer reached through its device address (pushed as a uvec2): the
- * matrices and rays alone exceed the 128 bytes of push constants a device must offer. Only dvec4
- * members come before the uvec4 ones, so the std430 layout is the C++ struct's.
+ * The parameters are one struct (the same declaration in both languages) in a buffer reached
+ * through its device address (pushed as a uvec2): the matrices and rays alone exceed the 128
+ * bytes of push constants a device must offer. The shader loads the struct whole, once. Only
+ * dvec4 members come before the uvec4 ones, so its std430 layout is the C++ struct's.
  */
 #ifndef SVDAG_RENDER_DEPTH_LAYOUT_H
 #define SVDAG_RENDER_DEPTH_LAYOUT_H
@@ -27,12 +28,6 @@ namespace render
 {
 namespace gpu
 {
-#define SVDAG_DEPTH_PARAMS_BEGIN(Name) struct Name {
-#define SVDAG_DEPTH_PARAMS_END };
-#else
-#define SVDAG_DEPTH_PARAMS_BEGIN(Name)                                                             \
-  layout(buffer_reference, std430, buffer_reference_align = 32) readonly buffer Name {
-#define SVDAG_DEPTH_PARAMS_END };
 #endif
 
 #define SVDAG_DEPTH_PASS_LIMITS 0u
@@ -49,7 +44,8 @@ using glm::dvec4;
 using glm::uvec4;
 #endif
 
-SVDAG_DEPTH_PARAMS_BEGIN(DepthParams)
+struct DepthParams
+{
   // Rows of the row-major clip-to-model matrix (limits) or model-to-clip matrix (composite).
   dvec4 matrix[4];
   // xyz: the view rays the depth is measured along (Camera.h's ViewRays, as the mapper has them)
@@ -73,7 +69,7 @@ SVDAG_DEPTH_PARAMS_BEGIN(DepthParams)
                 // zw the output (float ray limit per traced pixel, or window depth per viewport
                 // pixel)
   uvec4 traced; // addresses: xy label output, zw depth output of the trace (composite only)
-SVDAG_DEPTH_PARAMS_END
+};
 
 #ifdef __cplusplus
 static_assert(sizeof(DepthParams) == 14 * 32 + 4 * 16, "DepthParams: dvec4 members, then uvec4");
