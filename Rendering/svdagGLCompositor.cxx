@@ -91,6 +91,83 @@ GLenum depthFormatOf(GLuint framebuffer)
     return GL_DEPTH24_STENCIL8;
   return bits >= 32 ? GL_DEPTH_COMPONENT32 : (bits == 16 ? GL_DEPTH_COMPONENT16 : GL_DEPTH_COMPONENT24);
 }
+
+// A Vulkan buffer imported as an OpenGL buffer object of `bytes` bytes (GL_EXT_memory_object_fd),
+// the allocation `generation`.
+struct Import
+{
+  GLuint memory = 0;
+  GLuint buffer = 0;
+  uint64_t generation = 0;
+
+  void release()
+  {
+    if (this->buffer)
+      glDeleteBuffers(1, &this->buffer);
+    if (this->memory)
+      glDeleteMemoryObjectsEXT(1, &this->memory);
+    this->buffer = this->memory = 0;
+    this->generation = 0;
+  }
+  // The buffer object of `shared` (imported now unless it is the allocation imported last),
+  // created on `target`, the binding point it is used at (a driver may choose how it keeps a
+  // buffer from the first one). `what` names the data in messages.
+  GLuint of(const SharedBuffer& shared, GLenum target, size_t bytes, const char* what)
+  {
+    if (this->buffer && this->generation == shared.generation)
+      return this->buffer;
+    this->release();
+    vtkOpenGLClearErrorMacro();
+    const render::ExportedMemory memory = shared.exportMemory();
+    glCreateMemoryObjectsEXT(1, &this->memory);
+    if (memory.dedicated)
+    {
+      const GLint yes = GL_TRUE;
+      glMemoryObjectParameterivEXT(this->memory, GL_DEDICATED_MEMORY_OBJECT_EXT, &yes);
+    }
+    // On success OpenGL owns the descriptor; on failure it is still ours to close.
+    glImportMemoryFdEXT(this->memory, GLuint64(memory.bytes), GL_HANDLE_TYPE_OPAQUE_FD_EXT, memory.fd);
+    GLenum error = glGetError();
+    if (error != GL_NO_ERROR)
+    {
+      close(memory.fd);
+      this->release();
+      throw std::runtime_error(std::string("importing the Vulkan memory of the ") + what +
+        " into OpenGL failed (OpenGL error " + std::to_string(error) + ")");
+    }
+    glGenBuffers(1, &this->buffer);
+    glBindBuffer(target, this->buffer);
+    glBufferStorageMemEXT(target, GLsizeiptr(bytes), this->memory, 0);
+    glBindBuffer(target, 0);
+    error = glGetError();
+    if (error != GL_NO_ERROR)
+    {
+      this->release();
+      throw std::runtime_error(std::string("a buffer on the imported Vulkan memory of the ") +
+        what + " failed (OpenGL error " + std::to_string(error) + ")");
+    }
+    this->generation = shared.generation;
+    return this->buffer;
+  }
+};
+
+// Waits for a fence and deletes it: flushes on the first wait, so the fence is reached; a second
+// a round, never forever (a lost context reports failure).
+void waitAndDelete(GLsync& fence)
+{
+  if (!fence)
+    return;
+  GLbitfield flags = GL_SYNC_FLUSH_COMMANDS_BIT;
+  for (;;)
+  {
+    const GLenum result = glClientWaitSync(fence, flags, GLuint64(1000000000));
+    flags = 0;
+    if (result != GL_TIMEOUT_EXPIRED)
+      break;
+  }
+  glDeleteSync(fence);
+  fence = nullptr;
+}
 } // namespace
 
 struct Compositor::Internals
@@ -98,12 +175,13 @@ struct Compositor::Internals
   std::unique_ptr<vtkOpenGLQuadHelper> Quad;
   vtkSmartPointer<vtkTextureObject> Depth;
   // The color as a texture buffer over one of two buffers: HostColor (uploaded each frame) or
-  // SharedColor (Vulkan's memory, imported as SharedMemory, allocation SharedGeneration).
+  // SharedColor (Vulkan's memory). The shared path's depth: the scene depth slots read into and
+  // the composited depth uploaded from. SharedReads: the fence after the last shared draw.
   GLuint ColorTexture = 0;
   GLuint HostColor = 0;
-  GLuint SharedColor = 0;
-  GLuint SharedMemory = 0;
-  uint64_t SharedGeneration = 0;
+  Import SharedColor;
+  Import SceneDepth[2];
+  Import CompositedDepth;
   GLsync SharedReads = nullptr;
   // canImport's answer for the window it was asked for (-1: not asked).
   vtkOpenGLRenderWindow* ImportWindow = nullptr;
@@ -113,13 +191,11 @@ struct Compositor::Internals
   {
     if (this->SharedReads)
       glDeleteSync(this->SharedReads);
-    if (this->SharedColor)
-      glDeleteBuffers(1, &this->SharedColor);
-    if (this->SharedMemory)
-      glDeleteMemoryObjectsEXT(1, &this->SharedMemory);
     this->SharedReads = nullptr;
-    this->SharedColor = this->SharedMemory = 0;
-    this->SharedGeneration = 0;
+    this->SharedColor.release();
+    this->SceneDepth[0].release();
+    this->SceneDepth[1].release();
+    this->CompositedDepth.release();
   }
   // The MSAA resolve target: a framebuffer with one depth renderbuffer.
   GLuint ResolveFramebuffer = 0;
@@ -193,6 +269,36 @@ Viewport Compositor::currentViewport(vtkOpenGLRenderWindow* window)
 
 std::vector<float> Compositor::readDepth(vtkOpenGLRenderWindow* window, const Viewport& vp)
 {
+  std::vector<float> depth(size_t(vp.width) * size_t(vp.height), 1.0f);
+  this->readDepthInto(window, vp, depth.data());
+  return depth;
+}
+
+void Compositor::readDepthShared(
+  vtkOpenGLRenderWindow* window, const Viewport& vp, int slot, const SharedBuffer& depth)
+{
+  Internals& in = *this->Internal;
+  const GLuint buffer = in.SceneDepth[slot & 1].of(depth, GL_PIXEL_PACK_BUFFER,
+    size_t(vp.width) * size_t(vp.height) * sizeof(float), "scene depth");
+  // glReadPixels writes into the bound pack buffer, at offset 0 (the null pointer): no host copy.
+  glBindBuffer(GL_PIXEL_PACK_BUFFER, buffer);
+  try
+  {
+    this->readDepthInto(window, vp, nullptr);
+  }
+  catch (...)
+  {
+    glBindBuffer(GL_PIXEL_PACK_BUFFER, 0);
+    throw;
+  }
+  glBindBuffer(GL_PIXEL_PACK_BUFFER, 0);
+  // Vulkan and the host read it next.
+  GLsync written = glFenceSync(GL_SYNC_GPU_COMMANDS_COMPLETE, 0);
+  waitAndDelete(written);
+}
+
+void Compositor::readDepthInto(vtkOpenGLRenderWindow* window, const Viewport& vp, float* pixels)
+{
   Internals& in = *this->Internal;
   vtkOpenGLState* state = window->GetState();
   vtkOpenGLClearErrorMacro();
@@ -201,7 +307,6 @@ std::vector<float> Compositor::readDepth(vtkOpenGLRenderWindow* window, const Vi
   state->PushFramebufferBindings();
   state->vtkglBindFramebuffer(GL_READ_FRAMEBUFFER, GLuint(drawFramebuffer));
   glGetIntegerv(GL_SAMPLES, &samples);
-  std::vector<float> depth(size_t(vp.width) * size_t(vp.height), 1.0f);
   int x = vp.x, y = vp.y;
   if (samples > 0)
   {
@@ -232,13 +337,12 @@ std::vector<float> Compositor::readDepth(vtkOpenGLRenderWindow* window, const Vi
     state->vtkglBindFramebuffer(GL_READ_FRAMEBUFFER, in.ResolveFramebuffer);
   }
   state->vtkglPixelStorei(GL_PACK_ALIGNMENT, 4);
-  glReadPixels(x, y, vp.width, vp.height, GL_DEPTH_COMPONENT, GL_FLOAT, depth.data());
+  glReadPixels(x, y, vp.width, vp.height, GL_DEPTH_COMPONENT, GL_FLOAT, pixels);
   const GLenum error = glGetError();
   state->PopFramebufferBindings();
   if (error != GL_NO_ERROR)
     throw std::runtime_error("reading the depth buffer failed (OpenGL error " +
       std::to_string(error) + ")");
-  return depth;
 }
 
 void Compositor::draw(vtkOpenGLRenderWindow* window, const Viewport& vp, const float* rgba,
@@ -254,75 +358,48 @@ void Compositor::draw(vtkOpenGLRenderWindow* window, const Viewport& vp, const f
   glBindBuffer(GL_TEXTURE_BUFFER, 0);
   if (glGetError() != GL_NO_ERROR)
     throw std::runtime_error("uploading the traced image to OpenGL failed");
-  this->drawColor(window, vp, in.HostColor, colorWidth, colorHeight, depth, exposure);
+  this->drawColor(window, vp, in.HostColor, colorWidth, colorHeight,
+    depth.empty() ? nullptr : depth.data(), 0, exposure);
 }
 
 void Compositor::drawShared(vtkOpenGLRenderWindow* window, const Viewport& vp,
-  uint64_t generation, const std::function<render::ExportedMemory()>& exportMemory,
-  int colorWidth, int colorHeight, const std::vector<float>& depth, float exposure)
+  const SharedBuffer& color, int colorWidth, int colorHeight, const std::vector<float>& depth,
+  float exposure)
+{
+  this->drawSharedColor(window, vp, color, colorWidth, colorHeight,
+    depth.empty() ? nullptr : depth.data(), nullptr, exposure);
+}
+
+void Compositor::drawShared(vtkOpenGLRenderWindow* window, const Viewport& vp,
+  const SharedBuffer& color, int colorWidth, int colorHeight, const SharedBuffer& depth,
+  float exposure)
+{
+  this->drawSharedColor(window, vp, color, colorWidth, colorHeight, nullptr, &depth, exposure);
+}
+
+void Compositor::drawSharedColor(vtkOpenGLRenderWindow* window, const Viewport& vp,
+  const SharedBuffer& color, int colorWidth, int colorHeight, const float* depth,
+  const SharedBuffer* sharedDepth, float exposure)
 {
   Internals& in = *this->Internal;
-  if (!in.SharedColor || in.SharedGeneration != generation)
-  {
-    in.releaseShared();
-    vtkOpenGLClearErrorMacro();
-    const render::ExportedMemory memory = exportMemory();
-    glCreateMemoryObjectsEXT(1, &in.SharedMemory);
-    if (memory.dedicated)
-    {
-      const GLint yes = GL_TRUE;
-      glMemoryObjectParameterivEXT(in.SharedMemory, GL_DEDICATED_MEMORY_OBJECT_EXT, &yes);
-    }
-    // On success OpenGL owns the descriptor; on failure it is still ours to close.
-    glImportMemoryFdEXT(in.SharedMemory, GLuint64(memory.bytes), GL_HANDLE_TYPE_OPAQUE_FD_EXT, memory.fd);
-    GLenum error = glGetError();
-    if (error != GL_NO_ERROR)
-    {
-      close(memory.fd);
-      in.releaseShared();
-      throw std::runtime_error("importing the Vulkan image memory into OpenGL failed (OpenGL error " +
-        std::to_string(error) + ")");
-    }
-    glGenBuffers(1, &in.SharedColor);
-    glBindBuffer(GL_TEXTURE_BUFFER, in.SharedColor);
-    glBufferStorageMemEXT(GL_TEXTURE_BUFFER,
-      GLsizeiptr(size_t(colorWidth) * size_t(colorHeight) * 4 * sizeof(float)), in.SharedMemory, 0);
-    glBindBuffer(GL_TEXTURE_BUFFER, 0);
-    error = glGetError();
-    if (error != GL_NO_ERROR)
-    {
-      in.releaseShared();
-      throw std::runtime_error("a buffer on the imported Vulkan memory failed (OpenGL error " +
-        std::to_string(error) + ")");
-    }
-    in.SharedGeneration = generation;
-  }
+  const GLuint colorBuffer = in.SharedColor.of(color, GL_TEXTURE_BUFFER,
+    size_t(colorWidth) * size_t(colorHeight) * 4 * sizeof(float), "traced image");
+  const GLuint depthBuffer = sharedDepth
+    ? in.CompositedDepth.of(*sharedDepth, GL_PIXEL_UNPACK_BUFFER, size_t(vp.width) * size_t(vp.height) * sizeof(float),
+        "composited depth")
+    : 0;
   this->waitForSharedReads(); // a fence of an earlier draw, if any, is replaced below
-  this->drawColor(window, vp, in.SharedColor, colorWidth, colorHeight, depth, exposure);
+  this->drawColor(window, vp, colorBuffer, colorWidth, colorHeight, depth, depthBuffer, exposure);
   in.SharedReads = glFenceSync(GL_SYNC_GPU_COMMANDS_COMPLETE, 0);
 }
 
 void Compositor::waitForSharedReads()
 {
-  Internals& in = *this->Internal;
-  if (!in.SharedReads)
-    return;
-  // Flushes on the first wait, so the fence is reached; a second a round, never forever (a lost
-  // context reports failure).
-  GLbitfield flags = GL_SYNC_FLUSH_COMMANDS_BIT;
-  for (;;)
-  {
-    const GLenum result = glClientWaitSync(in.SharedReads, flags, GLuint64(1000000000));
-    flags = 0;
-    if (result != GL_TIMEOUT_EXPIRED)
-      break;
-  }
-  glDeleteSync(in.SharedReads);
-  in.SharedReads = nullptr;
+  waitAndDelete(this->Internal->SharedReads);
 }
 
 void Compositor::drawColor(vtkOpenGLRenderWindow* window, const Viewport& vp, unsigned int buffer,
-  int colorWidth, int colorHeight, const std::vector<float>& depth, float exposure)
+  int colorWidth, int colorHeight, const float* depth, unsigned int depthBuffer, float exposure)
 {
   Internals& in = *this->Internal;
   vtkOpenGLState* state = window->GetState();
@@ -330,14 +407,22 @@ void Compositor::drawColor(vtkOpenGLRenderWindow* window, const Viewport& vp, un
     in.Depth = vtkSmartPointer<vtkTextureObject>::New();
   in.Depth->SetContext(window);
   // Depth nearest: it must not blend across silhouettes (the color is filtered in the shader).
-  const bool writeDepth = !depth.empty();
+  const bool writeDepth = depth || depthBuffer;
   const float one = 1.0f;
   in.Depth->SetMinificationFilter(vtkTextureObject::Nearest);
   in.Depth->SetMagnificationFilter(vtkTextureObject::Nearest);
   in.Depth->SetWrapS(vtkTextureObject::ClampToEdge);
   in.Depth->SetWrapT(vtkTextureObject::ClampToEdge);
-  if (!in.Depth->Create2DFromRaw(writeDepth ? vp.width : 1, writeDepth ? vp.height : 1, 1,
-        VTK_FLOAT, writeDepth ? const_cast<float*>(depth.data()) : const_cast<float*>(&one)))
+  // From a buffer object: the texture is filled from the bound unpack buffer at offset 0 (the
+  // null pointer), the same floats into the same texture as from the host.
+  if (depthBuffer)
+    glBindBuffer(GL_PIXEL_UNPACK_BUFFER, depthBuffer);
+  const float* texels = depthBuffer ? nullptr : (depth ? depth : &one);
+  const bool uploaded = in.Depth->Create2DFromRaw(writeDepth ? vp.width : 1,
+    writeDepth ? vp.height : 1, 1, VTK_FLOAT, const_cast<float*>(texels));
+  if (depthBuffer)
+    glBindBuffer(GL_PIXEL_UNPACK_BUFFER, 0);
+  if (!uploaded)
     throw std::runtime_error("uploading the traced depth to OpenGL failed");
 
   if (!in.Quad)

@@ -27,6 +27,7 @@
 #include "svdagRenderSession.h"
 #include "svdagSelectionDraw.h"
 
+#include <svdag_render/DepthLayout.h>
 #include <svdag_render/FrameBudget.h>
 #include <svdag_render/Material.h>
 #include <svdag_render/RenderSettings.h>
@@ -121,10 +122,12 @@ double imageCoordinate(int i, int n)
 
 // Per traced pixel (width x height over the viewport), the ray distance to the surface drawn
 // before the volume (from the viewport's window depth); empty where nothing was drawn anywhere.
-std::vector<float> rayLimits(const std::vector<float>& sceneDepth, const svdag::gl::Viewport& vp,
+// The shared depth path computes the same on the device (depth.comp: any change here is one
+// there).
+std::vector<float> rayLimits(const float* sceneDepth, const svdag::gl::Viewport& vp,
   int width, int height, const Matrix& clipToModel, const core::ViewRays& rays)
 {
-  std::vector<float> limits(size_t(width) * size_t(height), 3.402823466e38f);
+  std::vector<float> limits(size_t(width) * size_t(height), SVDAG_RAY_NOT_LIMITED);
   bool limited = false;
   for (int y = 0; y < height; ++y)
   {
@@ -151,7 +154,7 @@ std::vector<float> rayLimits(const std::vector<float>& sceneDepth, const svdag::
       // A little past the surface (1e-5 relative, far below a pixel): where the volume's and
       // the surface's depths meet, the exact min in window depth (compositedDepth) decides, not
       // the rounding of the depth buffer into a ray distance.
-      limits[size_t(x) + size_t(width) * size_t(y)] = float(std::max(t, 0.0) * (1 + 1e-5));
+      limits[size_t(x) + size_t(width) * size_t(y)] = float(std::max(t, 0.0) * SVDAG_RAY_LIMIT_SLACK);
       limited = true;
     }
   }
@@ -159,9 +162,10 @@ std::vector<float> rayLimits(const std::vector<float>& sceneDepth, const svdag::
 }
 
 // The window depth to write over the viewport: per pixel, the nearer of the scene's and that of
-// the traced hit covering it (VTK's depth 0.5 z_clip / w_clip + 0.5, in double precision).
+// the traced hit covering it (VTK's depth 0.5 z_clip / w_clip + 0.5, in double precision). The
+// shared depth path computes the same on the device (depth.comp, Renderer::compositeDepth).
 std::vector<float> compositedDepth(const core::Image& image, const core::ViewRays& rays,
-  const Matrix& modelToClip, const std::vector<float>& sceneDepth, const svdag::gl::Viewport& vp)
+  const Matrix& modelToClip, const float* sceneDepth, const svdag::gl::Viewport& vp)
 {
   const int width = int(image.width), height = int(image.height);
   std::vector<float> traced(size_t(width) * size_t(height), 1.0f);
@@ -186,7 +190,7 @@ std::vector<float> compositedDepth(const core::Image& image, const core::ViewRay
       traced[i] = float(std::min(std::max(0.5 * z / w + 0.5, 0.0), 1.0));
     }
   }
-  std::vector<float> depth = sceneDepth;
+  std::vector<float> depth(sceneDepth, sceneDepth + size_t(vp.width) * size_t(vp.height));
   for (int fy = 0; fy < vp.height; ++fy)
   {
     const int y = std::min(int(int64_t(fy) * height / vp.height), height - 1);
@@ -211,17 +215,21 @@ struct FrameKey
 {
   Matrix matrix{};
   core::RenderSettings settings;
-  std::vector<uint64_t> ids; // ids[0]: the viewport's width
-  // The viewport's depth as drawn before the volume (shared, not copied, by the keys of one
-  // frame); null when nothing was.
-  std::shared_ptr<const std::vector<float>> sceneDepth;
+  std::vector<uint64_t> ids; // ids[0], ids[1]: the viewport's width and height
+  // The viewport's depth as drawn before the volume (ids[0] x ids[1] floats), shared, not
+  // copied, by the keys of one frame: host memory, or on the shared depth path the renderer's
+  // scene depth buffer `depthSlot` (mapped; the next frame reads into the other slot, so this
+  // one stays as it was); null when nothing was drawn.
+  std::shared_ptr<const float> sceneDepth;
+  int depthSlot = -1;
 
   bool matches(const FrameKey& o) const
   {
-    if (!this->sameView(o) || bool(sceneDepth) != bool(o.sceneDepth) ||
-      (sceneDepth && sceneDepth->size() != o.sceneDepth->size()))
+    // sameView: the same ids, so the same number of depth pixels.
+    if (!this->sameView(o) || bool(sceneDepth) != bool(o.sceneDepth))
       return false;
-    return !sceneDepth || sameSceneDepth(*sceneDepth, *o.sceneDepth, size_t(ids[0]));
+    return !sceneDepth || sameSceneDepth(sceneDepth.get(), o.sceneDepth.get(), size_t(ids[0]),
+                            size_t(ids[1]));
   }
 
   // Whether the image traced for `traced` can stand for this frame in a selection render: the
@@ -234,23 +242,21 @@ struct FrameKey
   {
     if (!this->sameView(traced))
       return false;
-    const std::vector<float>* now = sceneDepth.get();
-    const std::vector<float>* then = traced.sceneDepth.get();
+    const float* now = sceneDepth.get();
+    const float* then = traced.sceneDepth.get();
     if (!then)
       return true; // nothing was drawn before the volume: no ray was shortened
-    const size_t w = size_t(ids[0]), h = size_t(ids[1]);
-    if ((now && now->size() != w * h) || then->size() != w * h)
-      return false;
+    const size_t w = size_t(ids[0]), h = size_t(ids[1]); // both keys' (sameView)
     for (size_t y = 0; y < h; ++y)
     {
       for (size_t x = 0; x < w; ++x)
       {
-        const float a = now ? (*now)[x + w * y] : 1.0f;
+        const float a = now ? now[x + w * y] : 1.0f;
         float farthest = 0;
         for (size_t ny = (y > 0 ? y - 1 : y); ny <= std::min(y + 1, h - 1); ++ny)
         {
           for (size_t nx = (x > 0 ? x - 1 : x); nx <= std::min(x + 1, w - 1); ++nx)
-            farthest = std::max(farthest, (*then)[nx + w * ny]);
+            farthest = std::max(farthest, then[nx + w * ny]);
         }
         if (a > farthest + 1e-6f)
           return false;
@@ -274,9 +280,8 @@ struct FrameKey
   }
 
 private:
-  static bool sameSceneDepth(const std::vector<float>& a, const std::vector<float>& b, size_t w)
+  static bool sameSceneDepth(const float* a, const float* b, size_t w, size_t h)
   {
-    const size_t h = a.size() / w;
     size_t silhouettes = 0;
     for (size_t y = 0; y < h; ++y)
     {
@@ -285,7 +290,7 @@ private:
         const size_t i = x + w * y;
         if (std::abs(a[i] - b[i]) <= 1e-6f)
           continue;
-        if (!onSilhouette(b, x, y, w, h) || ++silhouettes > a.size() / 100)
+        if (!onSilhouette(b, x, y, w, h) || ++silhouettes > w * h / 100)
           return false;
       }
     }
@@ -293,7 +298,7 @@ private:
   }
 
   // Whether the depth steps (by more than 1e-3) between pixel (x, y) and a neighbour.
-  static bool onSilhouette(const std::vector<float>& depth, size_t x, size_t y, size_t w, size_t h)
+  static bool onSilhouette(const float* depth, size_t x, size_t y, size_t w, size_t h)
   {
     const float d = depth[x + w * y];
     for (size_t ny = (y > 0 ? y - 1 : y); ny <= std::min(y + 1, h - 1); ++ny)
@@ -404,6 +409,8 @@ struct vtkSegmentationSVDAGVolumeMapper::Internals
   // reason (reported once; the host path is used from then on).
   std::string CompositePath;
   std::string ImportFailure;
+  // How the last frame's scene depth came in and its written depth went out ("" before one).
+  std::string DepthPath;
 
   // What Pick reads: the last traced frame.
   vtkRenderer* PickRenderer = nullptr;
@@ -573,13 +580,42 @@ void vtkSegmentationSVDAGVolumeMapper::Render(vtkRenderer* renderer, vtkVolume* 
     const Matrix clipToModel = inverse(modelToClip);
     const core::ViewRays rays = core::viewRaysFromClipToWorld(clipToModel);
 
-    // Depth in: each traced pixel's ray ends at the surface drawn there before the volume.
-    const auto sceneDepthShared = std::make_shared<const std::vector<float>>(
-      timed([&] { return in.Compositor.readDepth(window, vp); }));
-    const std::vector<float>& sceneDepth = *sceneDepthShared;
+    // Depth in: each traced pixel's ray ends at the surface drawn there before the volume. On
+    // the shared depth path OpenGL reads it into the renderer's scene depth buffer (the slot the
+    // accumulating frame's key does not hold), whose mapping the host reads in place; the
+    // device turns it into ray limits and composites the written depth.
+    const size_t viewportPixels = size_t(vp.width) * size_t(vp.height);
+    int depthSlot = share && this->SharedDepth && r.canShareDepth()
+      ? (in.Frame.sceneDepth && in.Frame.depthSlot == 0 ? 1 : 0)
+      : -1;
+    std::shared_ptr<const float> sceneDepthView;
+    timed([&] {
+      if (depthSlot >= 0)
+      {
+        try
+        {
+          sceneDepthView = r.sceneDepth(uint32_t(depthSlot), uint32_t(viewportPixels));
+          const uint32_t slot = uint32_t(depthSlot);
+          in.Compositor.readDepthShared(window, vp, depthSlot,
+            { r.sceneDepthGeneration(slot), [&r, slot] { return r.exportSceneDepth(slot); } });
+          return true;
+        }
+        catch (const std::exception& e)
+        {
+          // The host reads this frame's depth; every later frame takes the host path.
+          in.ImportFailure = e.what();
+          vtkWarningMacro("Reading the depth through the host: " << e.what());
+          depthSlot = -1;
+        }
+      }
+      auto host = std::make_shared<const std::vector<float>>(in.Compositor.readDepth(window, vp));
+      sceneDepthView = std::shared_ptr<const float>(host, host->data());
+      return true;
+    });
+    const float* sceneDepth = sceneDepthView.get();
     const core::RenderSettings& base = in.Session.settings()->GetCoreSettings();
-    const bool drawnBefore =
-      std::any_of(sceneDepth.begin(), sceneDepth.end(), [](float d) { return d < 1.0f; });
+    const bool drawnBefore = std::any_of(
+      sceneDepth, sceneDepth + viewportPixels, [](float d) { return d < 1.0f; });
     // The settings a level traces with, the pixels it traces and the frame's identity (while it
     // stays the same, passes accumulate).
     struct LevelFrame
@@ -609,7 +645,10 @@ void vtkSegmentationSVDAGVolumeMapper::Render(vtkRenderer* renderer, vtkVolume* 
       // What was drawn before the volume: the depth itself (FrameKey), not the ray limits derived
       // from it, which change in their last bits with the camera matrices.
       if (drawnBefore)
-        f.key.sceneDepth = sceneDepthShared;
+      {
+        f.key.sceneDepth = sceneDepthView;
+        f.key.depthSlot = depthSlot;
+      }
       return f;
     };
     const core::FrameLevel fullLevel{ base.lod, 1 };
@@ -658,9 +697,9 @@ void vtkSegmentationSVDAGVolumeMapper::Render(vtkRenderer* renderer, vtkVolume* 
       selector->UpdateMaximumPointId(largestVoxel);
       selector->UpdateMaximumCellId(largestVoxel);
       // The hits' own window depth; the depth test takes the nearer of it and the scene's.
-      const std::vector<float> noScene(sceneDepth.size(), 1.0f);
+      const std::vector<float> noScene(viewportPixels, 1.0f);
       in.Selection.draw(window, vp, selectionIds(selector, r.image(), rays, geometry),
-        compositedDepth(r.image(), rays, modelToClip, noScene, vp));
+        compositedDepth(r.image(), rays, modelToClip, noScene.data(), vp));
       selector->EndRenderProp();
       rememberPick(rays, modelToWorld);
       finish();
@@ -670,9 +709,8 @@ void vtkSegmentationSVDAGVolumeMapper::Render(vtkRenderer* renderer, vtkVolume* 
     // full-quality image is already accumulating keeps it even then: showing it costs nothing,
     // and a coarse frame would replace a refined image by a noisier one (a capture or a render
     // with several props in the window gets a share of the frame time).
-    const uint64_t viewportPixels = uint64_t(vp.width) * uint64_t(vp.height);
     const double budget = this->AutoAdjustToRenderTime ? volume->GetAllocatedRenderTime() : 0.0;
-    const core::FrameLevel chosen = in.Budget.choose(base.lod, viewportPixels, budget);
+    const core::FrameLevel chosen = in.Budget.choose(base.lod, uint64_t(viewportPixels), budget);
     const bool chosenFull = chosen.lod == base.lod && chosen.reduction == 1;
     const bool keepAccumulated = accumulating(frame);
     in.Level = keepAccumulated ? fullLevel : chosen;
@@ -704,8 +742,14 @@ void vtkSegmentationSVDAGVolumeMapper::Render(vtkRenderer* renderer, vtkVolume* 
         r.resetAccumulation();
       r.setImageSize(uint32_t(width), uint32_t(height));
       r.setViewRays(rays);
-      r.setRayLimits(
-        timed([&] { return rayLimits(sceneDepth, vp, width, height, clipToModel, rays); }));
+      if (depthSlot < 0)
+        r.setRayLimits(
+          timed([&] { return rayLimits(sceneDepth, vp, width, height, clipToModel, rays); }));
+      else if (drawnBefore)
+        r.setRayLimitsFromDepth({ uint32_t(depthSlot), uint32_t(vp.width), uint32_t(vp.height),
+          clipToModel });
+      else
+        r.setRayLimits({});
       do
       {
         r.render();
@@ -718,12 +762,29 @@ void vtkSegmentationSVDAGVolumeMapper::Render(vtkRenderer* renderer, vtkVolume* 
     const core::Image& image = r.image();
     in.Converged = in.FullQuality && refined();
 
-    const std::vector<float> depth = timed([&] {
-      return this->WriteDepth ? compositedDepth(image, rays, modelToClip, sceneDepth, vp)
-                              : std::vector<float>();
+    // Depth out: on the shared depth path the device composites it into memory OpenGL reads.
+    std::vector<float> depth;
+    const auto hostDepth = [&] {
+      if (this->WriteDepth)
+        depth = compositedDepth(image, rays, modelToClip, sceneDepth, vp);
+      return true;
+    };
+    timed([&] {
+      if (depthSlot >= 0 && this->WriteDepth)
+        r.compositeDepth(uint32_t(depthSlot), uint32_t(vp.width), uint32_t(vp.height),
+          modelToClip, rays);
+      else
+        hostDepth();
+      return true;
     });
+    in.DepthPath = depthSlot >= 0 ? "shared memory" : "host";
     const float exposure = float(base.exposure);
     const auto drawHost = [&] {
+      if (depthSlot >= 0)
+      {
+        hostDepth(); // after an import failure: this frame's depth goes out through the host
+        in.DepthPath = "host";
+      }
       in.Compositor.draw(window, vp, image.hdr.data(), width, height, depth, exposure);
       return true;
     };
@@ -732,8 +793,14 @@ void vtkSegmentationSVDAGVolumeMapper::Render(vtkRenderer* renderer, vtkVolume* 
       try
       {
         timed([&] {
-          in.Compositor.drawShared(window, vp, r.sharedColorGeneration(),
-            [&r] { return r.exportColor(); }, width, height, depth, exposure);
+          const svdag::gl::SharedBuffer color{ r.sharedColorGeneration(),
+            [&r] { return r.exportColor(); } };
+          if (depthSlot >= 0 && this->WriteDepth)
+            in.Compositor.drawShared(window, vp, color, width, height,
+              { r.compositedDepthGeneration(), [&r] { return r.exportCompositedDepth(); } },
+              exposure);
+          else
+            in.Compositor.drawShared(window, vp, color, width, height, depth, exposure);
           return true;
         });
         in.CompositePath = "shared memory";
@@ -862,6 +929,11 @@ double vtkSegmentationSVDAGVolumeMapper::GetLastFrameMilliseconds()
 const char* vtkSegmentationSVDAGVolumeMapper::GetCompositePath()
 {
   return this->Internal->CompositePath.c_str();
+}
+
+const char* vtkSegmentationSVDAGVolumeMapper::GetDepthPath()
+{
+  return this->Internal->DepthPath.c_str();
 }
 
 double vtkSegmentationSVDAGVolumeMapper::GetLastCopyMilliseconds()
@@ -1023,7 +1095,9 @@ void vtkSegmentationSVDAGVolumeMapper::PrintSelf(ostream& os, vtkIndent indent)
   this->Superclass::PrintSelf(os, indent);
   os << indent << "WriteDepth: " << this->WriteDepth << "\n";
   os << indent << "SharedMemory: " << this->SharedMemory << "\n";
+  os << indent << "SharedDepth: " << this->SharedDepth << "\n";
   os << indent << "CompositePath: " << this->GetCompositePath() << "\n";
+  os << indent << "DepthPath: " << this->GetDepthPath() << "\n";
   os << indent << "LastCopyMilliseconds: " << this->GetLastCopyMilliseconds() << "\n";
   os << indent << "AutoAdjustToRenderTime: " << this->AutoAdjustToRenderTime << "\n";
   os << indent << "TargetSamplesPerPixel: " << this->TargetSamplesPerPixel << "\n";

@@ -12,7 +12,8 @@
  *   meshes with. The vtkVolume's matrix (position, orientation, scale, user matrix) applies on
  *   top of the data object's index-to-world transform.
  * - Depth: opaque props drawn before the volume end the rays at their surface (the mapper reads
- *   the depth buffer, resolving MSAA); the volume's first opaque hit is written into the depth
+ *   the depth buffer, resolving MSAA; through memory shared with Vulkan where it can, see
+ *   SharedMemory); the volume's first opaque hit is written into the depth
  *   buffer as VTK's window depth (WriteDepth, on by default), so props drawn later, picking and
  *   depth readers see it. Misses are transparent; color is blended with premultiplied alpha.
  *   The settings' Background is not used.
@@ -187,22 +188,38 @@ public:
 
   ///@{
   /**
-   * How the traced color reaches OpenGL. With SharedMemory on (default), where the Vulkan device
-   * exports memory that the window's OpenGL imports (VK_KHR_external_memory_fd and
-   * GL_EXT_memory_object_fd on the same device and driver, by their UUIDs: Mesa's lavapipe with
-   * llvmpipe, or one GPU's Vulkan and OpenGL drivers), the compositor reads it straight from the
-   * renderer's output buffer; otherwise (or with SharedMemory off) it is read back to the host and
-   * uploaded. Both paths draw the same pixels. The depth goes through the host on both: the mapper
-   * derives the rays' limits and the frame's identity from the scene's depth, and the depth it
-   * writes from the traced hits. GetCompositePath: the last frame's path, "shared memory" or
-   * "host" ("" before a frame). GetLastCopyMilliseconds: the part of the last frame spent moving
-   * depth and image between OpenGL, the host and Vulkan (scene depth read and turned into ray
-   * limits, outputs read back, depth composited, depth and color uploaded and drawn).
+   * How the traced color and the depth move between OpenGL and Vulkan. With SharedMemory on
+   * (default), where the Vulkan device exports memory that the window's OpenGL imports
+   * (VK_KHR_external_memory_fd and GL_EXT_memory_object_fd on the same device and driver, by
+   * their UUIDs: Mesa's lavapipe with llvmpipe, or one GPU's Vulkan and OpenGL drivers), the
+   * compositor reads the color straight from the renderer's output buffer; otherwise (or with
+   * SharedMemory off) it is read back to the host and uploaded. The depth likewise, where the
+   * device also computes in double precision (shaderFloat64) and SharedDepth is on (default):
+   * OpenGL reads the scene's depth (what was drawn before the volume) into a host-visible buffer
+   * of the device (glReadPixels into a pixel pack buffer on the imported memory, two buffers in
+   * turn so that a frame's depth can be compared with the accumulating one's in place), a
+   * compute pass turns it into the rays' limits before the trace and composites the depth to
+   * write from the traced hits after it, and OpenGL uploads that into its depth texture from
+   * the imported memory (a pixel unpack buffer); otherwise the mapper computes both on the host
+   * from a host copy of the depth. Every path draws the same pixels and writes the same depth,
+   * bit for bit (the compute pass repeats the host's double-precision arithmetic, operation by
+   * operation). Neither driver shares semaphores: OpenGL's side is waited for with fences.
+   * GetCompositePath: the last frame's color path, GetDepthPath its depth path, each "shared
+   * memory" or "host" ("" before a frame; an import that fails is reported once as a warning and
+   * the host path is used from then on). GetLastCopyMilliseconds: the part of the last frame
+   * spent moving depth and image between OpenGL, the host and Vulkan (scene depth read, and on
+   * the host path turned into ray limits; outputs read back; depth composited; depth and color
+   * uploaded or imported and drawn); on the shared depth path the ray limits are computed in the
+   * trace's submission and count as trace time.
    */
   vtkSetMacro(SharedMemory, bool);
   vtkGetMacro(SharedMemory, bool);
   vtkBooleanMacro(SharedMemory, bool);
+  vtkSetMacro(SharedDepth, bool);
+  vtkGetMacro(SharedDepth, bool);
+  vtkBooleanMacro(SharedDepth, bool);
   const char* GetCompositePath();
+  const char* GetDepthPath();
   double GetLastCopyMilliseconds();
   ///@}
 
@@ -266,6 +283,7 @@ protected:
 
   bool WriteDepth = true;
   bool SharedMemory = true;
+  bool SharedDepth = true;
   bool AutoAdjustToRenderTime = true;
   int TargetSamplesPerPixel = 64;
   double ErrorTarget = 0.0;

@@ -1,29 +1,40 @@
 #!/usr/bin/env python3
-"""The volume mapper's two ways of getting the traced image into OpenGL, side by side.
+"""The volume mapper's ways of moving the traced image and the depth between OpenGL and Vulkan,
+side by side.
 
 Run from the repository root, under Xvfb (VTK's OpenGL needs a display; llvmpipe here):
 
     xvfb-run -a -s "-screen 0 1024x768x24" .venv/bin/python bench/composite.py [--quick]
-        [--volume fib25_64] [--size 512] [--frames 12] [--out DIR]
+        [--volume fib25_64] [--size 512] [--frames 12] [--paths shared shared-color host]
+        [--out DIR]
 
-Two off-screen windows of --size x --size pixels in one process, each with the same volume
+Off-screen windows of --size x --size pixels in one process, each with the same volume
 (../shared/data/<volume>.nrrd; --quick or without ../shared: a generated 64^3 volume) drawn by
 vtkSegmentationSVDAGVolumeMapper beside a mesh (a tilted slab through it, so the scene depth and
-the written depth are real work), one mapper with SharedMemory on, one with it off. Per frame: 1
-sample per pixel at voxel LOD, full resolution (AutoAdjustToRenderTime off), the camera turned by
-0.01 degrees so that every frame traces anew; the two windows take turns, frame by frame, so that
-both see the same machine. Measured per frame:
+the written depth are real work), one window per path:
+
+  shared        SharedMemory on: color and depth through shared memory (where they can)
+  shared-color  SharedMemory on, SharedDepth off: the color shared, the depth through the host
+  host          SharedMemory off: both through the host
+
+Per frame: 1 sample per pixel at voxel LOD, full resolution (AutoAdjustToRenderTime off), the
+camera turned by 0.01 degrees so that every frame traces anew; the windows take turns, frame by
+frame, so that all see the same machine. Measured per frame:
 
   render_ms   wall time of vtkRenderWindow::Render() + WaitForCompletion() (the whole frame: the
               mesh, the trace and the composite)
   mapper_ms   the mapper's own time (GetLastFrameMilliseconds)
   trace_ms    the Vulkan pass (GetLastTraceMilliseconds)
   copy_ms     what the mapper spent moving depth and image between OpenGL, the host and Vulkan
-              (GetLastCopyMilliseconds: scene depth read and turned into ray limits, outputs read
-              back, written depth computed, depth and color uploaded and drawn)
+              (GetLastCopyMilliseconds: scene depth read, and on the host path turned into ray
+              limits, outputs read back, written depth composited, depth and color uploaded and
+              drawn; on the shared depth path the ray limits are computed in the trace's
+              submission, so they count in trace_ms)
 
-Prints the medians per path and the ratios shared / host; writes composite.csv (every frame) to
---out (default build/bench). The two windows' final images are compared (they must be equal).
+Prints the medians per path with the paths the color and the depth ran as and the copy share
+(copy_ms / mapper_ms), and the ratios of each path to host (and shared to shared-color: the
+depth path alone); writes composite.csv (every frame) to --out (default build/bench). The
+windows' final images and z-buffers are compared (they must be equal).
 """
 from __future__ import annotations
 
@@ -40,6 +51,7 @@ import numpy as np
 REPO = pathlib.Path(__file__).resolve().parents[1]
 SHARED_DATA = pathlib.Path(os.environ.get("VTKSVDAG_SHARED_DATA") or REPO.parent / "shared" / "data")
 FIELDS = ["render_ms", "mapper_ms", "trace_ms", "copy_ms"]
+PATHS = ["shared", "shared-color", "host"]
 
 
 def generated_volume():
@@ -62,7 +74,7 @@ def load_volume(name, quick):
     return vtksvdag.read(str(path)), name
 
 
-def scene(volume, size, shared):
+def scene(volume, size, path):
     import vtkmodules.vtkRenderingOpenGL2  # noqa: F401 (the OpenGL factory overrides)
     from vtkmodules.vtkFiltersSources import vtkCubeSource
     from vtkmodules.vtkRenderingCore import (vtkActor, vtkPolyDataMapper, vtkRenderer,
@@ -72,10 +84,15 @@ def scene(volume, size, shared):
 
     mapper = vtkSegmentationSVDAGVolumeMapper()
     mapper.SetInputData(volume.dataobject)
+    shared = path != "host"
     if hasattr(mapper, "SetSharedMemory"):
         mapper.SetSharedMemory(shared)
     elif shared:
         raise SystemExit("this build has no shared-memory path: run it with --paths host")
+    if hasattr(mapper, "SetSharedDepth"):
+        mapper.SetSharedDepth(path == "shared")
+    elif path == "shared-color":
+        raise SystemExit("this build has no shared depth path: run it with --paths shared host")
     mapper.AutoAdjustToRenderTimeOff()
     mapper.SetTargetSamplesPerPixel(1)
     mapper.GetSettings().SetLODToVoxel()
@@ -124,14 +141,21 @@ def frame(window, renderer, mapper):
 
 
 def pixels(window):
+    """The window's color and z-buffer."""
     from vtkmodules.util.numpy_support import vtk_to_numpy
+    from vtkmodules.vtkCommonCore import vtkFloatArray
     from vtkmodules.vtkRenderingCore import vtkWindowToImageFilter
 
     grab = vtkWindowToImageFilter()
     grab.SetInput(window)
     grab.ReadFrontBufferOff()
+    grab.ShouldRerenderOff()
     grab.Update()
-    return vtk_to_numpy(grab.GetOutput().GetPointData().GetScalars()).copy()
+    width, height = window.GetSize()
+    depth = vtkFloatArray()
+    window.GetZbufferData(0, 0, width - 1, height - 1, depth)
+    return np.concatenate([vtk_to_numpy(grab.GetOutput().GetPointData().GetScalars()).ravel(),
+                           vtk_to_numpy(depth).view(np.uint8).ravel()])
 
 
 def main(argv=None) -> int:
@@ -140,8 +164,8 @@ def main(argv=None) -> int:
     parser.add_argument("--volume", default="fib25_64", help="a volume of ../shared/data")
     parser.add_argument("--size", type=int, default=512, help="window width and height")
     parser.add_argument("--frames", type=int, default=12, help="frames per path (after 2 warm-up)")
-    parser.add_argument("--paths", nargs="+", default=["shared", "host"], choices=["shared", "host"],
-                        help="the paths to measure (an older build: host)")
+    parser.add_argument("--paths", nargs="+", default=PATHS, choices=PATHS,
+                        help="the paths to measure (an older build: host, or shared host)")
     parser.add_argument("--out", default=str(REPO / "build" / "bench"), help="folder for the CSV")
     args = parser.parse_args(argv)
     frames = 3 if args.quick else args.frames
@@ -149,41 +173,48 @@ def main(argv=None) -> int:
     volume, name = load_volume(args.volume, args.quick)
     paths = {}
     for label in args.paths:
-        paths[label] = scene(volume, args.size, label == "shared")
+        paths[label] = scene(volume, args.size, label)
     rows = []
     for index in range(frames + 2):
         for label, (window, renderer, mapper) in paths.items():
             measured = frame(window, renderer, mapper)
             if index >= 2:  # the first frames compile shaders and build the BVH
                 ran_as = getattr(mapper, "GetCompositePath", lambda: "host")()
-                rows.append({"path": label, "composite_path": ran_as,
+                depth_as = getattr(mapper, "GetDepthPath", lambda: "host")()
+                rows.append({"path": label, "composite_path": ran_as, "depth_path": depth_as,
                              "frame": index - 2, **measured})
-    # The same camera for both (each turned by the same angles): the same pixels.
-    same = len(paths) < 2 or np.array_equal(pixels(paths["shared"][0]), pixels(paths["host"][0]))
+    # The same camera for all (each turned by the same angles): the same pixels and depth.
+    images = [pixels(window) for window, _, _ in paths.values()]
+    same = all(np.array_equal(images[0], image) for image in images[1:])
 
     out = pathlib.Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     with open(out / "composite.csv", "w", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=["path", "composite_path", "frame", *FIELDS])
+        writer = csv.DictWriter(
+            f, fieldnames=["path", "composite_path", "depth_path", "frame", *FIELDS])
         writer.writeheader()
         writer.writerows(rows)
 
     medians = {label: {field: statistics.median(r[field] for r in rows if r["path"] == label)
                        for field in FIELDS} for label in paths}
-    ran = {label: sorted({r["composite_path"] for r in rows if r["path"] == label})
+    ran = {label: (", ".join(sorted({r["composite_path"] for r in rows if r["path"] == label})),
+                   ", ".join(sorted({r["depth_path"] for r in rows if r["path"] == label})))
            for label in paths}
-    device = paths["host"][2].GetDeviceName()
+    device = next(iter(paths.values()))[2].GetDeviceName()
     print(f"volume {name}, {args.size}x{args.size}, 1 spp, voxel LOD, {frames} frames per path, "
           f"device {device}")
-    print(f"{'path':<8} {'ran as':<16} " + " ".join(f"{f:>10}" for f in FIELDS) + "  copy share")
+    print(f"{'path':<13} {'color as':<14} {'depth as':<14} " + " ".join(f"{f:>10}" for f in FIELDS) +
+          "  copy share")
     for label in paths:
         m = medians[label]
-        print(f"{label:<8} {', '.join(ran[label]):<16} " +
+        print(f"{label:<13} {ran[label][0]:<14} {ran[label][1]:<14} " +
               " ".join(f"{m[f]:10.2f}" for f in FIELDS) +
               f"  {m['copy_ms'] / m['mapper_ms']:10.1%}")
-    if len(paths) == 2:
-        shared, host = medians["shared"], medians["host"]
-        print("shared / host: " + ", ".join(f"{f} {shared[f] / host[f]:.2f}x" for f in FIELDS))
+    ratios = [(a, b) for a, b in (("shared", "host"), ("shared-color", "host"),
+                                  ("shared", "shared-color")) if a in paths and b in paths]
+    for a, b in ratios:
+        print(f"{a} / {b}: " + ", ".join(f"{f} {medians[a][f] / medians[b][f]:.2f}x"
+                                         for f in FIELDS))
     print(f"images equal: {same}")
     print(f"wrote {out / 'composite.csv'}")
     return 0 if same else 1

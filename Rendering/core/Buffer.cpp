@@ -27,7 +27,8 @@ Buffer::Buffer(Context& context, VkDeviceSize size, VkBufferUsageFlags usage, Me
     VkExternalMemoryBufferCreateInfo external{
       VK_STRUCTURE_TYPE_EXTERNAL_MEMORY_BUFFER_CREATE_INFO
     };
-    if (use == MemoryUse::Shared)
+    const bool exportable = use == MemoryUse::Shared || use == MemoryUse::SharedHost;
+    if (exportable)
     {
       if (!context.canExportMemory())
         throw std::logic_error("a shared buffer was requested from a device that cannot export memory");
@@ -63,6 +64,7 @@ Buffer::Buffer(Context& context, VkDeviceSize size, VkBufferUsageFlags usage, Me
         preferred = VK_MEMORY_PROPERTY_HOST_CACHED_BIT;
         break;
       case MemoryUse::Upload:
+      case MemoryUse::SharedHost:
         required = VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
         break;
     }
@@ -70,7 +72,7 @@ Buffer::Buffer(Context& context, VkDeviceSize size, VkBufferUsageFlags usage, Me
     flags.flags = VK_MEMORY_ALLOCATE_DEVICE_ADDRESS_BIT;
     VkExportMemoryAllocateInfo exported{ VK_STRUCTURE_TYPE_EXPORT_MEMORY_ALLOCATE_INFO };
     VkMemoryDedicatedAllocateInfo dedicated{ VK_STRUCTURE_TYPE_MEMORY_DEDICATED_ALLOCATE_INFO };
-    if (use == MemoryUse::Shared)
+    if (exportable)
     {
       exported.handleTypes = fdType;
       flags.pNext = &exported;
@@ -98,7 +100,7 @@ Buffer::Buffer(Context& context, VkDeviceSize size, VkBufferUsageFlags usage, Me
     this->Allocated = req.size;
     context.noteAllocation(int64_t(req.size));
     check(vkBindBufferMemory(this->Device, this->Handle, this->Memory, 0), "vkBindBufferMemory");
-    if (use == MemoryUse::Readback || use == MemoryUse::Upload)
+    if (use == MemoryUse::Readback || use == MemoryUse::Upload || use == MemoryUse::SharedHost)
     {
       check(vkMapMemory(this->Device, this->Memory, 0, VK_WHOLE_SIZE, 0, &this->Mapped),
         "vkMapMemory");

@@ -90,6 +90,7 @@ struct Candidate
   std::vector<std::string> missing;
   std::vector<std::string> rayTracingMissing;
   bool memoryExport = false;
+  bool float64 = false;
   uint32_t queueFamily = 0;
 };
 
@@ -135,6 +136,7 @@ Candidate inspect(VkPhysicalDevice device)
   vkGetPhysicalDeviceFeatures2(device, &features.base);
   if (!features.v12.bufferDeviceAddress)
     c.missing.push_back("bufferDeviceAddress feature");
+  c.float64 = features.base.features.shaderFloat64 == VK_TRUE;
   if (c.rayTracingMissing.empty())
   {
     if (!features.as.accelerationStructure)
@@ -513,6 +515,7 @@ void Device::pickPhysicalDevice()
   this->QueueFamily = best->queueFamily;
   this->RayTracing = best->rayTracingMissing.empty();
   this->MemoryExport = best->memoryExport;
+  this->Float64 = best->float64;
   for (size_t i = 0; i < best->rayTracingMissing.size(); ++i)
     this->RayTracingMissing += (i ? ", " : "") + best->rayTracingMissing[i];
 }
@@ -565,6 +568,8 @@ void Device::createDevice()
   enabled.v12.bufferDeviceAddress = VK_TRUE;
   enabled.as.accelerationStructure = VK_TRUE;
   enabled.rt.rayTracingPipeline = VK_TRUE;
+  // Optional: only the depth pass (DepthPass.h) needs it, which is not used without it.
+  enabled.base.features.shaderFloat64 = this->Float64 ? VK_TRUE : VK_FALSE;
   std::vector<const char*> extensions(std::begin(RequiredExtensions), std::end(RequiredExtensions));
   if (this->RayTracing)
     extensions.insert(

@@ -3,6 +3,7 @@
 #include "svdag_render/Buffer.h"
 #include "svdag_render/Context.h"
 #include "svdag_render/DenoisePass.h"
+#include "svdag_render/DepthPass.h"
 #include "svdag_render/EnvironmentMap.h"
 #include "svdag_render/GpuLayout.h"
 #include "svdag_render/Pipeline.h"
@@ -23,6 +24,37 @@ namespace render
 namespace
 {
 using Clock = std::chrono::steady_clock;
+
+// Room an importer may need past the data in exported memory: llvmpipe's OpenGL buffers on
+// imported memory ask for 48 bytes more than their size.
+constexpr VkDeviceSize ImportSlack = 256;
+
+glm::dvec4 dvec(const std::array<double, 3>& v)
+{
+  return glm::dvec4(v[0], v[1], v[2], 0.0);
+}
+
+// The depth pass's matrix rows and rays: `rays` measures the depth, `traced` (with `advance`)
+// are the rays a render() traced (Renderer::render's advance).
+gpu::DepthParams depthParams(uint32_t pass, const std::array<double, 16>& matrix,
+  const ViewRays& rays, const ViewRays& traced, double advance)
+{
+  gpu::DepthParams p{};
+  for (int r = 0; r < 4; ++r)
+    p.matrix[r] = glm::dvec4(matrix[4 * r], matrix[4 * r + 1], matrix[4 * r + 2], matrix[4 * r + 3]);
+  p.origin = dvec(rays.origin);
+  p.originU = dvec(rays.originU);
+  p.originV = dvec(rays.originV);
+  p.direction = dvec(rays.direction);
+  p.directionU = dvec(rays.directionU);
+  p.directionV = dvec(rays.directionV);
+  p.tracedDirection = dvec(traced.direction);
+  p.tracedDirectionU = dvec(traced.directionU);
+  p.tracedDirectionV = dvec(traced.directionV);
+  p.scalars = glm::dvec4(advance > 0 ? advance : 0.0, SVDAG_RAY_LIMIT_SLACK, 0.0, 0.0);
+  p.pass = glm::uvec4(pass, 0u, 0u, 0u);
+  return p;
+}
 
 glm::uvec4 addresses(VkDeviceAddress a, VkDeviceAddress b)
 {
@@ -145,6 +177,20 @@ struct Renderer::Gpu
   // Whether hdr is a Shared buffer (Renderer::setColorSharing), and how often it was allocated.
   bool hdrShared = false;
   uint64_t hdrGeneration = 0;
+  // The scene depth slots (Renderer::sceneDepth; whoever holds their pointers shares them), the
+  // composited depth (Shared: OpenGL reads it), their pixel counts and allocations (one
+  // counter for all, so that no two allocations share a generation), and the depth pass (made
+  // on first use). The rays and advance of the last render(), which its depths are relative to.
+  std::shared_ptr<Buffer> sceneDepth[2];
+  uint32_t sceneDepthPixels[2] = { 0, 0 };
+  uint64_t sceneDepthGeneration[2] = { 0, 0 };
+  Buffer composited;
+  uint32_t compositedPixels = 0;
+  uint64_t compositedGeneration = 0;
+  uint64_t depthAllocations = 0;
+  std::unique_ptr<DepthPass> depthPass;
+  ViewRays tracedRays;
+  double tracedAdvance = 0;
   // Per-label materials (host-visible: an edit is a memcpy) and the environment's tables.
   Buffer materials;
   Buffer envMarginal, envConditional, envTexels;
@@ -166,7 +212,15 @@ struct Renderer::Gpu
   {
     return label.size() + depth.size() + normal.size() + hdr.size() + color.size() +
       variance.size() + accumulation.size() + squares.size() + rayLimits.size() +
-      (denoiser ? denoiser->bytes() : 0);
+      (sceneDepth[0] ? sceneDepth[0]->size() : 0) + (sceneDepth[1] ? sceneDepth[1]->size() : 0) +
+      composited.size() + (denoiser ? denoiser->bytes() : 0);
+  }
+
+  DepthPass& depthPassOf()
+  {
+    if (!depthPass)
+      depthPass = std::make_unique<DepthPass>(context);
+    return *depthPass;
   }
 
   void resizeOutputs(uint32_t pixels, bool shareColor)
@@ -180,10 +234,7 @@ struct Renderer::Gpu
     // Shading normals, then entry face normals (GpuLayout.h).
     normal = Buffer(context, pixels * 6 * sizeof(float), usage, MemoryUse::Readback);
     hdr = Buffer();
-    // An importer may need room past the image: llvmpipe's OpenGL buffers on imported memory
-    // ask for 48 bytes more than their size.
-    const VkDeviceSize importSlack = shareColor ? 256 : 0;
-    hdr = Buffer(context, pixels * 4 * sizeof(float) + importSlack, usage,
+    hdr = Buffer(context, pixels * 4 * sizeof(float) + (shareColor ? ImportSlack : 0), usage,
       shareColor ? MemoryUse::Shared : MemoryUse::Readback);
     hdrShared = shareColor;
     ++hdrGeneration;
@@ -465,6 +516,95 @@ ViewRays Renderer::viewRays() const
 void Renderer::setRayLimits(std::vector<float> limits)
 {
   this->RayLimits = std::move(limits);
+  this->DepthLimitsOn = false;
+}
+
+bool Renderer::canShareDepth() const
+{
+  return this->Device->context.canExportMemory() && this->Device->context.hasFloat64();
+}
+
+std::shared_ptr<const float> Renderer::sceneDepth(uint32_t slot, uint32_t pixels)
+{
+  Gpu& g = *this->Device;
+  if (slot > 1 || pixels == 0)
+    throw std::invalid_argument("scene depth slots are 0 and 1, of at least one pixel");
+  if (!this->canShareDepth())
+    throw std::logic_error("the scene depth cannot be shared on this device (canShareDepth)");
+  std::shared_ptr<Buffer>& buffer = g.sceneDepth[slot];
+  if (!buffer || g.sceneDepthPixels[slot] != pixels)
+  {
+    // A new buffer, not a reallocation in place: an earlier pointer keeps the old one.
+    buffer = std::make_shared<Buffer>(g.context, pixels * sizeof(float) + ImportSlack,
+      VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUse::SharedHost);
+    g.sceneDepthPixels[slot] = pixels;
+    g.sceneDepthGeneration[slot] = ++g.depthAllocations;
+  }
+  return std::shared_ptr<const float>(buffer, static_cast<const float*>(buffer->mapped()));
+}
+
+uint64_t Renderer::sceneDepthGeneration(uint32_t slot) const
+{
+  if (slot > 1 || !this->Device->sceneDepth[slot])
+    throw std::logic_error("no scene depth buffer in this slot: sceneDepth(slot, pixels) first");
+  return this->Device->sceneDepthGeneration[slot];
+}
+
+ExportedMemory Renderer::exportSceneDepth(uint32_t slot) const
+{
+  this->sceneDepthGeneration(slot); // the same checks
+  return this->Device->sceneDepth[slot]->exportMemory();
+}
+
+void Renderer::setRayLimitsFromDepth(const DepthRayLimits& limits)
+{
+  const Gpu& g = *this->Device;
+  if (limits.slot > 1 || !g.sceneDepth[limits.slot] ||
+    uint64_t(limits.viewportWidth) * limits.viewportHeight != g.sceneDepthPixels[limits.slot] ||
+    limits.viewportWidth == 0)
+    throw std::invalid_argument("the ray limits' viewport is not the size of its scene depth");
+  this->RayLimits.clear();
+  this->DepthLimits = limits;
+  this->DepthLimitsOn = true;
+}
+
+void Renderer::compositeDepth(uint32_t slot, uint32_t viewportWidth, uint32_t viewportHeight,
+  const std::array<double, 16>& modelToClip, const ViewRays& rays)
+{
+  Gpu& g = *this->Device;
+  const uint32_t pixels = viewportWidth * viewportHeight;
+  if (this->Output.width == 0 || g.outputPixels != this->Output.width * this->Output.height)
+    throw std::logic_error("compositeDepth needs a render() first");
+  if (slot > 1 || !g.sceneDepth[slot] || pixels == 0 || g.sceneDepthPixels[slot] != pixels)
+    throw std::invalid_argument("the composited viewport is not the size of its scene depth");
+  if (!g.composited || g.compositedPixels != pixels)
+  {
+    g.composited = Buffer();
+    g.composited = Buffer(g.context, pixels * sizeof(float) + ImportSlack,
+      VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUse::Shared);
+    g.compositedPixels = pixels;
+    g.compositedGeneration = ++g.depthAllocations;
+  }
+  gpu::DepthParams p =
+    depthParams(SVDAG_DEPTH_PASS_COMPOSITE, modelToClip, rays, g.tracedRays, g.tracedAdvance);
+  p.sizes = glm::uvec4(viewportWidth, viewportHeight, this->Output.width, this->Output.height);
+  p.depth = addresses(g.sceneDepth[slot]->address(), g.composited.address());
+  p.traced = addresses(g.label.address(), g.depth.address());
+  DepthPass& pass = g.depthPassOf();
+  g.context.submitAndWait([&](VkCommandBuffer cmd) { pass.record(cmd, p); });
+}
+
+uint64_t Renderer::compositedDepthGeneration() const
+{
+  if (!this->Device->composited)
+    throw std::logic_error("no composited depth: compositeDepth first");
+  return this->Device->compositedGeneration;
+}
+
+ExportedMemory Renderer::exportCompositedDepth() const
+{
+  this->compositedDepthGeneration(); // the same checks
+  return this->Device->composited.exportMemory();
 }
 
 void Renderer::setSettings(const RenderSettings& settings)
@@ -714,6 +854,7 @@ const Image& Renderer::render()
                        : 0.0;
   };
   const uint32_t pixels = this->Width * this->Height;
+  const bool depthLimits = this->DepthLimitsOn;
   if (!this->RayLimits.empty() && this->RayLimits.size() != pixels)
     throw std::invalid_argument("the ray limits hold " + std::to_string(this->RayLimits.size()) +
       " values for an image of " + std::to_string(pixels) + " pixels");
@@ -759,7 +900,8 @@ const Image& Renderer::render()
   u.sceneOutputs = addresses(g.scene->primitiveBlocksAddress(), g.label.address());
   u.outputs = addresses(g.depth.address(), g.normal.address());
   u.outputs2 = addresses(g.hdr.address(), g.color.address());
-  u.rayLimits = addresses(this->RayLimits.empty() ? 0 : g.rayLimits.address(), 0);
+  u.rayLimits =
+    addresses(this->RayLimits.empty() && !depthLimits ? 0 : g.rayLimits.address(), 0);
   u.statistics = addresses(g.squares.address(), g.variance.address());
   const auto toIndex = g.scene->worldToIndex();
   u.worldToIndexX = glm::vec4(float(toIndex[0]), float(toIndex[1]), float(toIndex[2]), float(toIndex[3]));
@@ -827,6 +969,19 @@ const Image& Renderer::render()
       }
     }
   }
+  // Limits from a shared scene depth: the depth pass writes them, before the trace, in the same
+  // submission.
+  DepthPass* limitsPass = depthLimits ? &g.depthPassOf() : nullptr;
+  gpu::DepthParams limitsParams{};
+  if (depthLimits)
+  {
+    const DepthRayLimits& d = this->DepthLimits;
+    if (!g.sceneDepth[d.slot] || uint64_t(d.viewportWidth) * d.viewportHeight != g.sceneDepthPixels[d.slot])
+      throw std::invalid_argument("the scene depth of the ray limits was reallocated");
+    limitsParams = depthParams(SVDAG_DEPTH_PASS_LIMITS, d.clipToModel, given, given, advance);
+    limitsParams.sizes = glm::uvec4(d.viewportWidth, d.viewportHeight, this->Width, this->Height);
+    limitsParams.depth = addresses(g.sceneDepth[d.slot]->address(), g.rayLimits.address());
+  }
   Pipeline& pipeline = g.pipeline(backend, features);
 
   // Everything that changes the image, besides the per-pass fields (samples, exposure): a
@@ -879,10 +1034,14 @@ const Image& Renderer::render()
 
   const auto start = Clock::now();
   g.context.submitAndWait([&](VkCommandBuffer cmd) {
+    if (limitsPass)
+      limitsPass->record(cmd, limitsParams);
     pipeline.record(cmd, this->Width, this->Height);
     if (settings.denoise)
       g.denoiser->record(cmd, denoised, denoise);
   });
+  g.tracedRays = given;
+  g.tracedAdvance = advance;
   this->FrameMilliseconds =
     std::chrono::duration<double, std::milli>(Clock::now() - start).count();
   this->RenderSeconds += this->FrameMilliseconds / 1000;

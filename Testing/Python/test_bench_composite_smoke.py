@@ -1,6 +1,7 @@
-"""Smoke test of `bench/composite.py --quick`: both composite paths measured side by side in one
-process, every frame traced anew at full size, the copy time part of the mapper's, and the two
-windows' images equal. It asserts structure, never timings."""
+"""Smoke test of `bench/composite.py --quick`: the composite paths (color and depth shared, the
+color shared with the depth through the host, both through the host) measured side by side in one
+process, every frame traced anew at full size, the copy time part of the mapper's, and the
+windows' images and z-buffers equal. It asserts structure, never timings."""
 import csv
 import os
 import pathlib
@@ -19,9 +20,13 @@ def test_composite_quick(tmp_path):
     assert "images equal: True" in completed.stdout
     with open(tmp_path / "composite.csv", newline="") as f:
         rows = list(csv.DictReader(f))
-    assert sorted({r["path"] for r in rows}) == ["host", "shared"]
-    assert all(r["composite_path"] == "host" for r in rows if r["path"] == "host")
+    assert sorted({r["path"] for r in rows}) == ["host", "shared", "shared-color"]
+    assert all(r["composite_path"] == r["depth_path"] == "host" for r in rows if r["path"] == "host")
+    assert all(r["depth_path"] == "host" for r in rows if r["path"] == "shared-color")
+    # The depth is shared only where the color is (the same check, plus shaderFloat64).
+    assert all(r["composite_path"] == "shared memory" for r in rows
+               if r["path"] == "shared" and r["depth_path"] == "shared memory")
     for r in rows:
         assert 0 < float(r["copy_ms"]) < float(r["mapper_ms"]) <= float(r["render_ms"]) * 1.01
         assert float(r["trace_ms"]) > 0  # every frame traced
-    assert len(rows) == 2 * 3
+    assert len(rows) == 3 * 3

@@ -1,11 +1,15 @@
-"""How the volume mapper's traced color reaches OpenGL: through memory shared with Vulkan
-(VK_KHR_external_memory_fd imported with GL_EXT_memory_object_fd) or through the host.
+"""How the volume mapper's traced color and the depth move between OpenGL and Vulkan: through
+memory shared with Vulkan (VK_KHR_external_memory_fd imported with GL_EXT_memory_object_fd) or
+through the host.
 
 The host path is the reference (the regression images and the depth tests of test_mapper.py
 check it): the shared path must draw exactly the same pixels and depth, at full and at reduced
 resolution, after a resize (a new allocation, imported again) and when switched at run time.
 Whether it can run is decided from the window's OpenGL extensions and the devices' UUIDs; on
 Mesa (lavapipe with llvmpipe, as in CI) both exist and match, so the shared path must run there.
+The depth has a shared path of its own (the scene depth read into Vulkan memory, ray limits and
+written depth computed by a compute pass in double precision): it must give the host path's bits
+too, and a change of the scene depth between frames must still restart the refinement.
 """
 import numpy as np
 import pytest
@@ -24,10 +28,11 @@ def svdag():
     return compress_zyx(two_boxes())
 
 
-def scene(svdag, shared, size=(W, H)):
+def scene(svdag, shared, size=(W, H), shared_depth=True):
     window, renderer, volume, mapper = mapper_scene(svdag, size=size)
     window.SetMultiSamples(0)
     mapper.SetSharedMemory(shared)
+    mapper.SetSharedDepth(shared_depth)
     mapper.SetTargetSamplesPerPixel(3)
     # A tilted slab through the volume: scene depth in, composited depth out.
     renderer.AddActor(tilted_slab())
@@ -53,6 +58,17 @@ def mesa_interop(window):
     Vulkan twin (lavapipe) is the device the renderer picks on a machine without a GPU."""
     capabilities = window.ReportCapabilities()
     return "GL_EXT_memory_object_fd" in capabilities and "llvmpipe" in capabilities
+
+
+def require_interop(window):
+    """Skips unless the window (rendered once: its capabilities need a context) can import."""
+    if not mesa_interop(window):
+        pytest.skip("this OpenGL cannot import the Vulkan device's memory (no GL_EXT_memory_object_fd "
+                    "on Mesa's llvmpipe): the shared depth path cannot run here")
+
+
+def slab_of(renderer):
+    return renderer.GetActors().GetLastActor()
 
 
 def assert_same(shared_capture, host_capture):
@@ -109,6 +125,7 @@ def test_reduced_frames_and_resizes_draw_the_same_pixels(svdag):
         assert reduction_s == reduction_h
         if step == 0:
             assert reduction_s > 1
+        assert shared[3].GetDepthPath() == ("shared memory" if mesa_interop(shared[0]) else "host")
         assert_same(shared_capture, host_capture)
 
 
@@ -162,3 +179,58 @@ def test_two_mappers_in_one_window_share_one_path(svdag):
     other.RenderUntilConverged(window, 60.0)
     assert mapper.GetCompositePath() == other.GetCompositePath() == "host"
     assert_same(shared_capture, capture(window))
+
+
+def test_shared_depth_path_gives_the_host_paths_bits(svdag):
+    """With the mesh cutting through the volume (in front of it here, behind it there), the depth
+    through shared memory (ray limits and written depth computed on the device) draws the same
+    pixels and writes the same z-buffer as the host's arithmetic, with the color shared or not."""
+    scenes = {"shared": scene(svdag, True), "shared color": scene(svdag, True, shared_depth=False),
+              "host": scene(svdag, False)}
+    captures = {}
+    for name, (window, _, _, mapper) in scenes.items():
+        assert mapper.GetDepthPath() == ""  # before a frame
+        assert mapper.RenderUntilConverged(window, 60.0) > 0
+        assert mapper.GetAccumulatedSamples() == 3
+        captures[name] = capture(window)
+    require_interop(scenes["shared"][0])
+    paths = {name: (m.GetCompositePath(), m.GetDepthPath()) for name, (_, _, _, m) in scenes.items()}
+    assert paths == {"shared": ("shared memory", "shared memory"),
+                     "shared color": ("shared memory", "host"), "host": ("host", "host")}
+    # The mesh alone covers `slab`; of that, the mesh is seen in front of the volume somewhere
+    # (green) and behind it elsewhere (the volume's hits, written over the mesh's depth).
+    window, renderer, volume, mapper = scenes["host"]
+    volume.VisibilityOff()
+    window.Render()
+    slab = capture(window)[1] < 1
+    volume.VisibilityOn()
+    color, depth = captures["host"]
+    green = (color[..., 1] > 200) & (color[..., 0] < 60) & (color[..., 2] < 60)
+    assert (slab & green).sum() > 100
+    assert (slab & ~green & (depth < 1)).sum() > 100
+    assert_same(captures["shared"], captures["host"])
+    assert_same(captures["shared color"], captures["host"])
+
+
+def test_a_moved_mesh_restarts_the_shared_depth_path(svdag):
+    """The frame's identity compares the scene depth through the mappings of the two scene depth
+    buffers: the same depth keeps the refined image (no trace), a moved mesh traces anew, and
+    what it draws is the host path's."""
+    shared, host = scene(svdag, True), scene(svdag, False)
+    for window, _, _, mapper in (shared, host):
+        mapper.RenderUntilConverged(window, 60.0)
+        require_interop(shared[0])
+        window.Render()  # the same depth read again, into the other buffer on the shared path
+        assert mapper.GetAccumulatedSamples() == 3 and mapper.GetLastTraceMilliseconds() == 0
+    # Twice: each of the two buffers holds the accumulating frame's depth once.
+    for step in range(2):
+        captures = []
+        for window, renderer, _, mapper in (shared, host):
+            slab_of(renderer).AddPosition(0, 0, 3)
+            window.Render()
+            assert mapper.GetAccumulatedSamples() == 1 and mapper.GetLastTraceMilliseconds() > 0
+            assert mapper.RenderUntilConverged(window, 60.0) > 0
+            assert mapper.GetAccumulatedSamples() == 3
+            captures.append(capture(window))
+        assert shared[3].GetDepthPath() == "shared memory"
+        assert_same(*captures)

@@ -6,6 +6,9 @@
 //   Upload   host-visible, coherent: the host writes in place (uniforms, staging)
 //   Shared   device-local preferred, exportable as a file descriptor (Device::canExportMemory):
 //            another API (OpenGL) imports it and reads what the GPU wrote, no host copy
+//   SharedHost  exportable like Shared, and host-visible, coherent and mapped: another API
+//            writes it, the GPU and the host read it in place (the scene depth OpenGL reads
+//            into it, which the host compares between frames)
 #pragma once
 
 #include "svdag_render/Context.h"
@@ -22,7 +25,8 @@ enum class MemoryUse
   Device,
   Readback,
   Upload,
-  Shared
+  Shared,
+  SharedHost
 };
 
 // A Shared buffer's memory as another API imports it (GL_EXT_memory_object_fd): the importer
@@ -53,7 +57,7 @@ public:
   VkBuffer handle() const { return this->Handle; }
   VkDeviceSize size() const { return this->Size; }
   VkDeviceAddress address() const { return this->Address; }
-  // Host pointer for Readback and Upload buffers, nullptr for Device and Shared buffers.
+  // Host pointer for Readback, Upload and SharedHost buffers, nullptr for Device and Shared ones.
   void* mapped() const { return this->Mapped; }
   // A new file descriptor of a Shared buffer's memory. Throws std::logic_error for any other
   // buffer, std::runtime_error when Vulkan refuses.

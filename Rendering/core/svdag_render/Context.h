@@ -128,6 +128,9 @@ public:
   // Whether buffers can be allocated in memory exported as a file descriptor
   // (VK_KHR_external_memory_fd; Buffer's MemoryUse::Shared).
   bool canExportMemory() const { return this->MemoryExport; }
+  // Whether shaders may compute in double precision (the shaderFloat64 feature, enabled where
+  // the device has it: the depth pass of DepthPass.h needs it).
+  bool hasFloat64() const { return this->Float64; }
   const DeviceUuids& uuids() const { return this->Uuids; }
   const DeviceFunctions& fn() const { return this->Functions; }
   const RayTracingLimits& limits() const { return this->Limits; }
@@ -184,6 +187,7 @@ private:
   bool RayTracing = false;
   std::string RayTracingMissing;
   bool MemoryExport = false;
+  bool Float64 = false;
   DeviceUuids Uuids;
   VkPhysicalDeviceMemoryProperties MemoryProperties{};
   uint64_t HeapBytes = 0; // device-local heaps (all heaps if none is device-local)
@@ -224,6 +228,7 @@ public:
   bool hasRayTracing() const { return this->Dev->hasRayTracing(); }
   const std::string& rayTracingMissing() const { return this->Dev->rayTracingMissing(); }
   bool canExportMemory() const { return this->Dev->canExportMemory(); }
+  bool hasFloat64() const { return this->Dev->hasFloat64(); }
   const DeviceUuids& uuids() const { return this->Dev->uuids(); }
   const DeviceFunctions& fn() const { return this->Dev->fn(); }
   const RayTracingLimits& limits() const { return this->Dev->limits(); }

@@ -162,8 +162,47 @@ public:
   // Per pixel (x + width * y), the farthest distance along the unit ray direction a camera ray
   // may hit (an opaque surface drawn before the volume); empty: no limit. The size must be the
   // image's pixel count at render(). The values are uploaded on each render(); a change of their
-  // content does not restart the accumulation (call resetAccumulation()).
+  // content does not restart the accumulation (call resetAccumulation()). Replaces the limits of
+  // setRayLimitsFromDepth.
   void setRayLimits(std::vector<float> limits);
+
+  // ---- scene depth in shared memory (the volume mapper's OpenGL depth path) ----
+  // Whether it can be used: the device exports memory (canShareColor()) and computes in double
+  // precision (shaderFloat64: the depth pass, DepthLayout.h, gives the bits the host would).
+  bool canShareDepth() const;
+  // Scene depth buffer `slot` (0 or 1: a consumer comparing a frame's depth with the last one's
+  // writes each into its own) for `pixels` floats: host-visible memory, exported, reallocated
+  // (a new generation) when the count changes. Another API writes a viewport's window depth in
+  // [0, 1] into it (rows from the bottom); the host reads it through the returned pointer, which
+  // keeps that allocation alive (it stays valid after a reallocation; it must not outlive the
+  // renderer). sceneDepthGeneration names the allocation, exportSceneDepth gives a new file
+  // descriptor of it (the importer owns it). std::invalid_argument for another slot or 0 pixels.
+  std::shared_ptr<const float> sceneDepth(uint32_t slot, uint32_t pixels);
+  uint64_t sceneDepthGeneration(uint32_t slot) const;
+  ExportedMemory exportSceneDepth(uint32_t slot) const;
+  // Ray limits computed by each render() on the device from scene depth `slot`, a viewport of
+  // viewportWidth x viewportHeight pixels, along viewRays(): the values the volume mapper's host
+  // code computes from the same depth with the same clip-to-model matrix (row-major, clip = M *
+  // (x, y, z, 1)). Replaces setRayLimits' limits (setRayLimits replaces these).
+  struct DepthRayLimits
+  {
+    uint32_t slot = 0;
+    uint32_t viewportWidth = 0, viewportHeight = 0;
+    std::array<double, 16> clipToModel{};
+  };
+  void setRayLimitsFromDepth(const DepthRayLimits& limits);
+  // After a render(): per pixel of the viewport (scene depth `slot`, the size of the last
+  // setRayLimitsFromDepth's or of any viewport), the nearer of its window depth and the window
+  // depth (0.5 z_clip / w_clip + 0.5 by `modelToClip`) of the traced hit of image() covering it,
+  // along `rays`, as the mapper's host code composites them, into exported memory (the importer
+  // reads viewportWidth * viewportHeight floats; written when this returns). The allocation is
+  // compositedDepthGeneration (a new one when the viewport's pixel count changes);
+  // exportCompositedDepth gives a new file descriptor of it. std::logic_error before a render()
+  // or where !canShareDepth(). The importer must have finished reading before the next call.
+  void compositeDepth(uint32_t slot, uint32_t viewportWidth, uint32_t viewportHeight,
+    const std::array<double, 16>& modelToClip, const ViewRays& rays);
+  uint64_t compositedDepthGeneration() const;
+  ExportedMemory exportCompositedDepth() const;
   // Throws std::invalid_argument for 0 or more pixels than the device dispatches (or 2^28).
   void setImageSize(uint32_t width, uint32_t height);
   // Every setting at once (validate() first: std::invalid_argument, the previous ones stay).
@@ -295,6 +334,8 @@ private:
   ViewRays Rays;
   bool RaysFromCamera = true;
   std::vector<float> RayLimits;
+  bool DepthLimitsOn = false;
+  DepthRayLimits DepthLimits;
   uint32_t Width = 256;
   uint32_t Height = 256;
   Image Output;
