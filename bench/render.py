@@ -27,7 +27,9 @@ Run from the repository root:
    per pixel per pass (seed 2) and, after 1, 2, 4, ... samples, the accumulated image's RMSE
    (over all pixels and RGB channels) and mean relative error (mean over pixels whose reference
    luminance is > 0.01 of |L - L_ref| / L_ref, L = luminance) against the tracing time spent so
-   far (the renderer's GetRenderSeconds: GPU passes, no readback). Default backend (auto).
+   far (the renderer's GetRenderSeconds: GPU passes, no readback); with NEE also with the
+   denoiser on (its cost counted in the seconds; everything else here runs with it off, as the
+   path tracer's own figures). Default backend (auto).
 
 Prints plain-text tables and writes render.csv (one row per measurement; `kind` is `frame`,
 `volcanite` or `error`), render_backends.png (ms per frame of both backends at 256x256 (the
@@ -55,7 +57,8 @@ REPO = pathlib.Path(__file__).resolve().parents[1]
 SHARED_DATA = pathlib.Path(os.environ.get("VTKSVDAG_SHARED_DATA") or REPO.parent / "shared" / "data")
 
 COLUMNS = [
-    "kind", "volume", "device", "backend", "width", "height", "lod", "bounces", "nee", "spp",
+    "kind", "volume", "device", "backend", "width", "height", "lod", "bounces", "nee", "denoise",
+    "spp",
     "frames", "ms_median", "ms_min", "ms_restart_median", "restart_ratio", "seconds", "rmse",
     "mean_rel_error", "setup_seconds", "bytes_blas", "bytes_tlas", "bytes_encoding",
     "bytes_acceleration", "bytes_device",
@@ -77,7 +80,7 @@ def load_volume(quick):
     return name, read(str(SHARED_DATA / f"{name}.nrrd"))
 
 
-def make_renderer(volume, size, lod, bounces, nee, backend="auto"):
+def make_renderer(volume, size, lod, bounces, nee, backend="auto", denoise=False):
     from vtksvdag.vtkSVDAGRendering import vtkSegmentationSVDAGRenderer
 
     r = vtkSegmentationSVDAGRenderer()
@@ -89,6 +92,9 @@ def make_renderer(volume, size, lod, bounces, nee, backend="auto"):
     s.SetLOD(LODS[lod])
     s.SetMaximumBounces(bounces)
     s.SetNextEventEstimation(nee)
+    # The path tracer's own frames and error; the denoiser has its rows in the error curves
+    # (and bench/denoise.py).
+    s.SetDenoise(denoise)
     s.SetSamplesPerPixel(1)
     if not r.ResetCamera(30, 20, 1.0):
         raise RuntimeError("ResetCamera failed")
@@ -282,8 +288,8 @@ def error_curves(volume, name, size, lods, reference_spp, max_spp):
         lit = ref_lum > 0.01
         print(f"  {lod}: reference {ref.GetAccumulatedSamples()} spp in {ref.GetRenderSeconds():.1f} s",
               flush=True)
-        for nee in (True, False):
-            r = make_renderer(volume, size, lod, 4, nee)
+        for nee, denoise in ((True, False), (False, False), (True, True)):
+            r = make_renderer(volume, size, lod, 4, nee, denoise=denoise)
             light(r)
             r.GetSettings().SetSeed(2)
             render(r)  # warm-up (shader compilation), then a fresh accumulation
@@ -298,12 +304,14 @@ def error_curves(volume, name, size, lods, reference_spp, max_spp):
                 rel = float(np.mean(np.abs(luminance(image)[lit] - ref_lum[lit]) / ref_lum[lit]))
                 rows.append(dict(
                     kind="error", volume=name, device=r.GetDeviceName(), width=size, height=size,
-                    lod=lod, bounces=4, nee=int(nee), spp=r.GetAccumulatedSamples(),
+                    lod=lod, bounces=4, nee=int(nee), denoise=int(denoise),
+                    spp=r.GetAccumulatedSamples(),
                     seconds=round(r.GetRenderSeconds(), 6), rmse=f"{rmse:.6g}",
                     mean_rel_error=f"{rel:.6g}"))
                 checkpoint *= 2
             last = rows[-1]
-            print(f"    NEE {'on ' if nee else 'off'}: {last['spp']} spp, {last['seconds']:.2f} s, "
+            print(f"    NEE {'on ' if nee else 'off'}, denoiser {'on ' if denoise else 'off'}: "
+                  f"{last['spp']} spp, {last['seconds']:.2f} s, "
                   f"RMSE {last['rmse']}, mean relative error {last['mean_rel_error']}", flush=True)
     return rows
 
@@ -318,13 +326,15 @@ def plot(rows, path):
     errors = [r for r in rows if r["kind"] == "error"]
     colors = {"voxel": "tab:blue", "leaf": "tab:green", "block": "tab:orange"}
     for lod in LODS:
-        for nee in (1, 0):
-            curve = [r for r in errors if r["lod"] == lod and r["nee"] == nee]
+        for nee, denoise, style, name in ((1, 0, "-o", "NEE + MIS"),
+                                          (0, 0, "--s", "no NEE (paper estimator)"),
+                                          (1, 1, ":^", "NEE + MIS, denoised")):
+            curve = [r for r in errors if r["lod"] == lod and r["nee"] == nee
+                     and r.get("denoise", 0) == denoise]
             if not curve:
                 continue
             ax.loglog([max(r["seconds"], 1e-6) for r in curve], [float(r["rmse"]) for r in curve],
-                      "-o" if nee else "--s", color=colors[lod], markersize=3,
-                      label=f"{lod}, {'NEE + MIS' if nee else 'no NEE (paper estimator)'}")
+                      style, color=colors[lod], markersize=3, label=f"{lod}, {name}")
     ax.set_xlabel("tracing time (s)")
     ax.set_ylabel("RMSE vs reference")
     ax.set_title("Path tracer error against run time (disk sun + sky)")

@@ -77,19 +77,23 @@ void prepare(uint x, uint y)
   float variance = 0.0;
   vec3 n = vec3(0.0);
   float t = 0.0;
+  bool edge = false;
   if (label != 0u)
   {
     uint samples = max(p.samples.x, 1u);
     // A pixel on a label edge: its samples cover two labels, and their mean (the edge's
     // antialiasing) is what the filter would remove. Left as it is once samples accumulate
-    // (variance 0: unfiltered), filtered only while a few samples are all noise.
-    bool edge = false;
-    for (int k = 0; k < 4; ++k)
+    // (variance 0: unfiltered), filtered only while a few samples are all noise; never a tap of
+    // another pixel's filter, so no radiance of a neighbouring label reaches the inside of one.
+    for (int dy = -1; dy <= 1; ++dy)
     {
-      ivec2 q = ivec2(x, y) + ivec2(k == 0 ? -1 : k == 1 ? 1 : 0, k == 2 ? -1 : k == 3 ? 1 : 0);
-      if (q.x >= 0 && q.y >= 0 && q.x < int(width) && q.y < int(height) &&
-        labels.v[uint(q.x) + width * uint(q.y)] != label)
-        edge = true;
+      for (int dx = -1; dx <= 1; ++dx)
+      {
+        ivec2 q = ivec2(x, y) + ivec2(dx, dy);
+        if (q.x >= 0 && q.y >= 0 && q.x < int(width) && q.y < int(height) &&
+          labels.v[uint(q.x) + width * uint(q.y)] != label)
+          edge = true;
+      }
     }
     if (samples >= SVDAG_DENOISE_TEMPORAL_SAMPLES)
       variance = edge ? 0.0 : DenoiseFloats(p.guides2.zw).v[i];
@@ -119,8 +123,9 @@ void prepare(uint x, uint y)
     n = vec3(normals.v[3u * i], normals.v[3u * i + 1u], normals.v[3u * i + 2u]);
     t = DenoiseFloats(p.guides.zw).v[i];
   }
+  // The edge flag rides in the depth's sign bit (depths are never negative).
   DenoiseGuides(p.variances.zw).v[i] =
-    uvec4(label, packNormal(n), floatBitsToUint(t), floatBitsToUint(variance));
+    uvec4(label, packNormal(n), floatBitsToUint(edge ? -t : t), floatBitsToUint(variance));
 }
 
 // One a-trous iteration at pixel (x, y).
@@ -140,7 +145,7 @@ void filterPixel(uint x, uint y)
   {
     vec3 n = unpackNormal(g.y);
     // The tangent plane n . x = plane through the center's hit.
-    float plane = dot(n, position(int(x), int(y), uintBitsToFloat(g.z)));
+    float plane = dot(n, position(int(x), int(y), abs(uintBitsToFloat(g.z))));
     float luma = dot(center.rgb, LUMINANCE);
     float lumaScale = 1.0 / (p.weights.x * sqrt(centerVariance) + 1e-10);
     float planeScale = 1.0 / p.weights.z;
@@ -156,7 +161,8 @@ void filterPixel(uint x, uint y)
           continue;
         uint j = uint(q.x) + width * uint(q.y);
         uvec4 gq = guides.v[j];
-        if (gq.x != g.x)
+        // Another label, or a label edge pixel (the sign bit of its depth) other than this one.
+        if (gq.x != g.x || (j != i && (gq.z & 0x80000000u) != 0u))
           continue;
         vec4 c = colors.v[j];
         float w = kernel[dx + 1] * kernel[dy + 1];

@@ -11,7 +11,8 @@ import pytest
 REPO = pathlib.Path(__file__).resolve().parents[2]
 SCRIPT = REPO / "bench" / "render.py"
 COLUMNS = [
-    "kind", "volume", "device", "backend", "width", "height", "lod", "bounces", "nee", "spp",
+    "kind", "volume", "device", "backend", "width", "height", "lod", "bounces", "nee", "denoise",
+    "spp",
     "frames", "ms_median", "ms_min", "ms_restart_median", "restart_ratio", "seconds", "rmse",
     "mean_rel_error", "setup_seconds", "bytes_blas", "bytes_tlas", "bytes_encoding",
     "bytes_acceleration", "bytes_device",
@@ -54,16 +55,24 @@ def test_csv_columns_and_rows(quick_run):
         assert int(pair["rt"]["bytes_acceleration"]) > int(pair["compute"]["bytes_acceleration"])
         assert pair["rt"]["bytes_encoding"] == pair["compute"]["bytes_encoding"]
     # Error curves per LOD and estimator at 1, 2, 4, 8 spp, time growing with the samples.
+    # Error curves per LOD and estimator (NEE off, NEE on, NEE on denoised) at 1, 2, 4, 8 spp,
+    # time growing with the samples.
     for lod in ("voxel", "block"):
-        for nee in "01":
-            curve = [r for r in errors if r["lod"] == lod and r["nee"] == nee]
+        for nee, denoise in (("0", "0"), ("1", "0"), ("1", "1")):
+            curve = [r for r in errors
+                     if r["lod"] == lod and r["nee"] == nee and r["denoise"] == denoise]
             assert [int(r["spp"]) for r in curve] == [1, 2, 4, 8]
             seconds = [float(r["seconds"]) for r in curve]
             assert all(b >= a for a, b in zip(seconds, seconds[1:]))
             assert all(float(r["rmse"]) >= 0 and float(r["mean_rel_error"]) >= 0 for r in curve)
-        # With NEE, 8 samples are closer to the reference than 1.
-        nee_curve = [float(r["rmse"]) for r in errors if r["lod"] == lod and r["nee"] == "1"]
+        # With NEE, 8 samples are closer to the reference than 1; one denoised sample is closer
+        # than one raw sample.
+        nee_curve = [float(r["rmse"]) for r in errors
+                     if r["lod"] == lod and r["nee"] == "1" and r["denoise"] == "0"]
         assert nee_curve[-1] < nee_curve[0]
+        denoised = [float(r["rmse"]) for r in errors
+                    if r["lod"] == lod and r["nee"] == "1" and r["denoise"] == "1"]
+        assert denoised[0] < nee_curve[0]
     assert (out / "render_error.png").stat().st_size > 0
     assert (out / "render_backends.png").exists()
     assert "reported, not measured here" in stdout

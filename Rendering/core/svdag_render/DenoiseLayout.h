@@ -22,8 +22,10 @@
  * (the accumulated mean's variance, GpuLayout.h's variance output, from
  * SVDAG_DENOISE_TEMPORAL_SAMPLES samples on; before that the spatial variance of the luminance
  * over the 5x5 same-label neighbourhood, divided by the samples; 0, i.e. unfiltered, for a pixel
- * with a 4-neighbour of another label from then on: its mean is the edge's antialiasing, not
- * noise); positions are recomputed from
+ * with an 8-neighbour of another label from then on: its mean is the edge's antialiasing, not
+ * noise). Such edge pixels are never taps of another pixel (their samples may have hit the
+ * neighbouring label), so no radiance of one label reaches a pixel inside another. Positions are
+ * recomputed from
  * the depth and the rays. Every iteration filters the variance with the squared weights, as SVGF
  * does.
  * Parameters live in a buffer reached through its device address (pushed as a uvec2), one slot
@@ -83,7 +85,8 @@ SVDAG_DENOISE_PARAMS_BEGIN(DenoiseParams)
   uvec4 guides2;   // addresses: xy normal output (shading normals), zw variance output
   uvec4 colors;    // addresses: xy the RGBA read, zw the RGBA written
   // addresses: xy the guides read, zw the guides written (per pixel a uvec4: label + 1, the
-  // shading normal packed in 32 bits, the depth's and the variance's float bits)
+  // shading normal packed in 32 bits, the depth's float bits with the sign bit set on a label
+  // edge, the variance's float bits)
   uvec4 variances;
   uvec4 geometry;  // addresses: xy unused; zw the color output (RGBA8), written by the last
                    // iteration
