@@ -3,7 +3,11 @@
 # bounces, on every .svdag file given (or in the folder given), through the C++ tool
 # vtksvdag-render (no VTK needed, Rendering/README.md "On a GPU machine"). Prints one table:
 # per file, LOD and bounces, the median milliseconds of an accumulating and of a restarting frame
-# for each backend, and the device bytes (encoding + what the backend finds blocks with).
+# for each backend, of a restarting frame with the denoiser on (the others run with it off), and
+# the device bytes (encoding + what the backend finds blocks with). Then the start-up of each
+# backend on the first file: seconds of a whole one-frame run with every cache empty (the
+# driver's disk cache off: __GL_SHADER_DISK_CACHE=0, MESA_SHADER_CACHE_DISABLE=true) and again
+# with only our pipeline cache (PipelineCacheFile.h) warm.
 #
 # Here (to prepare the files from the shared volumes):
 #   for f in ../shared/data/*.nrrd; do .venv/bin/vtksvdag compress "$f" -o "DIR/$(basename "$f" .nrrd).svdag"; done
@@ -67,12 +71,12 @@ for f in "${files[@]}"; do
   for lod in voxel block; do
     for bounces in 1 4; do
       for backend in rt compute; do
-        for restart in "" "--restart"; do
+        for variant in "--no-denoise" "--restart --no-denoise" "--restart --denoise"; do
           line=$("$tool" "$f" "$out/frame.png" --width "$width" --height "$height" --spp 1 \
-            --frames "$frames" --lod "$lod" --bounces "$bounces" --backend "$backend" $restart \
+            --frames "$frames" --lod "$lod" --bounces "$bounces" --backend "$backend" $variant \
             2>"$out/err")
           if [ $? -ne 0 ]; then
-            echo "FAILED: $(basename "$f") $lod $bounces $backend $restart: $(cat "$out/err")" >&2
+            echo "FAILED: $(basename "$f") $lod $bounces $backend $variant: $(cat "$out/err")" >&2
             status=1
             continue
           fi
@@ -83,9 +87,27 @@ for f in "${files[@]}"; do
   done
 done
 
-python3 - "$results" "$width" "$height" "$frames" <<'EOF'
+# Start-up: a whole one-frame run per backend, every cache empty, then with our cache warm.
+startup="$out/startup.txt"
+for backend in rt compute; do
+  cache="$out/cache-$backend"
+  for state in cold ours-warm; do
+    begin=$(date +%s.%N)
+    if XDG_CACHE_HOME="$cache" __GL_SHADER_DISK_CACHE=0 MESA_SHADER_CACHE_DISABLE=true \
+      "$tool" "${files[0]}" "$out/frame.png" --width "$width" --height "$height" --spp 1 \
+      --frames 1 --backend "$backend" >/dev/null 2>"$out/err"; then
+      end=$(date +%s.%N)
+      echo "$backend $state $(python3 -c "print(f'{$end - $begin:.3f}')")" >>"$startup"
+    else
+      echo "FAILED: start-up $backend $state: $(cat "$out/err")" >&2
+      status=1
+    fi
+  done
+done
+
+python3 - "$results" "$width" "$height" "$frames" "$startup" <<'EOF'
 import json, sys
-path, width, height, frames = sys.argv[1:]
+path, width, height, frames, startup = sys.argv[1:]
 rows = {}
 device = ""
 try:
@@ -97,19 +119,26 @@ for line in lines:
     run = r["run"]
     device = run["device"]
     key = (r["file"], run["lod"], run["bounces"])
-    kind = "restart" if run["restart"] else "accumulate"
+    kind = ("restart+denoise" if run.get("denoise") else "restart") if run["restart"] else "accumulate"
     rows.setdefault(key, {})[(run["backend"], kind)] = run
 print(f"{device}, {width}x{height}, 1 spp, median of {int(frames) - 1} frames after a warm-up (ms)")
-print(f"{'volume':<26} {'LOD':>6} {'b':>2} | {'rt acc':>8} {'rt rst':>8} | {'cmp acc':>8} {'cmp rst':>8}"
-      f" | {'rt/cmp':>6} | {'rt MB':>6} {'cmp MB':>6}")
+print(f"{'volume':<26} {'LOD':>6} {'b':>2} | {'rt acc':>8} {'rt rst':>8} {'rt dn':>8} | "
+      f"{'cmp acc':>8} {'cmp rst':>8} {'cmp dn':>8} | {'rt/cmp':>6} | {'rt MB':>6} {'cmp MB':>6}")
 for (name, lod, bounces), runs in sorted(rows.items()):
     ms = lambda b, k: runs[(b, k)]["ms_median"] if (b, k) in runs else float("nan")
     mb = lambda b: ((runs[(b, "accumulate")]["bytes_device"]["encoding"] +
                      runs[(b, "accumulate")]["bytes_device"]["acceleration"]) / 1e6
                     if (b, "accumulate") in runs else float("nan"))
     ratio = ms("rt", "accumulate") / ms("compute", "accumulate")
-    print(f"{name:<26} {lod:>6} {bounces:>2} | {ms('rt', 'accumulate'):8.2f} {ms('rt', 'restart'):8.2f} | "
-          f"{ms('compute', 'accumulate'):8.2f} {ms('compute', 'restart'):8.2f} | {ratio:6.2f} | "
+    print(f"{name:<26} {lod:>6} {bounces:>2} | {ms('rt', 'accumulate'):8.2f} {ms('rt', 'restart'):8.2f} "
+          f"{ms('rt', 'restart+denoise'):8.2f} | {ms('compute', 'accumulate'):8.2f} "
+          f"{ms('compute', 'restart'):8.2f} {ms('compute', 'restart+denoise'):8.2f} | {ratio:6.2f} | "
           f"{mb('rt'):6.2f} {mb('compute'):6.2f}")
+try:
+    print("\nstart-up, seconds of a one-frame run (every cache empty / only our pipeline cache warm)")
+    for line in open(startup).read().splitlines():
+        print("  " + line)
+except FileNotFoundError:
+    pass
 EOF
 exit $status

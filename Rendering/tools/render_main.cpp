@@ -5,10 +5,11 @@
 //   vtksvdag-render INPUT.svdag OUTPUT.png|OUTPUT.exr [--width 512] [--height 512]
 //     [--lod block|leaf|voxel|auto (default auto)] [--azimuth 30] [--elevation 20] [--zoom 1]
 //     [--view-angle 30] [--hide 0,5,7] [--frames 1] [--spp 1] [--bounces 4] [--seed 0]
-//     [--no-nee] [--environment MAP.exr] [--sun AZ,EL] [--backend auto|rt|compute] [--restart]
+//     [--no-nee] [--denoise|--no-denoise] [--environment MAP.exr] [--sun AZ,EL]
+//     [--backend auto|rt|compute] [--restart]
 //
 // Unset options take svdag::render::RenderSettings' defaults (LOD auto, bounces 4, seed 0, NEE
-// on, backend auto). --backend picks how rays find the blocks (RenderSettings.h; auto: per device). --restart makes
+// on, denoiser on, backend auto). --backend picks how rays find the blocks (RenderSettings.h; auto: per device). --restart makes
 // every frame start a new accumulation (what a frame costs while the camera moves).
 // Every frame adds --spp path-traced samples per pixel to the accumulated image. --sun places a
 // disk sun (the renderer's default size and irradiance) at azimuth AZ (degrees from +x towards

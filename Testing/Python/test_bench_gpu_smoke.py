@@ -31,12 +31,19 @@ def test_gpu_script_prints_one_table(tmp_path):
     assert run.returncode == 0, run.stdout[-2000:] + run.stderr[-2000:]
     lines = run.stdout.strip().splitlines()
     assert "32x24, 1 spp" in lines[0]
-    rows = [line.split() for line in lines[2:]]
+    end = lines.index("") if "" in lines else len(lines)
+    rows = [line.split() for line in lines[2:end]]
     assert sorted((r[0], r[1], r[2]) for r in rows) == sorted(
         (f, lod, b) for f in "ab" for lod in ("voxel", "block") for b in ("1", "4"))
     for r in rows:
+        # Per backend: accumulating, restarting, restarting denoised; the ratio; the bytes.
         numbers = [float(v) for v in r[3:] if v != "|"]
-        assert len(numbers) == 7 and all(n > 0 for n in numbers), r
+        assert len(numbers) == 9 and all(n > 0 for n in numbers), r
+    # The start-up of each backend, every cache empty and with our pipeline cache warm.
+    startup = [line.split() for line in lines[end + 2:]]
+    assert sorted((s[0], s[1]) for s in startup) == sorted(
+        (b, state) for b in ("rt", "compute") for state in ("cold", "ours-warm"))
+    assert all(float(s[2]) > 0 for s in startup)
     # A missing input or an empty folder is an error, not an empty table.
     bad = subprocess.run(["bash", str(REPO / "bench" / "gpu.sh"), str(tmp_path / "none")],
                          capture_output=True, text=True, timeout=60)
