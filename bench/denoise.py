@@ -40,6 +40,8 @@ import time
 import numpy as np
 
 REPO = pathlib.Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+import _scenes  # noqa: E402
 SHARED_DATA = pathlib.Path(os.environ.get("VTKSVDAG_SHARED_DATA") or REPO.parent / "shared" / "data")
 COLUMNS = ["kind", "volume", "size", "denoise", "spp", "seconds", "rmse", "rmse_boundary",
            "ms_median", "boundary_pixels"]
@@ -48,13 +50,7 @@ COLUMNS = ["kind", "volume", "size", "denoise", "spp", "seconds", "rmse", "rmse_
 def generated_volume():
     import vtksvdag
 
-    n = 48
-    z, y, x = np.mgrid[0:n, 0:n, 0:n]
-    labels = np.zeros((n, n, n), np.uint16)
-    labels[3:45, 5:43, 4:44] = 2
-    labels[15:30, 8:38, 15:30] = 9
-    labels[(x - 30) ** 2 + (y - 22) ** 2 + (z - 15) ** 2 < 11 ** 2] = 5
-    return vtksvdag.from_numpy(labels, axis_order="zyx")
+    return vtksvdag.from_numpy(_scenes.generated_labels(48), axis_order="zyx")
 
 
 def make_renderer(volume, size, denoise, seed):
@@ -71,35 +67,18 @@ def make_renderer(volume, size, denoise, seed):
     s.SetSamplesPerPixel(1)
     s.SetSeed(seed)
     s.SetDenoise(denoise)
-    s.SunOn()
-    s.SetSunDirection(0.45, 0.35, 0.82)
-    s.SetSunAngularRadius(8.0)
-    s.SetSunIrradiance(3.0, 2.9, 2.7)
-    s.SetEnvironmentColor(0.25, 0.3, 0.4)
-    s.SetBackground(0.25, 0.3, 0.4, 1.0)
+    _scenes.sun_and_sky(r)
     if not r.ResetCamera(30, 20, 1.0):
         raise RuntimeError("ResetCamera failed")
     return r
 
 
-def render(r):
-    if not r.Render():
-        raise RuntimeError("Render failed (see the VTK error above)")
-
-
-def array(r, name):
-    from vtkmodules.util.numpy_support import vtk_to_numpy
-
-    return vtk_to_numpy(r.GetOutput().GetPointData().GetArray(name))
-
-
-def hdr(r):
-    return array(r, "HDR")[:, :3].astype(np.float64)
+render, hdr = _scenes.render, _scenes.hdr
 
 
 def boundary_mask(r, size):
     """Labelled pixels with a 4-neighbour of another label (background included)."""
-    label = array(r, "Label").reshape(size, size)
+    label = _scenes.point_array(r, "Label").reshape(size, size)
     edge = np.zeros_like(label, dtype=bool)
     edge[:, 1:] |= label[:, 1:] != label[:, :-1]
     edge[:, :-1] |= label[:, :-1] != label[:, 1:]

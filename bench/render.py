@@ -53,6 +53,8 @@ import time
 import numpy as np
 
 REPO = pathlib.Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+import _scenes  # noqa: E402
 # The real volumes: ../shared/data, or where VTKSVDAG_SHARED_DATA points (as the tests).
 SHARED_DATA = pathlib.Path(os.environ.get("VTKSVDAG_SHARED_DATA") or REPO.parent / "shared" / "data")
 
@@ -101,15 +103,7 @@ def make_renderer(volume, size, lod, bounces, nee, backend="auto", denoise=False
     return r
 
 
-def render(r):
-    if not r.Render():
-        raise RuntimeError("Render failed (see the VTK error above)")
-
-
-def hdr(r):
-    from vtkmodules.util.numpy_support import vtk_to_numpy
-
-    return vtk_to_numpy(r.GetOutput().GetPointData().GetArray("HDR"))[:, :3].astype(np.float64)
+render, hdr = _scenes.render, _scenes.hdr
 
 
 def configurations(name, quick):
@@ -260,14 +254,7 @@ def plot_backends(rows, path):
     plt.close(fig)
 
 
-def light(r):
-    s = r.GetSettings()
-    s.SunOn()
-    s.SetSunDirection(0.45, 0.35, 0.82)
-    s.SetSunAngularRadius(8.0)
-    s.SetSunIrradiance(3.0, 2.9, 2.7)
-    s.SetEnvironmentColor(0.25, 0.3, 0.4)
-    s.SetBackground(0.25, 0.3, 0.4, 1.0)
+light = _scenes.sun_and_sky
 
 
 def luminance(rgb):

@@ -43,57 +43,30 @@ import sys
 import tempfile
 import time
 
+import numpy as np
+
 REPO = pathlib.Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+import _scenes  # noqa: E402
 SHARED_DATA = pathlib.Path(os.environ.get("VTKSVDAG_SHARED_DATA") or REPO.parent / "shared" / "data")
 ROUTES = ["cli-compute", "cli-rt", "pyvista-compute", "pyvista-rt", "gpu-raycast"]
 CACHES = ["cold", "warm"]
 FIELDS = ["route", "cache", "repeat", "first_image_s", "process_s"]
 
-# The child of the pyvista routes: argv = route, volume file, size, output .png. Prints the
-# wall-clock time (time.time()) at which the first image was written.
+# The child of the pyvista routes: argv = route, volume file, size, output .png, bench folder.
+# Prints the wall-clock time (time.time()) at which the first image was written.
 CHILD = r"""
 import sys, time
 route, path, size, out = sys.argv[1], sys.argv[2], int(sys.argv[3]), sys.argv[4]
-import numpy as np
+sys.path.insert(0, sys.argv[5])
 import pyvista as pv
 import vtksvdag
+import _scenes
 plotter = pv.Plotter(off_screen=True, window_size=(size, size))
 if route.startswith("pyvista-"):
     vtksvdag.add_segmentation(plotter, path, spp=1, backend=route.split("-", 1)[1])
 else:
-    import vtkmodules.vtkRenderingVolumeOpenGL2  # noqa: F401
-    from vtkmodules.util.numpy_support import numpy_to_vtk
-    from vtkmodules.vtkCommonDataModel import vtkImageData, vtkPiecewiseFunction
-    from vtkmodules.vtkRenderingCore import vtkColorTransferFunction, vtkVolume, vtkVolumeProperty
-    from vtkmodules.vtkRenderingVolume import vtkGPUVolumeRayCastMapper
-    volume = vtksvdag.read(path)
-    values, inverse = np.unique(volume.to_numpy().ravel(order="F"), return_inverse=True)
-    indices = inverse.astype(np.uint16).reshape(-1)
-    image = vtkImageData()
-    image.SetDimensions(*volume.dims)
-    image.SetSpacing(*volume.spacing)
-    image.SetOrigin(*volume.origin)
-    image.GetPointData().SetScalars(numpy_to_vtk(indices, deep=False))
-    colors = np.random.default_rng(0).uniform(0.15, 1.0, size=(len(values), 3))
-    ctf = vtkColorTransferFunction()
-    for i, c in enumerate(colors):
-        ctf.AddRGBPoint(float(i), *c)
-    otf = vtkPiecewiseFunction()
-    first = 1 if values[0] == 0 else 0
-    if first:
-        otf.AddPoint(0.0, 0.0)
-    otf.AddPoint(float(first), 1.0)
-    otf.AddPoint(float(max(len(values) - 1, first)), 1.0)
-    prop = vtkVolumeProperty()
-    prop.SetColor(ctf)
-    prop.SetScalarOpacity(otf)
-    prop.SetInterpolationTypeToNearest()
-    prop.ShadeOn()
-    mapper = vtkGPUVolumeRayCastMapper()
-    mapper.SetInputData(image)
-    actor = vtkVolume()
-    actor.SetMapper(mapper)
-    actor.SetProperty(prop)
+    actor, _ = _scenes.gpu_raycast_volume(vtksvdag.read(path))
     plotter.add_actor(actor, reset_camera=True)
 plotter.screenshot(out)
 print(f"FIRST_IMAGE {time.time():.6f}", flush=True)
@@ -102,19 +75,12 @@ plotter.close()
 
 
 def generated_volume(path):
-    """A 48^3 gzip NRRD of nested boxes and a sphere (no ../shared needed)."""
-    import numpy as np
+    """A 48^3 gzip NRRD of _scenes.generated_labels (no ../shared needed)."""
+    import nrrd
 
     import vtksvdag
 
-    n = 48
-    z, y, x = np.mgrid[0:n, 0:n, 0:n]
-    labels = np.zeros((n, n, n), np.uint16)
-    labels[3:45, 5:43, 4:44] = 2
-    labels[15:30, 8:38, 15:30] = 9
-    labels[(x - 30) ** 2 + (y - 22) ** 2 + (z - 15) ** 2 < 11 ** 2] = 5
-    import nrrd
-
+    labels = _scenes.generated_labels(48)
     nrrd.write(str(path), np.ascontiguousarray(labels.transpose(2, 1, 0)),
                {"encoding": "gzip"}, index_order="F")
     vtksvdag.read(str(path))  # checks that the file reads
@@ -132,7 +98,8 @@ def run_once(route, volume, svdag, size, caches, out_png):
         command = [str(pathlib.Path(sys.executable).parent / "vtksvdag"), "render", str(svdag),
                    "-o", str(out_png), "--sun", "0", "-20", "--backend", route.split("-", 1)[1]]
     else:
-        command = [sys.executable, "-c", CHILD, route, str(volume), str(size), str(out_png)]
+        command = [sys.executable, "-c", CHILD, route, str(volume), str(size), str(out_png),
+                   str(pathlib.Path(__file__).resolve().parent)]
     start = time.time()
     completed = subprocess.run(command, capture_output=True, text=True, env=env, timeout=900)
     end = time.time()

@@ -60,6 +60,8 @@ import tempfile
 import time
 
 REPO = pathlib.Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+import _scenes  # noqa: E402
 # The real volumes: ../shared/data, or where VTKSVDAG_SHARED_DATA points (as the tests).
 SHARED_DATA = pathlib.Path(os.environ.get("VTKSVDAG_SHARED_DATA") or REPO.parent / "shared" / "data")
 
@@ -91,35 +93,6 @@ def _maxrss_mb():
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024 / 1e6  # KiB on Linux
 
 
-def _relabel(volume):
-    """Decoded labels as dense uint16 indices in VTK order (x fastest), and the index of value 0."""
-    import numpy as np
-
-    labels = volume.to_numpy()  # (nx, ny, nz), Fortran order: x fastest when raveled as F
-    flat = labels.ravel(order="F")
-    values, inverse = np.unique(flat, return_inverse=True)
-    if len(values) > 65536:
-        raise RuntimeError(f"{len(values)} distinct values do not fit uint16 indices")
-    indices = inverse.astype(np.uint16).reshape(-1)
-    background = int(np.searchsorted(values, 0)) if values[0] == 0 else None
-    return indices, len(values), background
-
-
-def _image(volume, indices):
-    from vtkmodules.util.numpy_support import numpy_to_vtk
-    from vtkmodules.vtkCommonDataModel import vtkImageData
-
-    image = vtkImageData()
-    image.SetDimensions(*volume.dims)
-    image.SetSpacing(*volume.spacing)
-    image.SetOrigin(*volume.origin)
-    scalars = numpy_to_vtk(indices, deep=False)
-    scalars.SetName("label_index")
-    image.GetPointData().SetScalars(scalars)
-    image._keep = indices  # the VTK array borrows the numpy buffer
-    return image
-
-
 def _render_timed(window):
     start = time.perf_counter()
     window.Render()
@@ -130,12 +103,8 @@ def _render_timed(window):
 def worker(spec):
     import numpy as np
     import pyvista as pv
-    import vtkmodules.vtkRenderingVolumeOpenGL2  # noqa: F401  (the OpenGL volume mappers)
-    from vtkmodules.vtkCommonDataModel import vtkPiecewiseFunction
     from vtkmodules.vtkFiltersGeneral import vtkDiscreteFlyingEdges3D
-    from vtkmodules.vtkRenderingCore import (vtkActor, vtkColorTransferFunction,
-                                             vtkPolyDataMapper, vtkVolume, vtkVolumeProperty)
-    from vtkmodules.vtkRenderingVolume import vtkGPUVolumeRayCastMapper
+    from vtkmodules.vtkRenderingCore import vtkActor, vtkPolyDataMapper
 
     import vtksvdag
 
@@ -156,37 +125,18 @@ def worker(spec):
         mapper = actor.GetMapper()
         result["prep_s"] = time.perf_counter() - t  # device creation, upload happens at render
     else:
-        indices, n_values, background = _relabel(volume)
+        relabelled = _scenes.relabel(volume)
+        indices, n_values, background = relabelled
         result["read_s"] = time.perf_counter() - start
         t = time.perf_counter()
-        image = _image(volume, indices)
         first_label = 0 if background is None else 1
         if route == "gpu-raycast":
-            rng = np.random.default_rng(0)
-            colors = rng.uniform(0.15, 1.0, size=(n_values, 3))
-            ctf = vtkColorTransferFunction()
-            for i in range(n_values):
-                ctf.AddRGBPoint(float(i), *colors[i])
-            otf = vtkPiecewiseFunction()
-            if background is not None:
-                otf.AddPoint(0.0, 0.0)
-            otf.AddPoint(float(first_label), 1.0)
-            otf.AddPoint(float(max(n_values - 1, first_label)), 1.0)
-            prop = vtkVolumeProperty()
-            prop.SetColor(ctf)
-            prop.SetScalarOpacity(otf)
-            prop.SetInterpolationTypeToNearest()
-            prop.ShadeOn()
-            mapper = vtkGPUVolumeRayCastMapper()
-            mapper.SetInputData(image)
-            actor = vtkVolume()
-            actor.SetMapper(mapper)
-            actor.SetProperty(prop)
+            actor, mapper = _scenes.gpu_raycast_volume(volume, relabelled)
             result["notes"].append(f"sample distance {mapper.GetSampleDistance():g}, auto-adjust "
                                    f"{'on' if mapper.GetAutoAdjustSampleDistances() else 'off'}")
         else:
             surfaces = vtkDiscreteFlyingEdges3D()
-            surfaces.SetInputData(image)
+            surfaces.SetInputData(_scenes.index_image(volume, indices))
             n_labels = n_values - first_label
             surfaces.GenerateValues(n_labels, float(first_label), float(n_values - 1))
             surfaces.ComputeNormalsOff()
