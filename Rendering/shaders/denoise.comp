@@ -149,7 +149,6 @@ void filterPixel(uint x, uint y)
     float luma = dot(center.rgb, LUMINANCE);
     float lumaScale = 1.0 / (p.weights.x * sqrt(centerVariance) + 1e-10);
     float planeScale = 1.0 / p.weights.z;
-    const float kernel[3] = float[3](0.25, 0.5, 0.25);
     vec4 sum = vec4(0.0);
     float weights = 0.0, varianceSum = 0.0;
     for (int dy = -1; dy <= 1; ++dy)
@@ -165,7 +164,8 @@ void filterPixel(uint x, uint y)
         if (gq.x != g.x || (j != i && (gq.z & 0x80000000u) != 0u))
           continue;
         vec4 c = colors.v[j];
-        float w = kernel[dx + 1] * kernel[dy + 1];
+        // The 3x3 kernel (1/4, 1/2, 1/4) in each direction.
+        float w = (dx == 0 ? 0.5 : 0.25) * (dy == 0 ? 0.5 : 0.25);
         if (j != i)
         {
           // facing^32 by squaring, and one exp for the plane and luminance terms: the filter's
