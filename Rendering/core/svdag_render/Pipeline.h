@@ -96,7 +96,8 @@ public:
   // The pool sizes of one descriptor set of this backend.
   const std::vector<VkDescriptorPoolSize>& poolSizes() const { return this->PoolSizes; }
   uint64_t compilations() const;
-  // Hash of every embedded SPIR-V module (part of the persistent pipeline cache's key).
+  // Hash of the path tracer's embedded SPIR-V modules (part of the persistent pipeline cache's
+  // key).
   static uint64_t shaderHash();
 
 private:

@@ -4,7 +4,7 @@
 //
 // Location: $XDG_CACHE_HOME/vtksvdag, else $HOME/.cache/vtksvdag; VTKSVDAG_PIPELINE_CACHE=0
 // (or off/false/no) keeps the cache in memory only. One file per key (device, driver, and the
-// hash of the embedded SPIR-V), so two builds or two GPUs never overwrite each other's file:
+// hash of the path tracer's SPIR-V), so two builds or two GPUs never overwrite each other's file:
 //   pipelines-<vendor>-<device>-<driver version>-<pipeline cache UUID>-<shader hash>.bin
 //
 // File: a header of our own (magic, format version, the key, the data's size and FNV-1a 64-bit
@@ -32,7 +32,10 @@ struct PipelineCacheKey
   uint32_t deviceId = 0;
   uint32_t driverVersion = 0;
   std::array<uint8_t, 16> cacheUuid{}; // VkPhysicalDeviceProperties::pipelineCacheUUID
-  uint64_t shaderHash = 0;             // of every SPIR-V module the pipelines are made of
+  // Of the path tracer's SPIR-V modules (PipelineLibrary::shaderHash): a build with other
+  // shaders writes a file of its own. The depth pass and the denoiser share the file; the driver
+  // keys every pipeline in it by its own code anyway.
+  uint64_t shaderHash = 0;
 };
 
 // FNV-1a, 64 bits (the shader hash and the data checksum).
