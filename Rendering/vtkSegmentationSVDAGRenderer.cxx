@@ -37,8 +37,9 @@ struct vtkSegmentationSVDAGRenderer::Internals
   svdag::vtkglue::RenderSession Session;
   vtkSmartPointer<vtkPlaneCollection> ClippingPlanes;
   bool CameraSet = false;
-  // Whether the last execution succeeded (Render()'s result).
+  // Whether the last execution succeeded (Render()'s result), and its passes' frame times.
   bool Succeeded = false;
+  std::vector<double> PassMilliseconds;
 };
 
 vtkStandardNewMacro(vtkSegmentationSVDAGRenderer);
@@ -352,7 +353,13 @@ int vtkSegmentationSVDAGRenderer::RequestData(
     svdag::vtkglue::setClipping(settings, this->Internal->ClippingPlanes, identity, identity,
       this->Cropping != 0, this->CroppingRegionPlanes);
     r.setSettings(settings);
-    r.render();
+    in.PassMilliseconds.clear();
+    using PassUse = svdag::render::Renderer::PassUse;
+    for (int pass = 0; pass < this->PassesPerRender; ++pass)
+    {
+      r.render(pass + 1 < this->PassesPerRender ? PassUse::Accumulating : PassUse::Shown);
+      in.PassMilliseconds.push_back(r.lastFrameMilliseconds());
+    }
   }
   catch (const std::exception& e)
   {
@@ -417,6 +424,12 @@ SVDAG_RENDERER_STATISTIC(vtkTypeInt64, NeighbourTableBytes, r->neighbourTableByt
 SVDAG_RENDERER_STATISTIC(int, NumberOfBLAS, r->blasCount())
 #undef SVDAG_RENDERER_STATISTIC
 
+double vtkSegmentationSVDAGRenderer::GetPassMilliseconds(int pass) const
+{
+  const std::vector<double>& times = this->Internal->PassMilliseconds;
+  return pass >= 0 && size_t(pass) < times.size() ? times[size_t(pass)] : 0.0;
+}
+
 const char* vtkSegmentationSVDAGRenderer::GetBackendInUse() const
 {
   return this->Internal->Session.backendInUse();
@@ -469,6 +482,7 @@ void vtkSegmentationSVDAGRenderer::PrintSelf(ostream& os, vtkIndent indent)
   auto triple = [&os](const double* v) { os << v[0] << " " << v[1] << " " << v[2] << "\n"; };
   os << indent << "Width: " << this->Width << "\n";
   os << indent << "Height: " << this->Height << "\n";
+  os << indent << "PassesPerRender: " << this->PassesPerRender << "\n";
   os << indent << "CameraPosition: ";
   triple(this->CameraPosition);
   os << indent << "CameraFocalPoint: ";

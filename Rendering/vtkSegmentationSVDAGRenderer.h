@@ -5,7 +5,8 @@
  * A vtkImageAlgorithm: one input port, a vtkSegmentationSVDAG (SetInputConnection from a reader
  * or from vtkImageDataToSegmentationSVDAG, or SetInputData), one output, a vtkImageData of
  * Width x Height x 1 points (whole extent 0..Width-1, 0..Height-1, 0..0). Each execution renders
- * one pass: Settings->SamplesPerPixel path-traced samples per pixel added to a progressive
+ * PassesPerRender passes (default 1), each Settings->SamplesPerPixel path-traced samples per
+ * pixel added to a progressive
  * accumulation, which restarts whenever anything that changes the image changed (input volume,
  * camera, size, settings other than Exposure and SamplesPerPixel, label properties;
  * ResetAccumulation() forces it). Like any algorithm it re-executes on Update() when the input
@@ -123,6 +124,17 @@ public:
   vtkGetMacro(Width, int);
   vtkSetClampMacro(Height, int, 1, 16384);
   vtkGetMacro(Height, int);
+  ///@}
+
+  ///@{
+  /** Passes one execution traces (default 1, at most 65536), each adding
+   * Settings->SamplesPerPixel samples: the denoiser (Settings Denoise) filters only the last,
+   * the one the output shows, so several passes in one Render() cost less than as many
+   * Render() calls. GetPassMilliseconds(i): the frame time of pass i of the last execution
+   * (the last one's includes the denoiser), 0 for an i outside 0 .. PassesPerRender - 1. */
+  vtkSetClampMacro(PassesPerRender, int, 1, 65536);
+  vtkGetMacro(PassesPerRender, int);
+  double GetPassMilliseconds(int pass) const;
   ///@}
 
   ///@{
@@ -255,6 +267,7 @@ protected:
 
   int Width = 256;
   int Height = 256;
+  int PassesPerRender = 1;
   double CameraPosition[3] = { 0, 0, 1 };
   double CameraFocalPoint[3] = { 0, 0, 0 };
   double CameraViewUp[3] = { 0, 1, 0 };

@@ -750,13 +750,15 @@ void vtkSegmentationSVDAGVolumeMapper::Render(vtkRenderer* renderer, vtkVolume* 
           clipToModel });
       else
         r.setRayLimits({});
+      // Only the last pass is drawn: the ones before it leave the denoiser out.
       do
       {
-        r.render();
+        r.render(svdag::render::Renderer::PassUse::Accumulating);
         in.TraceMilliseconds += r.lastFrameMilliseconds();
         copyMilliseconds += r.lastReadbackMilliseconds();
       } while (finishNow && in.FullQuality && !refined() &&
         (tiled || std::chrono::duration<double>(Clock::now() - start).count() < this->RefineTimeLimit));
+      in.TraceMilliseconds += r.finishImage();
       in.Frame = std::move(frame.key);
     }
     const core::Image& image = r.image();

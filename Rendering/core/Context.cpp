@@ -1,5 +1,6 @@
 #include "svdag_render/Context.h"
 
+#include "svdag_render/ComputePipeline.h"
 #include "svdag_render/Pipeline.h"
 #include "svdag_render/PipelineCacheFile.h"
 
@@ -287,6 +288,7 @@ void Device::destroy()
     vkDeviceWaitIdle(this->Handle); // no user is left: nothing else submits
     for (auto& library : this->Libraries)
       library.reset();
+    this->ComputePipelines.clear();
     this->Own.reset();
     if (this->PipelineCache)
       vkDestroyPipelineCache(this->Handle, this->PipelineCache, nullptr);
@@ -321,6 +323,16 @@ PipelineLibrary& Device::pipelines(Backend backend)
   if (!library)
     library = std::make_unique<PipelineLibrary>(*this->Own, backend);
   return *library;
+}
+
+const ComputePipeline& Device::computePipeline(
+  const uint32_t* code, size_t bytes, const char* what)
+{
+  std::lock_guard<std::mutex> lock(this->PipelineLock);
+  std::unique_ptr<ComputePipeline>& pipeline = this->ComputePipelines[code];
+  if (!pipeline)
+    pipeline = std::make_unique<ComputePipeline>(*this->Own, code, bytes, what);
+  return *pipeline;
 }
 
 uint64_t Device::pipelineCompilations() const

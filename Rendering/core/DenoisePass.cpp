@@ -30,7 +30,8 @@ void barrier(VkCommandBuffer cmd, VkAccessFlags dst, VkPipelineStageFlags dstSta
 
 DenoisePass::DenoisePass(Context& context)
   : Ctx(context)
-  , Program(context, svdagShader_denoise_comp, sizeof(svdagShader_denoise_comp), "the denoiser")
+  , Program(context.shared().computePipeline(
+      svdagShader_denoise_comp, sizeof(svdagShader_denoise_comp), "the denoiser"))
   , Params(context, Dispatches * sizeof(gpu::DenoiseParams), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
       MemoryUse::Upload)
 {

@@ -28,7 +28,8 @@ DepthPass::DepthPass(Context& context)
   : Ctx(withFloat64(context))
   , Params(context, PassKinds * sizeof(gpu::DepthParams), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
       MemoryUse::Upload)
-  , Program(context, svdagShader_depth_comp, sizeof(svdagShader_depth_comp), "the depth pass")
+  , Program(context.shared().computePipeline(
+      svdagShader_depth_comp, sizeof(svdagShader_depth_comp), "the depth pass"))
 {
 }
 

@@ -171,8 +171,12 @@ struct Renderer::Gpu
   Buffer label, depth, normal, hdr, color, variance, accumulation, squares;
   // The per-pixel ray limits (host-visible, written before each frame that has them).
   Buffer rayLimits;
-  // The denoiser, made on the first frame that uses it.
+  // The denoiser, made on the first frame that uses it, and what it would filter of the last
+  // pass where that pass left it out (Renderer::PassUse::Accumulating; finishImage runs it).
   std::unique_ptr<DenoisePass> denoiser;
+  bool denoisePending = false;
+  DenoisePass::Frame pendingFrame;
+  gpu::DenoiseParams pendingParams{};
   uint32_t outputPixels = 0;
   // Whether hdr is a Shared buffer (Renderer::setColorSharing), and how often it was allocated.
   bool hdrShared = false;
@@ -822,9 +826,10 @@ uint64_t Renderer::visibleBlocks() const
   return this->Device->scene ? this->Device->scene->visibleBlocks() : 0;
 }
 
-const Image& Renderer::render()
+const Image& Renderer::render(PassUse use)
 {
   Gpu& g = *this->Device;
+  g.denoisePending = false;
   if (!g.scene)
     throw std::runtime_error("render needs a volume first (setVolume)");
   this->applyBackend();
@@ -1010,6 +1015,7 @@ const Image& Renderer::render()
     g.denoiser = std::make_unique<DenoisePass>(g.context);
   gpu::DenoiseParams denoise{};
   DenoisePass::Frame denoised;
+  const bool denoiseNow = settings.denoise && use == PassUse::Shown;
   if (settings.denoise)
   {
     denoise.rayOrigin = u.rayOrigin;
@@ -1037,7 +1043,7 @@ const Image& Renderer::render()
     if (limitsPass)
       limitsPass->record(cmd, limitsParams);
     pipeline.record(cmd, this->Width, this->Height);
-    if (settings.denoise)
+    if (denoiseNow)
       g.denoiser->record(cmd, denoised, denoise);
   });
   g.tracedRays = given;
@@ -1047,6 +1053,12 @@ const Image& Renderer::render()
   this->RenderSeconds += this->FrameMilliseconds / 1000;
   this->Accumulated += settings.samplesPerPixel;
   this->AccumulationValid = true;
+  if (settings.denoise && !denoiseNow)
+  {
+    g.denoisePending = true;
+    g.pendingFrame = denoised;
+    g.pendingParams = denoise;
+  }
 
   const auto readStart = Clock::now();
   Image& out = this->Output;
@@ -1074,11 +1086,7 @@ const Image& Renderer::render()
   out.faceNormal.resize(size_t(pixels) * 3);
   std::memcpy(out.faceNormal.data(), static_cast<const float*>(g.normal.mapped()) + size_t(pixels) * 3,
     size_t(pixels) * 3 * sizeof(float));
-  if (g.hdrShared)
-    out.hdr.clear();
-  else
-    read(out.hdr, g.hdr, size_t(pixels) * 4);
-  read(out.color, g.color, pixels);
+  this->readColor();
   read(out.variance, g.variance, pixels);
   double sum = 0;
   for (float v : out.variance)
@@ -1087,6 +1095,41 @@ const Image& Renderer::render()
   this->ReadbackMilliseconds =
     std::chrono::duration<double, std::milli>(Clock::now() - readStart).count();
   return out;
+}
+
+void Renderer::readColor()
+{
+  const Gpu& g = *this->Device;
+  Image& out = this->Output;
+  const size_t pixels = size_t(out.width) * out.height;
+  if (g.hdrShared)
+    out.hdr.clear();
+  else
+  {
+    out.hdr.resize(pixels * 4);
+    std::memcpy(out.hdr.data(), g.hdr.mapped(), pixels * 4 * sizeof(float));
+  }
+  out.color.resize(pixels);
+  std::memcpy(out.color.data(), g.color.mapped(), pixels * sizeof(uint32_t));
+}
+
+double Renderer::finishImage()
+{
+  Gpu& g = *this->Device;
+  if (!g.denoisePending)
+    return 0;
+  g.denoisePending = false;
+  const auto start = Clock::now();
+  g.context.submitAndWait(
+    [&](VkCommandBuffer cmd) { g.denoiser->record(cmd, g.pendingFrame, g.pendingParams); });
+  const double filtered = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+  this->FrameMilliseconds += filtered;
+  this->RenderSeconds += filtered / 1000;
+  const auto readStart = Clock::now();
+  this->readColor();
+  this->ReadbackMilliseconds +=
+    std::chrono::duration<double, std::milli>(Clock::now() - readStart).count();
+  return filtered;
 }
 
 } // namespace render

@@ -246,7 +246,10 @@ int main(int argc, char** argv)
     {
       if (o.restart)
         renderer.resetAccumulation();
-      renderer.render();
+      // Without restarts only the last frame's image is written: the denoiser filters only it.
+      const bool shown = o.restart || f + 1 == o.frames;
+      renderer.render(shown ? svdag::render::Renderer::PassUse::Shown
+                            : svdag::render::Renderer::PassUse::Accumulating);
       if (f > 0 || o.frames == 1)
         timed.push_back(renderer.lastFrameMilliseconds());
     }

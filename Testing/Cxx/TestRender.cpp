@@ -737,3 +737,51 @@ TEST(RenderBackends, DeviceWithoutRayTracingRendersThroughCompute)
   EXPECT_THROW(renderer.setSettings(settings), std::runtime_error);
   EXPECT_EQ(renderer.render().label, reference.label);
 }
+
+// An Accumulating pass leaves the denoiser out (its hdr and color are the raw mean, those of the
+// same pass with the denoiser off); finishImage then gives exactly the Shown pass's image, and
+// does nothing a second time or after a Shown pass.
+TEST(RenderDenoiser, OnlyShownPassesAreFiltered)
+{
+  // Two large boxes: most pixels are inside one label, where the filter averages.
+  svdag::Geometry g;
+  g.dims = { { 28, 24, 20 } };
+  std::vector<uint8_t> labels(g.voxelCount(), 0);
+  for (int z = 2; z < 18; ++z)
+    for (int y = 2; y < 22; ++y)
+      for (int x = 2; x < 26; ++x)
+        labels[x + 28 * (y + 24 * size_t(z))] = x < 14 ? 1 : 2;
+  const auto volume = std::make_shared<const svdag::Volume>(
+    svdag::Builder::build(g, svdag::ScalarType::UInt8, labels.data()));
+  using PassUse = svdag::render::Renderer::PassUse;
+  auto make = [&](bool denoise) {
+    auto r = std::make_unique<svdag::render::Renderer>();
+    r->setBackend(svdag::render::Backend::Compute);
+    r->setVolume(volume);
+    r->setImageSize(40, 30);
+    r->setCamera(svdag::render::frameVolume(g, 25, -15, 1.2));
+    r->setMaximumBounces(2);
+    r->setDenoise(denoise);
+    return r;
+  };
+  auto raw = make(false), deferred = make(true), shown = make(true);
+  for (int pass = 0; pass < 3; ++pass)
+  {
+    const svdag::render::Image rawImage = raw->render();
+    const svdag::render::Image& accumulating = deferred->render(PassUse::Accumulating);
+    EXPECT_EQ(accumulating.hdr, rawImage.hdr) << pass;
+    EXPECT_EQ(accumulating.color, rawImage.color) << pass;
+    const svdag::render::Image shownImage = shown->render(PassUse::Shown);
+    EXPECT_NE(shownImage.hdr, rawImage.hdr) << pass; // the filter changed something
+    const double traced = deferred->lastFrameMilliseconds();
+    const double filtered = deferred->finishImage();
+    EXPECT_GT(filtered, 0.0);
+    EXPECT_DOUBLE_EQ(deferred->lastFrameMilliseconds(), traced + filtered);
+    EXPECT_EQ(deferred->image().hdr, shownImage.hdr) << pass;
+    EXPECT_EQ(deferred->image().color, shownImage.color) << pass;
+    EXPECT_EQ(deferred->finishImage(), 0.0);
+    EXPECT_EQ(shown->finishImage(), 0.0);
+    EXPECT_EQ(raw->finishImage(), 0.0);
+  }
+  EXPECT_EQ(deferred->accumulatedSamples(), 3u);
+}

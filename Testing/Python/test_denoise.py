@@ -126,6 +126,30 @@ def test_edges_kept_and_filter_fades_as_samples_converge(two_boxes):
     assert np.array_equal(render_to(off, 4), render_to(renderer(two_boxes, False), 4))
 
 
+def test_only_the_shown_pass_is_denoised(two_boxes):
+    """PassesPerRender: the passes before the last leave the denoiser out and the last is
+    filtered, so one execution of 4 passes gives exactly the image of 4 executions of 1 pass
+    (the denoiser filters the displayed image, never the accumulation), and the filter runs once.
+    """
+    each, batched = renderer(two_boxes, True), renderer(two_boxes, True)
+    once_raw = renderer(two_boxes, False)
+    each_hdr = render_to(each, 4)
+    batched.SetPassesPerRender(4)
+    assert batched.Render() == 1
+    assert batched.GetAccumulatedSamples() == 4
+    assert np.array_equal(output(batched, "HDR"), output(each, "HDR"))
+    assert np.array_equal(output(batched, "Color"), output(each, "Color"))
+    once_raw.SetPassesPerRender(4)
+    assert once_raw.Render() == 1
+    # The denoiser did run on the last pass (the raw mean differs).
+    assert not np.array_equal(output(once_raw, "HDR")[:, :3], each_hdr)
+    times = [batched.GetPassMilliseconds(i) for i in range(4)]
+    assert all(t > 0 for t in times)
+    assert batched.GetPassMilliseconds(4) == 0 and batched.GetPassMilliseconds(-1) == 0
+    assert batched.GetLastFrameMilliseconds() == times[-1]
+    assert abs(sum(times) / 1000 - batched.GetRenderSeconds()) < 1e-6
+
+
 def test_denoise_in_every_layer(two_boxes, tmp_path):
     settings = vtkSegmentationSVDAGRenderSettings()
     assert settings.GetDenoise() is True  # the core's default

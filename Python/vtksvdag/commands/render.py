@@ -216,10 +216,10 @@ def run(args):
     try:
         check(lambda: renderer.ResetCamera(args.azimuth, args.elevation, args.zoom), "camera")
         start = time.perf_counter()
-        pass_ms = []
-        for _ in range(args.spp):
-            check(renderer.Render, "render")
-            pass_ms.append(renderer.GetLastFrameMilliseconds())
+        # All passes in one execution: the denoiser filters only the last, the one written.
+        renderer.SetPassesPerRender(args.spp)
+        check(renderer.Render, "render")
+        pass_ms = [renderer.GetPassMilliseconds(i) for i in range(args.spp)]
         wall = time.perf_counter() - start
         check(lambda: renderer.WriteImage(args.output), "write")
     except RuntimeError as error:

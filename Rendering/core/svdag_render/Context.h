@@ -23,6 +23,7 @@
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <stdexcept>
@@ -89,6 +90,7 @@ struct RayTracingLimits
 
 class Context;
 class PipelineLibrary;
+class ComputePipeline;
 struct PipelineCacheKey;
 enum class Backend : uint32_t;
 
@@ -156,6 +158,10 @@ public:
   // run). Pipeline compilations so far, over every backend and user.
   PipelineLibrary& pipelines(Backend backend);
   uint64_t pipelineCompilations() const;
+  // The compute pipeline of an embedded SPIR-V module (ComputePipeline.h: the depth pass, the
+  // denoiser), compiled the first time any user asks for it (the reference stays valid for the
+  // device's life). Throws std::runtime_error naming `what`.
+  const ComputePipeline& computePipeline(const uint32_t* code, size_t bytes, const char* what);
 
   // Submits to the queue under the device's lock.
   VkResult submit(const VkSubmitInfo& info, VkFence fence);
@@ -199,6 +205,7 @@ private:
   // The device's own allocations (shader binding tables) are counted on this context.
   std::unique_ptr<Context> Own;
   std::unique_ptr<PipelineLibrary> Libraries[3]; // indexed by Backend
+  std::map<const uint32_t*, std::unique_ptr<ComputePipeline>> ComputePipelines; // by SPIR-V
 };
 
 // One user's (one renderer's) handle on the shared Device: its own command pool and fence, and

@@ -1,7 +1,7 @@
-// The denoiser (denoise.comp; DenoiseLayout.h says what it computes): a compute pipeline of its
-// own, with no descriptor set (one push constant, the address of a dispatch's parameters), the
-// parameters' buffer and the filter's working images. One per renderer, made on first use; the
-// working images follow the image size.
+// The denoiser (denoise.comp; DenoiseLayout.h says what it computes): a compute pipeline with no
+// descriptor set (one push constant, the address of a dispatch's parameters; compiled once per
+// device, Device::computePipeline), this renderer's parameters' buffer and the filter's working
+// images. One per renderer, made on first use; the working images follow the image size.
 #pragma once
 
 #include "svdag_render/Buffer.h"
@@ -45,7 +45,7 @@ private:
   void dispatch(VkCommandBuffer cmd, uint32_t slot, const gpu::DenoiseParams& params);
 
   Context& Ctx;
-  ComputePipeline Program;
+  const ComputePipeline& Program; // the device's (shared by its users)
   Buffer Params; // one DenoiseParams per dispatch (host-visible: written in place, GPU idle)
   uint32_t Pixels = 0;
   Buffer Colors[2]; // RGBA ping-pong

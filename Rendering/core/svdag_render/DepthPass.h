@@ -1,7 +1,7 @@
-// The depth pass (depth.comp; DepthLayout.h says what it computes): a compute pipeline of its
-// own, with no descriptor set (one push constant, the address of its parameters), and the
-// parameters' buffer. One per renderer; made on first use, on a device with shaderFloat64
-// (Context::hasFloat64) only.
+// The depth pass (depth.comp; DepthLayout.h says what it computes): a compute pipeline with no
+// descriptor set (one push constant, the address of its parameters; compiled once per device,
+// Device::computePipeline) and this renderer's parameters' buffer. One per renderer; made on
+// first use, on a device with shaderFloat64 (Context::hasFloat64) only.
 #pragma once
 
 #include "svdag_render/Buffer.h"
@@ -31,7 +31,7 @@ public:
 private:
   Context& Ctx;
   Buffer Params; // one DepthParams per pass kind (host-visible: written in place, GPU idle)
-  ComputePipeline Program;
+  const ComputePipeline& Program; // the device's (shared by its users)
 };
 
 } // namespace render

@@ -305,10 +305,25 @@ public:
   uint64_t sharedColorGeneration() const;
   ExportedMemory exportColor() const;
 
+  // How the image of a pass is used. Shown: it is looked at (read, drawn, written) after the
+  // pass, so the denoiser (settings().denoise) filters it. Accumulating: another pass follows
+  // before anyone looks, so the denoiser is left out (hdr and color are the raw mean; the
+  // accumulation is the same either way) and finishImage() filters the pass if it turns out to
+  // be the last.
+  enum class PassUse
+  {
+    Shown,
+    Accumulating
+  };
   // Traces one pass (samplesPerPixel samples per pixel, added to the accumulation) and reads
   // the outputs back. Throws std::runtime_error (no volume, Vulkan failure) or
   // std::invalid_argument (degenerate camera).
-  const Image& render();
+  const Image& render(PassUse use = PassUse::Shown);
+  // After a pass traced as Accumulating with the denoiser on: filters its image and reads hdr
+  // and color into image() again, as a Shown pass would have; returns the filter's
+  // milliseconds, which lastFrameMilliseconds and renderSeconds then include. Otherwise does
+  // nothing and returns 0. Throws std::runtime_error on a Vulkan failure.
+  double finishImage();
   const Image& image() const { return this->Output; }
 
   // Upload + BVH or grid build of the last setVolume, or rebuild of the last setHiddenLabels that
@@ -324,6 +339,7 @@ public:
 
 private:
   void applyVisibility();
+  void readColor(); // hdr (unless shared) and color into Output
   void timeSetup(bool rebuilt, double seconds);
   void applyBackend();
 
