@@ -616,12 +616,14 @@ void vtkSegmentationSVDAGVolumeMapper::Render(vtkRenderer* renderer, vtkVolume* 
     const core::RenderSettings& base = in.Session.settings()->GetCoreSettings();
     const bool drawnBefore = std::any_of(
       sceneDepth, sceneDepth + viewportPixels, [](float d) { return d < 1.0f; });
-    // The settings a level traces with, the pixels it traces and the frame's identity (while it
-    // stays the same, passes accumulate).
+    // The settings a level traces with, its image (the viewport's size) and the reduction its
+    // paths are traced at (the renderer's guided upsampling shows them at the image's size), and
+    // the frame's identity (while it stays the same, passes accumulate).
     struct LevelFrame
     {
       core::RenderSettings settings;
       int width = 0, height = 0;
+      uint32_t reduction = 1;
       FrameKey key;
     };
     auto levelFrame = [&](const core::FrameLevel& level) {
@@ -635,8 +637,9 @@ void vtkSegmentationSVDAGVolumeMapper::Render(vtkRenderer* renderer, vtkVolume* 
       // The mapper's planes (VTK world) into the data's world; its cropping is there already.
       svdag::vtkglue::setClipping(f.settings, this->ClippingPlanes, modelToWorld, worldToModel,
         this->Cropping, this->CroppingRegionPlanes);
-      f.width = int((vp.width + level.reduction - 1) / level.reduction);
-      f.height = int((vp.height + level.reduction - 1) / level.reduction);
+      f.width = vp.width;
+      f.height = vp.height;
+      f.reduction = level.reduction;
       f.key.matrix = modelToClip;
       f.key.settings = f.settings;
       f.key.ids = { uint64_t(vp.width), uint64_t(vp.height), uint64_t(level.reduction),
@@ -682,6 +685,7 @@ void vtkSegmentationSVDAGVolumeMapper::Render(vtkRenderer* renderer, vtkVolume* 
         r.setSettings(frame.settings);
         r.resetAccumulation();
         r.setImageSize(uint32_t(frame.width), uint32_t(frame.height));
+        r.setTraceReduction(frame.reduction);
         r.setViewRays(rays);
         r.setRayLimits(rayLimits(sceneDepth, vp, frame.width, frame.height, clipToModel, rays));
         r.render();
@@ -741,6 +745,7 @@ void vtkSegmentationSVDAGVolumeMapper::Render(vtkRenderer* renderer, vtkVolume* 
       if (!sameFrame)
         r.resetAccumulation();
       r.setImageSize(uint32_t(width), uint32_t(height));
+      r.setTraceReduction(frame.reduction);
       r.setViewRays(rays);
       if (depthSlot < 0)
         r.setRayLimits(
@@ -832,8 +837,12 @@ void vtkSegmentationSVDAGVolumeMapper::Render(vtkRenderer* renderer, vtkVolume* 
     // A frame that built the BVH or the pipeline (uploads, shader compilation) overestimates what
     // the next one costs: provisional. A tile traced several passes: no measure at all.
     const bool warm = r.bvhBuilds() + r.pipelineBuilds() == buildsBefore;
+    // The pixels whose paths were traced (a reduced frame's guides cost a primary ray per
+    // viewport pixel besides: the budget learns them as part of each traced pixel's cost).
+    const uint64_t tracedPixels = uint64_t((width + frame.reduction - 1) / frame.reduction) *
+      uint64_t((height + frame.reduction - 1) / frame.reduction);
     if (in.TraceMilliseconds > 0 && !tiled)
-      in.Budget.record(in.Level.lod, uint64_t(width) * uint64_t(height),
+      in.Budget.record(in.Level.lod, tracedPixels,
         in.TraceMilliseconds / 1000, total - in.TraceMilliseconds / 1000, !warm);
   }
   catch (const std::exception& e)

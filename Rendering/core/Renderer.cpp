@@ -3,6 +3,7 @@
 #include "svdag_render/Buffer.h"
 #include "svdag_render/Context.h"
 #include "svdag_render/DenoisePass.h"
+#include "svdag_render/UpsamplePass.h"
 #include "svdag_render/DepthPass.h"
 #include "svdag_render/EnvironmentMap.h"
 #include "svdag_render/GpuLayout.h"
@@ -152,6 +153,51 @@ RenderSettings edited(const RenderSettings& current, Edit edit)
 }
 } // namespace
 
+namespace
+{
+// The per-pixel buffers of one traced image size: the outputs (GpuLayout.h), the accumulation's
+// sums and the ray limits.
+struct TraceImages
+{
+  Buffer label, depth, normal, hdr, color, variance, accumulation, squares, rayLimits;
+  uint32_t pixels = 0;
+  // Whether hdr is a Shared buffer (Renderer::setColorSharing), and how often it was allocated.
+  bool hdrShared = false;
+  uint64_t hdrGeneration = 0;
+
+  uint64_t bytes() const
+  {
+    return label.size() + depth.size() + normal.size() + hdr.size() + color.size() +
+      variance.size() + accumulation.size() + squares.size() + rayLimits.size();
+  }
+
+  void resize(Context& context, uint32_t count, bool shareColor)
+  {
+    if (count == pixels && shareColor == hdrShared)
+      return;
+    pixels = 0;
+    const VkBufferUsageFlags usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
+    label = Buffer(context, count * sizeof(uint32_t), usage, MemoryUse::Readback);
+    depth = Buffer(context, count * sizeof(float), usage, MemoryUse::Readback);
+    // Shading normals, then entry face normals (GpuLayout.h).
+    normal = Buffer(context, count * 6 * sizeof(float), usage, MemoryUse::Readback);
+    hdr = Buffer();
+    hdr = Buffer(context, count * 4 * sizeof(float) + (shareColor ? ImportSlack : 0), usage,
+      shareColor ? MemoryUse::Shared : MemoryUse::Readback);
+    hdrShared = shareColor;
+    ++hdrGeneration;
+    color = Buffer(context, count * sizeof(uint32_t), usage, MemoryUse::Readback);
+    variance = Buffer(context, count * sizeof(float), usage, MemoryUse::Readback);
+    accumulation = Buffer(context, count * 4 * sizeof(float), usage, MemoryUse::Device);
+    squares = Buffer(context, count * sizeof(float), usage, MemoryUse::Device);
+    rayLimits = Buffer(context, count * sizeof(float), usage, MemoryUse::Upload);
+    pixels = count;
+  }
+
+  void release() { *this = TraceImages(); }
+};
+} // namespace
+
 // Everything that lives on the device. Declaration order is destruction order in reverse:
 // the context goes last.
 struct Renderer::Gpu
@@ -166,21 +212,22 @@ struct Renderer::Gpu
   bool hasNeighbours = false;
   Buffer uniforms{ context, sizeof(gpu::FrameUniforms), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT,
     MemoryUse::Upload };
-  // Outputs, sized for the current image: label, depth, normal, hdr, color; and the per-pixel
-  // sums of the accumulation (device memory: only the shader reads it).
-  Buffer label, depth, normal, hdr, color, variance, accumulation, squares;
-  // The per-pixel ray limits (host-visible, written before each frame that has them).
-  Buffer rayLimits;
+  // The image's outputs (what image() reads back), and those of the reduced trace while
+  // RenderSettings::traceReduction is above 1 (empty otherwise).
+  TraceImages full, reduced;
   // The denoiser, made on the first frame that uses it, and what it would filter of the last
   // pass where that pass left it out (Renderer::PassUse::Accumulating; finishImage runs it).
   std::unique_ptr<DenoisePass> denoiser;
   bool denoisePending = false;
   DenoisePass::Frame pendingFrame;
   gpu::DenoiseParams pendingParams{};
-  uint32_t outputPixels = 0;
-  // Whether hdr is a Shared buffer (Renderer::setColorSharing), and how often it was allocated.
-  bool hdrShared = false;
-  uint64_t hdrGeneration = 0;
+  bool pendingUpsample = false;
+  // Guided upsampling (made on the first reduced frame), its last parameters, and what the
+  // guides were traced with (empty: not traced) and how long that took in the last frame.
+  std::unique_ptr<UpsamplePass> upsampler;
+  gpu::UpsampleParams upsampleParams{};
+  std::vector<unsigned char> guideState;
+  double guideMilliseconds = 0;
   // The scene depth slots (Renderer::sceneDepth; whoever holds their pointers shares them), the
   // composited depth (Shared: OpenGL reads it), their pixel counts and allocations (one
   // counter for all, so that no two allocations share a generation), and the depth pass (made
@@ -214,10 +261,9 @@ struct Renderer::Gpu
 
   uint64_t imageBytes() const
   {
-    return label.size() + depth.size() + normal.size() + hdr.size() + color.size() +
-      variance.size() + accumulation.size() + squares.size() + rayLimits.size() +
-      (sceneDepth[0] ? sceneDepth[0]->size() : 0) + (sceneDepth[1] ? sceneDepth[1]->size() : 0) +
-      composited.size() + (denoiser ? denoiser->bytes() : 0);
+    return full.bytes() + reduced.bytes() + (sceneDepth[0] ? sceneDepth[0]->size() : 0) +
+      (sceneDepth[1] ? sceneDepth[1]->size() : 0) + composited.size() +
+      (denoiser ? denoiser->bytes() : 0) + (upsampler ? upsampler->bytes() : 0);
   }
 
   DepthPass& depthPassOf()
@@ -225,29 +271,6 @@ struct Renderer::Gpu
     if (!depthPass)
       depthPass = std::make_unique<DepthPass>(context);
     return *depthPass;
-  }
-
-  void resizeOutputs(uint32_t pixels, bool shareColor)
-  {
-    if (pixels == outputPixels && shareColor == hdrShared)
-      return;
-    outputPixels = 0;
-    const VkBufferUsageFlags usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
-    label = Buffer(context, pixels * sizeof(uint32_t), usage, MemoryUse::Readback);
-    depth = Buffer(context, pixels * sizeof(float), usage, MemoryUse::Readback);
-    // Shading normals, then entry face normals (GpuLayout.h).
-    normal = Buffer(context, pixels * 6 * sizeof(float), usage, MemoryUse::Readback);
-    hdr = Buffer();
-    hdr = Buffer(context, pixels * 4 * sizeof(float) + (shareColor ? ImportSlack : 0), usage,
-      shareColor ? MemoryUse::Shared : MemoryUse::Readback);
-    hdrShared = shareColor;
-    ++hdrGeneration;
-    color = Buffer(context, pixels * sizeof(uint32_t), usage, MemoryUse::Readback);
-    variance = Buffer(context, pixels * sizeof(float), usage, MemoryUse::Readback);
-    accumulation = Buffer(context, pixels * 4 * sizeof(float), usage, MemoryUse::Device);
-    squares = Buffer(context, pixels * sizeof(float), usage, MemoryUse::Device);
-    rayLimits = Buffer(context, pixels * sizeof(float), usage, MemoryUse::Upload);
-    outputPixels = pixels;
   }
 };
 
@@ -290,15 +313,15 @@ const DeviceUuids& Renderer::deviceUuids() const
 uint64_t Renderer::sharedColorGeneration() const
 {
   const Gpu& g = *this->Device;
-  if (!g.hdrShared || !g.hdr)
+  if (!g.full.hdrShared || !g.full.hdr)
     throw std::logic_error("the color is not shared: setColorSharing(true), then render()");
-  return g.hdrGeneration;
+  return g.full.hdrGeneration;
 }
 
 ExportedMemory Renderer::exportColor() const
 {
   this->sharedColorGeneration(); // the same checks
-  return this->Device->hdr.exportMemory();
+  return this->Device->full.hdr.exportMemory();
 }
 
 const std::string& Renderer::deviceName() const
@@ -500,6 +523,14 @@ void Renderer::setImageSize(uint32_t width, uint32_t height)
   this->Height = height;
 }
 
+void Renderer::setTraceReduction(uint32_t reduction)
+{
+  if (reduction < 1 || reduction > MaximumTraceReduction)
+    throw std::invalid_argument("the trace reduction must be 1 .. " +
+      std::to_string(MaximumTraceReduction) + ", got " + std::to_string(reduction));
+  this->TraceReduction = reduction;
+}
+
 void Renderer::setCamera(const Camera& camera)
 {
   this->View = camera;
@@ -577,7 +608,7 @@ void Renderer::compositeDepth(uint32_t slot, uint32_t viewportWidth, uint32_t vi
 {
   Gpu& g = *this->Device;
   const uint32_t pixels = viewportWidth * viewportHeight;
-  if (this->Output.width == 0 || g.outputPixels != this->Output.width * this->Output.height)
+  if (this->Output.width == 0 || g.full.pixels != this->Output.width * this->Output.height)
     throw std::logic_error("compositeDepth needs a render() first");
   if (slot > 1 || !g.sceneDepth[slot] || pixels == 0 || g.sceneDepthPixels[slot] != pixels)
     throw std::invalid_argument("the composited viewport is not the size of its scene depth");
@@ -593,7 +624,7 @@ void Renderer::compositeDepth(uint32_t slot, uint32_t viewportWidth, uint32_t vi
     depthParams(SVDAG_DEPTH_PASS_COMPOSITE, modelToClip, rays, g.tracedRays, g.tracedAdvance);
   p.sizes = glm::uvec4(viewportWidth, viewportHeight, this->Output.width, this->Output.height);
   p.depth = addresses(g.sceneDepth[slot]->address(), g.composited.address());
-  p.traced = addresses(g.label.address(), g.depth.address());
+  p.traced = addresses(g.full.label.address(), g.full.depth.address());
   DepthPass& pass = g.depthPassOf();
   g.context.submitAndWait([&](VkCommandBuffer cmd) { pass.record(cmd, p); });
 }
@@ -852,18 +883,27 @@ const Image& Renderer::render(PassUse use)
   }
   const double advance = approachParameter(given, reference, std::sqrt(radius));
   const ViewRays rays = advance > 0 ? advanceRays(given, advance) : given;
-  // Per pixel center, how much closer the traced rays start (world units).
-  auto advanced = [&](uint32_t x, uint32_t y) {
-    return advance > 0 ? advance * spanLength(given, 2 * (x + 0.5) / this->Width - 1,
-                                      2 * (y + 0.5) / this->Height - 1)
+  // Per pixel center of a width x height image, how much closer the traced rays start (world
+  // units).
+  auto advancedIn = [&](uint32_t width, uint32_t height, uint32_t x, uint32_t y) {
+    return advance > 0 ? advance * spanLength(given, 2 * (x + 0.5) / width - 1,
+                                      2 * (y + 0.5) / height - 1)
                        : 0.0;
   };
+  auto advanced = [&](uint32_t x, uint32_t y) { return advancedIn(this->Width, this->Height, x, y); };
+  // A reduced frame (setTraceReduction) traces its paths at 1/r of the width and height and its
+  // full-resolution guides with a primary-only trace (UpsampleLayout.h).
+  const uint32_t r = this->TraceReduction;
+  const uint32_t tracedWidth = (this->Width + r - 1) / r, tracedHeight = (this->Height + r - 1) / r;
   const uint32_t pixels = this->Width * this->Height;
   const bool depthLimits = this->DepthLimitsOn;
   if (!this->RayLimits.empty() && this->RayLimits.size() != pixels)
     throw std::invalid_argument("the ray limits hold " + std::to_string(this->RayLimits.size()) +
       " values for an image of " + std::to_string(pixels) + " pixels");
-  g.resizeOutputs(pixels, this->ShareColor);
+  g.full.resize(g.context, pixels, this->ShareColor);
+  if (r > 1)
+    g.reduced.resize(g.context, tracedWidth * tracedHeight, false);
+  TraceImages& traced = r > 1 ? g.reduced : g.full;
 
   const FieldWidths& w = volume.widths;
   const auto cells = volume.geometry.cellCounts();
@@ -887,7 +927,6 @@ const Image& Renderer::render(PassUse use)
   u.display = glm::vec4(settings.exposure, 0.0f, 0.0f, 0.0f);
   u.autoLod = glm::vec4(float(std::min({ s[0], s[1], s[2] })), settings.autoLodPixels,
     float(footprint.footprint0), float(footprint.footprintSlope));
-  u.image = glm::uvec4(this->Width, this->Height, uint32_t(settings.lod), uint32_t(settings.shading));
   u.grid = glm::uvec4(uint32_t(cells[0]), uint32_t(cells[1]), g.scene->primitivesPerBlas(),
     g.scene->blockChunkShift());
   u.widths = glm::uvec4(w.cellBits, w.labelBits, w.rootRefBits, w.midRefBits);
@@ -902,12 +941,6 @@ const Image& Renderer::render(PassUse use)
     uint32_t(neighbours >> 32));
   u.volumeStreams = addresses(g.scene->blocksAddress(), g.scene->rootsAddress());
   u.volumeStreams2 = addresses(g.scene->midsAddress(), g.scene->leavesAddress());
-  u.sceneOutputs = addresses(g.scene->primitiveBlocksAddress(), g.label.address());
-  u.outputs = addresses(g.depth.address(), g.normal.address());
-  u.outputs2 = addresses(g.hdr.address(), g.color.address());
-  u.rayLimits =
-    addresses(this->RayLimits.empty() && !depthLimits ? 0 : g.rayLimits.address(), 0);
-  u.statistics = addresses(g.squares.address(), g.variance.address());
   const auto toIndex = g.scene->worldToIndex();
   u.worldToIndexX = glm::vec4(float(toIndex[0]), float(toIndex[1]), float(toIndex[2]), float(toIndex[3]));
   u.worldToIndexY = glm::vec4(float(toIndex[4]), float(toIndex[5]), float(toIndex[6]), float(toIndex[7]));
@@ -949,7 +982,6 @@ const Image& Renderer::render(PassUse use)
   u.environment = glm::vec4(env[0], env[1], env[2], float(epsilon));
   u.lighting = glm::uvec4(g.envSize.x, g.envSize.y, settings.maximumBounces,
     settings.nextEventEstimation ? 1u : 0u /* FLAG_NEE */);
-  u.materials = addresses(g.materials.address(), g.accumulation.address());
   u.environmentMap = addresses(g.envMarginal.address(), g.envConditional.address());
   u.environmentMap2 = addresses(g.envTexels.address(), 0);
   u.sampling =
@@ -962,32 +994,88 @@ const Image& Renderer::render(PassUse use)
     this->MaterialsDirty = false;
     ++this->MaterialGeneration;
   }
-  if (!this->RayLimits.empty())
-  {
-    float* limits = static_cast<float*>(g.rayLimits.mapped());
-    for (uint32_t y = 0; y < this->Height; ++y)
+  // The fields of one traced size: its outputs, sums and ray limits. The host's limits (one per
+  // image pixel) are uploaded for it; a reduced pixel takes the limit of the image pixel under
+  // its center.
+  auto sized = [&](gpu::FrameUniforms f, TraceImages& set, uint32_t width, uint32_t height) {
+    f.image = glm::uvec4(width, height, uint32_t(settings.lod), uint32_t(settings.shading));
+    f.sceneOutputs = addresses(g.scene->primitiveBlocksAddress(), set.label.address());
+    f.outputs = addresses(set.depth.address(), set.normal.address());
+    f.outputs2 = addresses(set.hdr.address(), set.color.address());
+    f.rayLimits = addresses(this->RayLimits.empty() && !depthLimits ? 0 : set.rayLimits.address(), 0);
+    f.statistics = addresses(set.squares.address(), set.variance.address());
+    f.materials = addresses(g.materials.address(), set.accumulation.address());
+    if (!this->RayLimits.empty())
     {
-      for (uint32_t x = 0; x < this->Width; ++x)
+      float* limits = static_cast<float*>(set.rayLimits.mapped());
+      const uint32_t step = width == this->Width ? 1 : r;
+      for (uint32_t y = 0; y < height; ++y)
       {
-        const size_t i = x + size_t(this->Width) * y;
-        limits[i] = float(std::max(0.0, double(this->RayLimits[i]) - advanced(x, y)));
+        for (uint32_t x = 0; x < width; ++x)
+        {
+          const uint32_t ix = std::min(this->Width - 1, x * step + step / 2);
+          const uint32_t iy = std::min(this->Height - 1, y * step + step / 2);
+          const double limit = this->RayLimits[ix + size_t(this->Width) * iy];
+          limits[x + size_t(width) * y] =
+            float(std::max(0.0, limit - advancedIn(width, height, x, y)));
+        }
       }
     }
-  }
-  // Limits from a shared scene depth: the depth pass writes them, before the trace, in the same
+    return f;
+  };
+  // Limits from a shared scene depth: the depth pass writes them, before a trace, in the same
   // submission.
   DepthPass* limitsPass = depthLimits ? &g.depthPassOf() : nullptr;
-  gpu::DepthParams limitsParams{};
-  if (depthLimits)
-  {
+  auto limitsFor = [&](TraceImages& set, uint32_t width, uint32_t height) {
+    gpu::DepthParams limitsParams{};
     const DepthRayLimits& d = this->DepthLimits;
     if (!g.sceneDepth[d.slot] || uint64_t(d.viewportWidth) * d.viewportHeight != g.sceneDepthPixels[d.slot])
       throw std::invalid_argument("the scene depth of the ray limits was reallocated");
     limitsParams = depthParams(SVDAG_DEPTH_PASS_LIMITS, d.clipToModel, given, given, advance);
-    limitsParams.sizes = glm::uvec4(d.viewportWidth, d.viewportHeight, this->Width, this->Height);
-    limitsParams.depth = addresses(g.sceneDepth[d.slot]->address(), g.rayLimits.address());
-  }
+    limitsParams.sizes = glm::uvec4(d.viewportWidth, d.viewportHeight, width, height);
+    limitsParams.depth = addresses(g.sceneDepth[d.slot]->address(), set.rayLimits.address());
+    return limitsParams;
+  };
   Pipeline& pipeline = g.pipeline(backend, features);
+
+  // A reduced frame's guides: the pixel-center hits of the full image (no bounce, no light),
+  // traced again only when they change.
+  if (r > 1)
+  {
+    gpu::FrameUniforms guide = sized(u, g.full, this->Width, this->Height);
+    guide.lighting.z = 0;
+    guide.lighting.w = 0;
+    guide.sunRadiance.w = 0.0f;
+    guide.sampling = glm::uvec4(0u, 1u, settings.seed, guide.sampling.w);
+    guide.display = glm::vec4(0.0f);
+    std::vector<unsigned char> guideState(sizeof(guide) + sizeof(this->SceneGeneration));
+    std::memcpy(guideState.data(), &guide, sizeof(guide));
+    std::memcpy(guideState.data() + sizeof(guide), &this->SceneGeneration, sizeof(this->SceneGeneration));
+    if (guideState != g.guideState)
+    {
+      g.guideState.clear();
+      std::memcpy(g.uniforms.mapped(), &guide, sizeof(guide));
+      pipeline.updateDescriptors(g.uniforms.handle(), g.scene->tlas());
+      const gpu::DepthParams guideLimits =
+        depthLimits ? limitsFor(g.full, this->Width, this->Height) : gpu::DepthParams{};
+      const auto guideStart = Clock::now();
+      g.context.submitAndWait([&](VkCommandBuffer cmd) {
+        if (limitsPass)
+          limitsPass->record(cmd, guideLimits);
+        pipeline.record(cmd, this->Width, this->Height);
+      });
+      g.guideMilliseconds =
+        std::chrono::duration<double, std::milli>(Clock::now() - guideStart).count();
+      g.guideState = std::move(guideState);
+    }
+    else
+      g.guideMilliseconds = 0;
+  }
+  else
+    g.guideState.clear();
+  u = sized(u, traced, tracedWidth, tracedHeight);
+  const gpu::DepthParams limitsParams =
+    depthLimits ? limitsFor(traced, tracedWidth, tracedHeight) : gpu::DepthParams{};
 
   // Everything that changes the image, besides the per-pass fields (samples, exposure): a
   // difference from the last pass starts a new accumulation.
@@ -1027,29 +1115,46 @@ const Image& Renderer::render(PassUse use)
     // Luminance against 4 standard deviations (SVGF's), a tangent plane distance of one voxel
     // side (a voxel staircase's step is one).
     denoise.weights = glm::vec4(4.0f, 0.0f, u.autoLod.x, settings.exposure);
-    denoised.width = this->Width;
-    denoised.height = this->Height;
+    denoised.width = tracedWidth;
+    denoised.height = tracedHeight;
     denoised.samples = this->Accumulated + settings.samplesPerPixel;
-    denoised.label = g.label.address();
-    denoised.depth = g.depth.address();
-    denoised.normal = g.normal.address();
-    denoised.variance = g.variance.address();
-    denoised.hdr = g.hdr.address();
-    denoised.color = g.color.address();
+    denoised.label = traced.label.address();
+    denoised.depth = traced.depth.address();
+    denoised.normal = traced.normal.address();
+    denoised.variance = traced.variance.address();
+    denoised.hdr = traced.hdr.address();
+    denoised.color = traced.color.address();
+  }
+  if (r > 1 && !g.upsampler)
+    g.upsampler = std::make_unique<UpsamplePass>(g.context);
+  gpu::UpsampleParams upsample{};
+  if (r > 1)
+  {
+    upsample.sizes = glm::uvec4(this->Width, this->Height, tracedWidth, tracedHeight);
+    upsample.background = u.background;
+    upsample.weights =
+      glm::vec4(float(r), float(r) * u.autoLod.x, settings.exposure, 0.0f);
+    upsample.guides = addresses(g.full.label.address(), g.full.depth.address());
+    upsample.reducedGuides = addresses(g.reduced.label.address(), g.reduced.depth.address());
+    upsample.reducedColors = addresses(g.reduced.hdr.address(), g.reduced.variance.address());
+    upsample.hdr = addresses(g.full.hdr.address(), g.full.color.address());
+    upsample.variance = addresses(g.full.variance.address(), 0);
   }
 
   const auto start = Clock::now();
   g.context.submitAndWait([&](VkCommandBuffer cmd) {
     if (limitsPass)
       limitsPass->record(cmd, limitsParams);
-    pipeline.record(cmd, this->Width, this->Height);
+    pipeline.record(cmd, tracedWidth, tracedHeight);
     if (denoiseNow)
       g.denoiser->record(cmd, denoised, denoise);
+    if (r > 1)
+      g.upsampler->record(cmd, upsample);
   });
   g.tracedRays = given;
   g.tracedAdvance = advance;
   this->FrameMilliseconds =
-    std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+    std::chrono::duration<double, std::milli>(Clock::now() - start).count() + g.guideMilliseconds;
   this->RenderSeconds += this->FrameMilliseconds / 1000;
   this->Accumulated += settings.samplesPerPixel;
   this->AccumulationValid = true;
@@ -1058,6 +1163,8 @@ const Image& Renderer::render(PassUse use)
     g.denoisePending = true;
     g.pendingFrame = denoised;
     g.pendingParams = denoise;
+    g.pendingUpsample = r > 1;
+    g.upsampleParams = upsample;
   }
 
   const auto readStart = Clock::now();
@@ -1068,8 +1175,8 @@ const Image& Renderer::render(PassUse use)
     vector.resize(count);
     std::memcpy(vector.data(), buffer.mapped(), count * sizeof(vector[0]));
   };
-  read(out.label, g.label, pixels);
-  read(out.depth, g.depth, pixels);
+  read(out.label, g.full.label, pixels);
+  read(out.depth, g.full.depth, pixels);
   if (advance > 0)
   {
     for (uint32_t y = 0; y < this->Height; ++y)
@@ -1082,12 +1189,12 @@ const Image& Renderer::render(PassUse use)
       }
     }
   }
-  read(out.normal, g.normal, size_t(pixels) * 3);
+  read(out.normal, g.full.normal, size_t(pixels) * 3);
   out.faceNormal.resize(size_t(pixels) * 3);
-  std::memcpy(out.faceNormal.data(), static_cast<const float*>(g.normal.mapped()) + size_t(pixels) * 3,
+  std::memcpy(out.faceNormal.data(), static_cast<const float*>(g.full.normal.mapped()) + size_t(pixels) * 3,
     size_t(pixels) * 3 * sizeof(float));
   this->readColor();
-  read(out.variance, g.variance, pixels);
+  read(out.variance, g.full.variance, pixels);
   double sum = 0;
   for (float v : out.variance)
     sum += v;
@@ -1102,15 +1209,15 @@ void Renderer::readColor()
   const Gpu& g = *this->Device;
   Image& out = this->Output;
   const size_t pixels = size_t(out.width) * out.height;
-  if (g.hdrShared)
+  if (g.full.hdrShared)
     out.hdr.clear();
   else
   {
     out.hdr.resize(pixels * 4);
-    std::memcpy(out.hdr.data(), g.hdr.mapped(), pixels * 4 * sizeof(float));
+    std::memcpy(out.hdr.data(), g.full.hdr.mapped(), pixels * 4 * sizeof(float));
   }
   out.color.resize(pixels);
-  std::memcpy(out.color.data(), g.color.mapped(), pixels * sizeof(uint32_t));
+  std::memcpy(out.color.data(), g.full.color.mapped(), pixels * sizeof(uint32_t));
 }
 
 double Renderer::finishImage()
@@ -1120,8 +1227,11 @@ double Renderer::finishImage()
     return 0;
   g.denoisePending = false;
   const auto start = Clock::now();
-  g.context.submitAndWait(
-    [&](VkCommandBuffer cmd) { g.denoiser->record(cmd, g.pendingFrame, g.pendingParams); });
+  g.context.submitAndWait([&](VkCommandBuffer cmd) {
+    g.denoiser->record(cmd, g.pendingFrame, g.pendingParams);
+    if (g.pendingUpsample)
+      g.upsampler->record(cmd, g.upsampleParams);
+  });
   const double filtered = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
   this->FrameMilliseconds += filtered;
   this->RenderSeconds += filtered / 1000;

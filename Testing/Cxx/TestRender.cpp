@@ -11,7 +11,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <iostream>
 #include <cstdlib>
 #include <random>
 #include <stdexcept>
@@ -784,4 +786,85 @@ TEST(RenderDenoiser, OnlyShownPassesAreFiltered)
     EXPECT_EQ(raw->finishImage(), 0.0);
   }
   EXPECT_EQ(deferred->accumulatedSamples(), 3u);
+}
+
+// Guided upsampling: a frame traced at 1/r of the image's size shows every pixel's own label,
+// depth and normal (those of the full-resolution frame, exactly), never carries one label's
+// color into a pixel of another where a same-label sample is near, and is closer to the
+// full-resolution image than the reduced one scaled up by pixel replication.
+TEST(RenderUpsampling, GuidesAreExactAndColorsStayWithinTheirLabel)
+{
+  svdag::Geometry g;
+  g.dims = { { 40, 36, 30 } };
+  std::vector<uint8_t> labels(g.voxelCount(), 0);
+  for (int z = 3; z < 27; ++z)
+    for (int y = 3; y < 33; ++y)
+      for (int x = 3; x < 37; ++x)
+        labels[x + 40 * (y + 36 * size_t(z))] = (x + y / 2) < 24 ? 1 : 2;
+  const auto volume = std::make_shared<const svdag::Volume>(
+    svdag::Builder::build(g, svdag::ScalarType::UInt8, labels.data()));
+  for (const auto backend : { svdag::render::Backend::Compute, svdag::render::Backend::RayTracing })
+  {
+    auto make = [&](uint32_t reduction) {
+      auto r = std::make_unique<svdag::render::Renderer>();
+      r->setBackend(backend);
+      r->setVolume(volume);
+      r->setImageSize(67, 50); // not a multiple of the reduction
+      r->setCamera(svdag::render::frameVolume(g, 30, 25, 1.3));
+      r->setDenoise(false);
+      r->setSeed(3);
+      svdag::render::Material red = svdag::render::Renderer::defaultMaterial(0);
+      red.baseColorVisibility = { 1, 0, 0, 1 };
+      svdag::render::Material blue = red;
+      blue.baseColorVisibility = { 0, 0, 1, 1 };
+      r->setMaterials({ red, blue });
+      r->setTraceReduction(reduction);
+      return r;
+    };
+    auto full = make(1), reduced = make(3), coarse = make(1);
+    coarse->setImageSize(23, 17); // the reduced trace's own size
+    svdag::render::Image reference;
+    for (int pass = 0; pass < 16; ++pass)
+      reference = full->render();
+    svdag::render::Image up;
+    for (int pass = 0; pass < 16; ++pass)
+      up = reduced->render();
+    EXPECT_EQ(reduced->accumulatedSamples(), 16u);
+    ASSERT_EQ(up.width, 67u);
+    ASSERT_EQ(up.height, 50u);
+    EXPECT_EQ(up.label, reference.label);
+    EXPECT_EQ(up.depth, reference.depth);
+    EXPECT_EQ(up.normal, reference.normal);
+    svdag::render::Image small;
+    for (int pass = 0; pass < 16; ++pass)
+      small = coarse->render();
+    double guided = 0, replicated = 0;
+    size_t crossed = 0, foreground = 0;
+    for (uint32_t y = 0; y < up.height; ++y)
+    {
+      for (uint32_t x = 0; x < up.width; ++x)
+      {
+        const size_t i = x + size_t(up.width) * y;
+        const size_t j = std::min(x / 3, small.width - 1) + size_t(small.width) * std::min(y / 3, small.height - 1);
+        for (int c = 0; c < 3; ++c)
+        {
+          guided += std::pow(up.hdr[4 * i + c] - reference.hdr[4 * i + c], 2);
+          replicated += std::pow(small.hdr[4 * j + c] - reference.hdr[4 * i + c], 2);
+        }
+        if (up.label[i] == 0)
+          continue;
+        ++foreground;
+        // Red label 1 shows no blue, blue label 2 no red (direct light of its own color; the
+        // other label's color would come only from a bounce, which is dimmer).
+        const float own = up.hdr[4 * i + (up.label[i] == 1 ? 0 : 2)];
+        const float other = up.hdr[4 * i + (up.label[i] == 1 ? 2 : 0)];
+        crossed += other > own;
+      }
+    }
+    EXPECT_GT(foreground, size_t(up.width) * up.height / 4);
+    EXPECT_LE(crossed, foreground / 200) << int(backend);
+    EXPECT_LT(guided, 0.7 * replicated) << int(backend) << " " << guided << " " << replicated;
+    std::cout << "backend " << int(backend) << ": guided SSE " << guided << ", replicated " << replicated
+              << ", crossed " << crossed << " of " << foreground << "\n";
+  }
 }

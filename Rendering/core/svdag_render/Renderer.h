@@ -205,6 +205,16 @@ public:
   ExportedMemory exportCompositedDepth() const;
   // Throws std::invalid_argument for 0 or more pixels than the device dispatches (or 2^28).
   void setImageSize(uint32_t width, uint32_t height);
+  // Guided upsampling: above 1, render() traces its paths on ceil(width / r) x ceil(height / r)
+  // pixels and shows them at the image's size, guided by the label and depth of every image
+  // pixel's own pixel-center ray (a primary-only trace, repeated only when what it sees changes;
+  // UpsampleLayout.h). image() keeps the image's size: label, depth and normals are exact per
+  // pixel, the color and variance are upsampled. lastFrameMilliseconds includes the guides'
+  // trace. The reduced image accumulates like a full one. Default 1; std::invalid_argument
+  // outside 1 .. MaximumTraceReduction.
+  static constexpr uint32_t MaximumTraceReduction = 8;
+  void setTraceReduction(uint32_t reduction);
+  uint32_t traceReduction() const { return this->TraceReduction; }
   // Every setting at once (validate() first: std::invalid_argument, the previous ones stay).
   // The setters below change one setting each, with the same checks.
   void setSettings(const RenderSettings& settings);
@@ -354,6 +364,7 @@ private:
   DepthRayLimits DepthLimits;
   uint32_t Width = 256;
   uint32_t Height = 256;
+  uint32_t TraceReduction = 1;
   Image Output;
   double SetupSeconds = 0;
   double FrameMilliseconds = 0;
