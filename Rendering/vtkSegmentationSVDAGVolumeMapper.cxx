@@ -424,6 +424,15 @@ struct vtkSegmentationSVDAGVolumeMapper::Internals
   Vec3 PickedNormal{ { 0, 0, 0 } };
   Vec3 PickedShadingNormal{ { 0, 0, 0 } };
 
+  // Whether the last frame was a preview, and the interactor timer that renders again while the
+  // full pipeline compiles.
+  bool Previewed = false;
+  vtkWeakPointer<vtkRenderWindowInteractor> PreviewInteractor;
+  vtkWeakPointer<vtkRenderWindow> PreviewWindow;
+  unsigned long PreviewObserver = 0;
+  int PreviewTimer = -1;
+  vtkNew<vtkCallbackCommand> PreviewTimerFired;
+
   // The selection capture (vtkHardwareSelector::CaptureBuffers) being drawn, until its EndEvent.
   vtkWeakPointer<vtkHardwareSelector> CaptureSelector;
   unsigned long CaptureObserver = 0;
@@ -435,8 +444,40 @@ struct vtkSegmentationSVDAGVolumeMapper::Internals
     this->CaptureEnded->SetCallback([](vtkObject*, unsigned long, void* self, void*) {
       static_cast<Internals*>(self)->CaptureSelector = nullptr;
     });
+    this->PreviewTimerFired->SetClientData(this);
+    this->PreviewTimerFired->SetCallback([](vtkObject*, unsigned long, void* self, void* data) {
+      Internals& in = *static_cast<Internals*>(self);
+      if (!data || *static_cast<int*>(data) != in.PreviewTimer)
+        return;
+      in.PreviewTimer = -1;
+      if (in.PreviewWindow)
+        in.PreviewWindow->Render();
+    });
   }
-  ~Internals() { this->watchCapture(nullptr); }
+  ~Internals()
+  {
+    this->watchCapture(nullptr);
+    this->watchPreview(nullptr, nullptr);
+  }
+  // Renders `window` again soon (a one-shot timer of `interactor`); null: no more.
+  void watchPreview(vtkRenderWindowInteractor* interactor, vtkRenderWindow* window)
+  {
+    if (this->PreviewInteractor && this->PreviewInteractor != interactor)
+    {
+      this->PreviewInteractor->RemoveObserver(this->PreviewObserver);
+      this->PreviewInteractor = nullptr;
+    }
+    this->PreviewWindow = window;
+    if (!interactor)
+      return;
+    if (!this->PreviewInteractor)
+    {
+      this->PreviewInteractor = interactor;
+      this->PreviewObserver = interactor->AddObserver(vtkCommand::TimerEvent, this->PreviewTimerFired);
+    }
+    if (this->PreviewTimer < 0)
+      this->PreviewTimer = interactor->CreateOneShotTimer(50);
+  }
   void watchCapture(vtkHardwareSelector* selector)
   {
     if (this->CaptureSelector)
@@ -656,8 +697,9 @@ void vtkSegmentationSVDAGVolumeMapper::Render(vtkRenderer* renderer, vtkVolume* 
     };
     const core::FrameLevel fullLevel{ base.lod, 1 };
     LevelFrame frame = levelFrame(fullLevel);
+    // (A preview is replaced as soon as the path tracer's pipeline is ready.)
     auto accumulating = [&](const LevelFrame& f) {
-      return f.key.matches(in.Frame) && r.accumulatedSamples() > 0 &&
+      return f.key.matches(in.Frame) && r.accumulatedSamples() > 0 && !r.previewed() &&
         r.image().width == uint32_t(f.width) && r.image().height == uint32_t(f.height);
     };
     auto refined = [&]() {
@@ -677,7 +719,9 @@ void vtkSegmentationSVDAGVolumeMapper::Render(vtkRenderer* renderer, vtkVolume* 
       const bool sameCapture = in.CaptureSelector == selector;
       if (!sameCapture)
         in.watchCapture(selector);
-      const bool reuse = r.accumulatedSamples() > 0 && r.image().width == uint32_t(frame.width) &&
+      // A preview's hits are the block boxes': never picked from.
+      const bool reuse = r.accumulatedSamples() > 0 && !r.previewed() &&
+        r.image().width == uint32_t(frame.width) &&
         r.image().height == uint32_t(frame.height) &&
         (sameCapture ? frame.key.sameView(in.Frame) : frame.key.coveredBy(in.Frame));
       if (!reuse)
@@ -688,6 +732,7 @@ void vtkSegmentationSVDAGVolumeMapper::Render(vtkRenderer* renderer, vtkVolume* 
         r.setTraceReduction(frame.reduction);
         r.setViewRays(rays);
         r.setRayLimits(rayLimits(sceneDepth, vp, frame.width, frame.height, clipToModel, rays));
+        r.setPreviewWhileCompiling(false);
         r.render();
         in.TraceMilliseconds = r.lastFrameMilliseconds();
         in.Frame = std::move(frame.key);
@@ -736,6 +781,8 @@ void vtkSegmentationSVDAGVolumeMapper::Render(vtkRenderer* renderer, vtkVolume* 
     const bool still = window->GetDesiredUpdateRate() <= stillRate;
     const bool finishNow = tiled || (this->RefineStillRenders && still);
     in.TraceMilliseconds = 0;
+    const bool watched = interactor && interactor->GetInitialized();
+    r.setPreviewWhileCompiling(this->PreviewWhileCompiling && watched && !finishNow);
     // A kept still view adds a pass when its time allows one (or it must be finished now), else
     // shows what it has; any other frame traces unless it is refined at full quality.
     const bool trace = keepAccumulated ? !refined() && (chosenFull || finishNow)
@@ -767,7 +814,10 @@ void vtkSegmentationSVDAGVolumeMapper::Render(vtkRenderer* renderer, vtkVolume* 
       in.Frame = std::move(frame.key);
     }
     const core::Image& image = r.image();
-    in.Converged = in.FullQuality && refined();
+    in.Previewed = r.previewed();
+    in.Converged = in.FullQuality && refined() && !in.Previewed;
+    if (in.Previewed)
+      in.watchPreview(interactor, window);
 
     // Depth out: on the shared depth path the device composites it into memory OpenGL reads.
     std::vector<float> depth;
@@ -925,6 +975,11 @@ int vtkSegmentationSVDAGVolumeMapper::GetLastLOD()
 int vtkSegmentationSVDAGVolumeMapper::GetLastReductionFactor()
 {
   return int(this->Internal->Level.reduction);
+}
+
+bool vtkSegmentationSVDAGVolumeMapper::GetLastFramePreviewed()
+{
+  return this->Internal->Previewed;
 }
 
 double vtkSegmentationSVDAGVolumeMapper::GetLastTraceMilliseconds()
@@ -1114,6 +1169,7 @@ void vtkSegmentationSVDAGVolumeMapper::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "TargetSamplesPerPixel: " << this->TargetSamplesPerPixel << "\n";
   os << indent << "RefineStillRenders: " << this->RefineStillRenders << "\n";
   os << indent << "RefineTimeLimit: " << this->RefineTimeLimit << "\n";
+  os << indent << "PreviewWhileCompiling: " << this->PreviewWhileCompiling << "\n";
   os << indent << "ErrorTarget: " << this->ErrorTarget << "\n";
   os << indent << "Cropping: " << this->Cropping << "\n";
   os << indent << "CroppingRegionPlanes: " << this->CroppingRegionPlanes[0] << " "

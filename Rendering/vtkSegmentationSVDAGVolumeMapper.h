@@ -125,6 +125,18 @@ public:
   /** Seconds a still render refines at most with RefineStillRenders (default 60). */
   vtkSetClampMacro(RefineTimeLimit, double, 0.0, VTK_DOUBLE_MAX);
   vtkGetMacro(RefineTimeLimit, double);
+  /** While the path tracer's pipeline compiles (the first frames of a process with empty shader
+   * caches, or a feature switched on), draw the block boxes' first hits under a headlight from
+   * a small pipeline and compile the full one in the background (default on), so that the
+   * window never waits; a one-shot timer of the window's interactor renders again until the
+   * full pipeline is ready. Only in a window whose interactor is initialized (someone looks at
+   * it) and never for a render that must be final (RefineStillRenders' still renders, tiles,
+   * selections): those wait for the full pipeline. GetLastFramePreviewed(): whether the last
+   * frame was such a preview. */
+  vtkSetMacro(PreviewWhileCompiling, bool);
+  vtkGetMacro(PreviewWhileCompiling, bool);
+  vtkBooleanMacro(PreviewWhileCompiling, bool);
+  bool GetLastFramePreviewed();
   ///@}
 
   ///@{
@@ -289,6 +301,7 @@ protected:
   double ErrorTarget = 0.0;
   bool RefineStillRenders = false;
   double RefineTimeLimit = 60.0;
+  bool PreviewWhileCompiling = true;
   vtkTypeBool Cropping = 0;
   double CroppingRegionPlanes[6] = { 0.0, 1.0, 0.0, 1.0, 0.0, 1.0 };
 

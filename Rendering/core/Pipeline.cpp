@@ -104,11 +104,14 @@ PipelineLibrary::~PipelineLibrary()
 
 void PipelineLibrary::destroy()
 {
+  for (auto& compilation : this->Background)
+    compilation.wait();
+  this->Background.clear();
   VkDevice device = this->Ctx.device();
-  for (auto& program : this->Programs)
+  for (auto& entry : this->Programs)
   {
-    program->table.reset();
-    vkDestroyPipeline(device, program->handle, nullptr);
+    entry->program.table.reset();
+    vkDestroyPipeline(device, entry->program.handle, nullptr);
   }
   this->Programs.clear();
   if (this->Layout)
@@ -122,24 +125,114 @@ void PipelineLibrary::destroy()
 uint64_t PipelineLibrary::compilations() const
 {
   std::lock_guard<std::mutex> lock(this->Lock);
-  return this->Programs.size();
+  uint64_t ready = 0;
+  for (const auto& entry : this->Programs)
+    ready += entry->ready;
+  return ready;
+}
+
+PipelineLibrary::Entry* PipelineLibrary::find(const ShaderFeatures& features)
+{
+  for (const auto& entry : this->Programs)
+  {
+    if (entry->program.features == features)
+      return entry.get();
+  }
+  return nullptr;
+}
+
+std::shared_ptr<std::promise<void>> PipelineLibrary::begin(const ShaderFeatures& features)
+{
+  auto promise = std::make_shared<std::promise<void>>();
+  auto entry = std::make_unique<Entry>();
+  entry->program.features = features;
+  entry->compiled = promise->get_future().share();
+  this->Programs.push_back(std::move(entry));
+  return promise;
+}
+
+void PipelineLibrary::complete(
+  const ShaderFeatures& features, std::promise<void>& promise, bool background)
+{
+  Program program;
+  program.features = features;
+  try
+  {
+    this->compile(program);
+  }
+  catch (...)
+  {
+    {
+      // Forgotten, so that a later request compiles again.
+      std::lock_guard<std::mutex> lock(this->Lock);
+      for (auto it = this->Programs.begin(); it != this->Programs.end(); ++it)
+      {
+        if ((*it)->program.features == features)
+        {
+          this->Programs.erase(it);
+          if (background)
+            this->Failed.emplace_back(features, std::current_exception());
+          break;
+        }
+      }
+    }
+    promise.set_exception(std::current_exception());
+    return;
+  }
+  {
+    std::lock_guard<std::mutex> lock(this->Lock);
+    Entry* entry = this->find(features);
+    entry->program = std::move(program);
+    entry->ready = true;
+  }
+  promise.set_value();
+  // Kept on disk at once: a later process starts from it even if this one never exits cleanly.
+  this->Ctx.shared().savePipelineCache();
 }
 
 const PipelineLibrary::Program& PipelineLibrary::program(const ShaderFeatures& features)
 {
-  std::lock_guard<std::mutex> lock(this->Lock);
-  for (const auto& program : this->Programs)
+  std::shared_ptr<std::promise<void>> mine;
+  std::shared_future<void> compiled;
+  Entry* entry = nullptr;
   {
-    if (program->features == features)
-      return *program;
+    std::lock_guard<std::mutex> lock(this->Lock);
+    // A background compilation of these features that failed: its error, once.
+    for (auto it = this->Failed.begin(); it != this->Failed.end(); ++it)
+    {
+      if (it->first == features)
+      {
+        const std::exception_ptr failure = it->second;
+        this->Failed.erase(it);
+        std::rethrow_exception(failure);
+      }
+    }
+    entry = this->find(features);
+    if (entry && entry->ready)
+      return entry->program;
+    if (!entry)
+    {
+      mine = this->begin(features);
+      entry = this->find(features);
+    }
+    compiled = entry->compiled;
   }
-  auto program = std::make_unique<Program>();
-  program->features = features;
-  this->compile(*program);
-  this->Programs.push_back(std::move(program));
-  // Kept on disk at once: a later process starts from it even if this one never exits cleanly.
-  this->Ctx.shared().savePipelineCache();
-  return *this->Programs.back();
+  if (mine)
+    this->complete(features, *mine, false);
+  compiled.get(); // waits for the compiling thread; rethrows its failure
+  std::lock_guard<std::mutex> lock(this->Lock);
+  return this->find(features)->program;
+}
+
+const PipelineLibrary::Program* PipelineLibrary::compiledProgram(const ShaderFeatures& features)
+{
+  std::lock_guard<std::mutex> lock(this->Lock);
+  if (Entry* entry = this->find(features))
+    return entry->ready ? &entry->program : nullptr;
+  std::shared_ptr<std::promise<void>> promise = this->begin(features);
+  this->Background.push_back(std::async(std::launch::async,
+    [this, features, promise] { this->complete(features, *promise, true); }));
+  return nullptr;
 }
 
 void PipelineLibrary::createLayouts()
@@ -181,6 +274,7 @@ void PipelineLibrary::compile(Program& program)
   constants[SVDAG_CONSTANT_SUN] = f.sun;
   constants[SVDAG_CONSTANT_EMISSION] = f.emission;
   constants[SVDAG_CONSTANT_TRANSMISSION] = f.transmission;
+  constants[SVDAG_CONSTANT_PREVIEW] = f.preview;
   VkSpecializationMapEntry entries[SVDAG_CONSTANT_COUNT];
   for (uint32_t i = 0; i < SVDAG_CONSTANT_COUNT; ++i)
     entries[i] = { i, uint32_t(i * sizeof(VkBool32)), sizeof(VkBool32) };

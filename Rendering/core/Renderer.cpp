@@ -956,6 +956,16 @@ const Image& Renderer::render(PassUse use)
   if (this->EnvironmentDirty)
     this->setEnvironmentMap(settings.environmentMap);
   const ShaderFeatures features = this->shaderFeatures();
+  // The preview while the path tracer's pipeline compiles in the background.
+  ShaderFeatures traceFeatures = features;
+  const bool preview = this->PreviewWhileCompiling &&
+    !g.context.shared().pipelines(backend).compiledProgram(features);
+  if (preview)
+  {
+    traceFeatures = ShaderFeatures();
+    traceFeatures.nextEventEstimation = false;
+    traceFeatures.preview = true;
+  }
   const SunLight& sun = settings.sun;
   const auto& sd = sun.direction;
   const double sunLength = std::sqrt(sd[0] * sd[0] + sd[1] * sd[1] + sd[2] * sd[2]);
@@ -998,7 +1008,9 @@ const Image& Renderer::render(PassUse use)
   // image pixel) are uploaded for it; a reduced pixel takes the limit of the image pixel under
   // its center.
   auto sized = [&](gpu::FrameUniforms f, TraceImages& set, uint32_t width, uint32_t height) {
-    f.image = glm::uvec4(width, height, uint32_t(settings.lod), uint32_t(settings.shading));
+    // A preview walks block boxes (on the compute backend its pipeline knows no other LOD).
+    const Lod lod = preview ? Lod::Block : settings.lod;
+    f.image = glm::uvec4(width, height, uint32_t(lod), uint32_t(settings.shading));
     f.sceneOutputs = addresses(g.scene->primitiveBlocksAddress(), set.label.address());
     f.outputs = addresses(set.depth.address(), set.normal.address());
     f.outputs2 = addresses(set.hdr.address(), set.color.address());
@@ -1036,7 +1048,8 @@ const Image& Renderer::render(PassUse use)
     limitsParams.depth = addresses(g.sceneDepth[d.slot]->address(), set.rayLimits.address());
     return limitsParams;
   };
-  Pipeline& pipeline = g.pipeline(backend, features);
+  Pipeline& pipeline = g.pipeline(backend, traceFeatures);
+  this->Previewed = false;
 
   // A reduced frame's guides: the pixel-center hits of the full image (no bounce, no light),
   // traced again only when they change.
@@ -1048,9 +1061,11 @@ const Image& Renderer::render(PassUse use)
     guide.sunRadiance.w = 0.0f;
     guide.sampling = glm::uvec4(0u, 1u, settings.seed, guide.sampling.w);
     guide.display = glm::vec4(0.0f);
-    std::vector<unsigned char> guideState(sizeof(guide) + sizeof(this->SceneGeneration));
+    // The preview's guides (block boxes) are not the path tracer's.
+    const uint64_t guideGenerations[2] = { this->SceneGeneration, preview ? 1u : 0u };
+    std::vector<unsigned char> guideState(sizeof(guide) + sizeof(guideGenerations));
     std::memcpy(guideState.data(), &guide, sizeof(guide));
-    std::memcpy(guideState.data() + sizeof(guide), &this->SceneGeneration, sizeof(this->SceneGeneration));
+    std::memcpy(guideState.data() + sizeof(guide), guideGenerations, sizeof(guideGenerations));
     if (guideState != g.guideState)
     {
       g.guideState.clear();
@@ -1082,8 +1097,9 @@ const Image& Renderer::render(PassUse use)
   gpu::FrameUniforms key = u;
   key.sampling.y = 0;
   key.display = glm::vec4(0.0f);
-  const uint64_t generations[3] = { this->SceneGeneration, this->MaterialGeneration,
-    this->EnvironmentGeneration };
+  // A preview pass (which differs in its pipeline only) never accumulates with another pass.
+  const uint64_t generations[4] = { this->SceneGeneration, this->MaterialGeneration,
+    this->EnvironmentGeneration, preview ? ++this->PreviewGeneration : 0 };
   std::vector<unsigned char> state(sizeof(key) + sizeof(generations));
   std::memcpy(state.data(), &key, sizeof(key));
   std::memcpy(state.data() + sizeof(key), generations, sizeof(generations));
@@ -1158,6 +1174,7 @@ const Image& Renderer::render(PassUse use)
   this->RenderSeconds += this->FrameMilliseconds / 1000;
   this->Accumulated += settings.samplesPerPixel;
   this->AccumulationValid = true;
+  this->Previewed = preview;
   if (settings.denoise && !denoiseNow)
   {
     g.denoisePending = true;

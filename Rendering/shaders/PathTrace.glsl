@@ -16,18 +16,7 @@
 #ifndef SVDAG_RENDER_PATH_TRACE_GLSL
 #define SVDAG_RENDER_PATH_TRACE_GLSL
 
-// Feature switches: a scene that does not use a feature does not pay for it (the host computes
-// them from the scene and rebuilds the pipeline when they change).
-layout(constant_id = SVDAG_CONSTANT_NEE) const bool featureNee = true;
-layout(constant_id = SVDAG_CONSTANT_ENV_MAP) const bool featureEnvMap = false;
-layout(constant_id = SVDAG_CONSTANT_SUN) const bool featureSun = false;
-layout(constant_id = SVDAG_CONSTANT_EMISSION) const bool featureEmission = false;
-layout(constant_id = SVDAG_CONSTANT_TRANSMISSION) const bool featureTransmission = false;
-#define SVDAG_FEATURE_NEE featureNee
-#define SVDAG_FEATURE_ENV_MAP featureEnvMap
-#define SVDAG_FEATURE_SUN featureSun
-#define SVDAG_FEATURE_EMISSION featureEmission
-#define SVDAG_FEATURE_TRANSMISSION featureTransmission
+#include "Features.glsl"
 
 // Far end of every ray: beyond any scene, finite so that no inf enters the traversal.
 const float RAY_TMAX = 1.0e30;

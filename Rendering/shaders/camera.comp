@@ -5,6 +5,7 @@
 // table of each cell's first block (blocks are sorted by cell), and hidden labels are bits.
 #extension GL_GOOGLE_include_directive : require
 #include "Common.glsl"
+#include "Features.glsl"
 
 // One workgroup: an SVDAG_COMPUTE_GROUP_SIZE^2 pixel tile, its invocations in 4 x 2 pixel
 // quads (invocation i: quad i / 8, pixel i % 8 in it), so that the 8 lanes a CPU implementation
@@ -45,8 +46,9 @@ bool gAnyHidden;
     label = record_.label;                                                                         \
   }
 #define SVDAG_GRID_SKIP(label) (gAnyHidden && ((gHidden.w[(label) >> 5u] >> ((label) & 31u)) & 1u) != 0u)
+// The preview walks block boxes only: the DAG's descent is compiled out with it.
 #define SVDAG_GRID_LOD(lod, lo, hi, rootRef, origin, dir, tmin, tmax, s)                           \
-  svdagChooseLod(lo, hi, rootRef, origin, dir, tmin, tmax, s)
+  (SVDAG_FEATURE_PREVIEW ? SVDAG_LOD_BLOCK : svdagChooseLod(lo, hi, rootRef, origin, dir, tmin, tmax, s))
 #include "svdag/GridTraversal.h"
 
 // World (relative to the scene's reference point) -> volume index space (GpuLayout.h).
@@ -68,7 +70,7 @@ SvdagGridHit castGrid(vec3 origin, vec3 direction, float tmin, float tmax, bool 
 {
   return svdagCastGrid(indexPoint(origin), indexVector(direction), tmin, tmax,
     ivec3(frame.volumeDims.xyz), ivec3(frame.grid.xy, frame.volumeDims.w), frame.widths.w,
-    frame.widths2.x, frame.image.z, entryOnly, anyHit);
+    frame.widths2.x, SVDAG_FEATURE_PREVIEW ? SVDAG_LOD_BLOCK : frame.image.z, entryOnly, anyHit);
 }
 
 // The world direction has unit length and the index-space one is not renormalised, so the walk

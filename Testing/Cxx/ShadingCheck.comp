@@ -28,6 +28,7 @@ PathHit traceStandIn(vec3 o, vec3 d)
 #define SVDAG_FEATURE_SUN true
 #define SVDAG_FEATURE_EMISSION true
 #define SVDAG_FEATURE_TRANSMISSION true
+#define SVDAG_FEATURE_PREVIEW false
 #define SVDAG_TRACE(hit, origin, direction, tmax, skipStart, anyHit) hit = traceStandIn(origin, direction)
 #define SVDAG_MATERIAL(label) materials[(label)]
 #include "svdag_render/PathTracer.h"

@@ -9,12 +9,15 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <memory>
 #include <random>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <unistd.h>
@@ -268,4 +271,84 @@ TEST(DeviceSharing, PipelineCacheFileIsReusedAndABadOneIgnored)
   unsetenv("VTKSVDAG_PIPELINE_CACHE");
   unsetenv("XDG_CACHE_HOME");
   fs::remove_all(home);
+}
+
+// Previews while compiling: on a new device (nothing compiled) the first pass is the preview,
+// whose hits are exactly the block LOD's and whose color is the hit label's base color under a
+// headlight; it does not accumulate, and once the background compilation is done the path
+// tracer's passes start a new accumulation that equals a renderer's without the preview.
+TEST(DeviceSharing, PreviewWhileThePipelineCompiles)
+{
+  for (const auto backend : { svdag::render::Backend::Compute, svdag::render::Backend::RayTracing })
+  {
+  ASSERT_EQ(svdag::render::Renderer::deviceUsers(), 0u); // a new device: nothing compiled
+  svdag::Geometry g;
+  g.dims = { { 40, 30, 24 } };
+  std::vector<uint16_t> labels(g.voxelCount(), 0);
+  for (int z = 2; z < 22; ++z)
+    for (int y = 2; y < 28; ++y)
+      for (int x = 2; x < 38; ++x)
+        labels[x + 40 * (y + 30 * size_t(z))] = uint16_t(1 + (x * x + y * 3 + z * z) % 5);
+  const auto volume = std::make_shared<const svdag::Volume>(
+    svdag::Builder::build(g, svdag::ScalarType::UInt16, labels.data()));
+  auto make = [&] {
+    auto r = std::make_unique<svdag::render::Renderer>();
+    r->setBackend(backend);
+    r->setVolume(volume);
+    r->setImageSize(48, 40);
+    r->setCamera(svdag::render::frameVolume(g, 35, 25, 1.1));
+    r->setDenoise(false);
+    return r;
+  };
+  auto previewing = make();
+  previewing->setPreviewWhileCompiling(true);
+  const svdag::render::Image preview = previewing->render();
+  ASSERT_TRUE(previewing->previewed());
+  EXPECT_EQ(previewing->accumulatedSamples(), 1u);
+
+  auto plain = make(); // compiles (or waits for) the full pipeline
+  const svdag::render::Image full = plain->render();
+  EXPECT_FALSE(plain->previewed());
+  plain->setLod(svdag::render::Lod::Block);
+  const svdag::render::Image block = plain->render();
+  EXPECT_EQ(preview.label, block.label);
+  EXPECT_EQ(preview.depth, block.depth);
+  const svdag::render::ViewRays rays = previewing->viewRays();
+  size_t hits = 0;
+  for (size_t i = 0; i < preview.label.size(); ++i)
+  {
+    if (preview.label[i] == 0)
+      continue;
+    ++hits;
+    const uint32_t x = uint32_t(i % preview.width), y = uint32_t(i / preview.width);
+    const double u = 2 * (x + 0.5) / preview.width - 1, v = 2 * (y + 0.5) / preview.height - 1;
+    double d[3], length = 0;
+    for (int a = 0; a < 3; ++a)
+    {
+      d[a] = rays.direction[a] + u * rays.directionU[a] + v * rays.directionV[a];
+      length += d[a] * d[a];
+    }
+    double facing = 0;
+    for (int a = 0; a < 3; ++a)
+      facing += d[a] / std::sqrt(length) * preview.normal[3 * i + a];
+    const auto base = svdag::render::Renderer::defaultMaterial(preview.label[i] - 1).baseColorVisibility;
+    for (int c = 0; c < 3; ++c)
+      EXPECT_NEAR(preview.hdr[4 * i + c], base[c] * (0.3 + 0.7 * std::abs(facing)), 1e-4) << i;
+  }
+  EXPECT_GT(hits, preview.label.size() / 4);
+
+  // Waits for the background compilation (bounded): then the path tracer's image.
+  const auto start = std::chrono::steady_clock::now();
+  svdag::render::Image after = previewing->render();
+  while (previewing->previewed() &&
+    std::chrono::steady_clock::now() - start < std::chrono::seconds(120))
+  {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    after = previewing->render();
+  }
+  ASSERT_FALSE(previewing->previewed());
+  EXPECT_EQ(previewing->accumulatedSamples(), 1u);
+  EXPECT_EQ(after.label, full.label);
+  EXPECT_EQ(after.hdr, full.hdr);
+  }
 }

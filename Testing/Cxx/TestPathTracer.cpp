@@ -28,6 +28,7 @@ thread_local const Scene* scene = nullptr;
 #define SVDAG_FEATURE_SUN true
 #define SVDAG_FEATURE_EMISSION true
 #define SVDAG_FEATURE_TRANSMISSION true
+#define SVDAG_FEATURE_PREVIEW false
 // traceScene already reports only entries (a ray inside a sphere leaves it without a hit), which
 // is what the renderer's entry-only trace (skipStart) does after a transmission event.
 #define SVDAG_TRACE(hit, origin, direction, tmax, skipStart, anyHit)                              \

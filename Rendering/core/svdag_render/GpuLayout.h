@@ -92,7 +92,8 @@ typedef uint32_t uint;
 #define SVDAG_CONSTANT_SUN 2
 #define SVDAG_CONSTANT_EMISSION 3
 #define SVDAG_CONSTANT_TRANSMISSION 4
-#define SVDAG_CONSTANT_COUNT 5
+#define SVDAG_CONSTANT_PREVIEW 5
+#define SVDAG_CONSTANT_COUNT 6
 
 /* The compute backend's workgroup: SVDAG_COMPUTE_GROUP_SIZE^2 pixels (camera.comp). */
 #define SVDAG_COMPUTE_GROUP_SIZE 8

@@ -30,7 +30,9 @@
  *   and the environment macros of Shading.h.
  * Feature switches (specialization constants on the GPU, so a scene that does not use a feature
  * does not pay for it): SVDAG_FEATURE_NEE, SVDAG_FEATURE_ENV_MAP, SVDAG_FEATURE_SUN,
- * SVDAG_FEATURE_EMISSION, SVDAG_FEATURE_TRANSMISSION (booleans).
+ * SVDAG_FEATURE_EMISSION, SVDAG_FEATURE_TRANSMISSION (booleans), and SVDAG_FEATURE_PREVIEW: no
+ * path at all, the camera ray's first hit shaded by its base color under a headlight (what a
+ * window shows while the full pipeline compiles; the rest of the integrator is compiled out).
  */
 #ifndef SVDAG_RENDER_PATHTRACER_H
 #define SVDAG_RENDER_PATHTRACER_H
@@ -174,6 +176,12 @@ SHADING_FN vec3 tracePath(
       break;
     }
     Material m = SVDAG_MATERIAL(h.label);
+    if (SVDAG_FEATURE_PREVIEW)
+    {
+      float facing = h.inside ? 1.0f : abs(dot(h.shading, d));
+      radiance = vec3(m.baseColorVisibility) * (0.3f + 0.7f * facing);
+      break;
+    }
     if (SVDAG_FEATURE_EMISSION && !h.inside)
       radiance += throughput * vec3(m.emission);
     if (bounce == maxBounces)

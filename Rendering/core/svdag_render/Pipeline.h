@@ -25,6 +25,9 @@
 #include "svdag_render/RenderSettings.h"
 
 #include <array>
+#include <exception>
+#include <future>
+#include <utility>
 #include <memory>
 #include <mutex>
 #include <vector>
@@ -55,10 +58,13 @@ struct ShaderFeatures
   bool sun = false;
   bool emission = false;
   bool transmission = false;
+  // The preview (PathTracer.h's SVDAG_FEATURE_PREVIEW): primary hits only, a small pipeline.
+  bool preview = false;
   bool operator==(const ShaderFeatures& o) const
   {
     return nextEventEstimation == o.nextEventEstimation && environmentMap == o.environmentMap &&
-      sun == o.sun && emission == o.emission && transmission == o.transmission;
+      sun == o.sun && emission == o.emission && transmission == o.transmission &&
+      preview == o.preview;
   }
   bool operator!=(const ShaderFeatures& o) const { return !(*this == o); }
 };
@@ -88,8 +94,14 @@ public:
   PipelineLibrary& operator=(const PipelineLibrary&) = delete;
 
   // The program of these features, compiled the first time any user asks for them (the
-  // reference stays valid for the library's life). Thread-safe.
+  // reference stays valid for the library's life); waits where another thread compiles them.
+  // Thread-safe; throws std::runtime_error where the compilation fails (a later call tries
+  // again).
   const Program& program(const ShaderFeatures& features);
+  // The program of these features if it is compiled; else starts compiling it on a thread of
+  // its own (once) and returns nullptr at once. A failed background compilation is reported
+  // by the next program() call for the features.
+  const Program* compiledProgram(const ShaderFeatures& features);
   Backend backend() const { return this->Kind; }
   VkPipelineLayout layout() const { return this->Layout; }
   VkDescriptorSetLayout setLayout() const { return this->SetLayout; }
@@ -113,8 +125,26 @@ private:
   VkDescriptorSetLayout SetLayout = VK_NULL_HANDLE;
   VkPipelineLayout Layout = VK_NULL_HANDLE;
   std::vector<VkDescriptorPoolSize> PoolSizes;
+  // One feature set's program: compiled (ready), being compiled by the thread that made the
+  // entry or by a background compilation (its future), or failed (removed, error kept).
+  struct Entry
+  {
+    Program program;
+    bool ready = false;
+    std::shared_future<void> compiled;
+  };
+  Entry* find(const ShaderFeatures& features); // with Lock held
+  // Makes the entry of these features (with Lock held) and returns the promise its compiler
+  // keeps.
+  std::shared_ptr<std::promise<void>> begin(const ShaderFeatures& features);
+  // Compiles the entry of these features (Lock not held) and fulfils its promise; a failure
+  // removes the entry (and, in the background, is kept for the next program() call).
+  void complete(const ShaderFeatures& features, std::promise<void>& promise, bool background);
+
   mutable std::mutex Lock;
-  std::vector<std::unique_ptr<Program>> Programs;
+  std::vector<std::unique_ptr<Entry>> Programs;
+  std::vector<std::future<void>> Background; // background compilations, waited for at the end
+  std::vector<std::pair<ShaderFeatures, std::exception_ptr>> Failed;
 };
 
 // One renderer's use of a backend's shared pipelines: its own descriptor set (its uniforms and

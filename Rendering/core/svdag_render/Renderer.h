@@ -283,6 +283,17 @@ public:
   size_t materialCount() const { return this->Materials.size(); }
   // The feature switches the next render() compiles the pipeline with.
   ShaderFeatures shaderFeatures() const;
+  // Previews while the pipeline compiles: where the device has not compiled the pipeline of
+  // shaderFeatures() yet, render() starts its compilation in the background and traces the pass
+  // with the small preview pipeline instead (ShaderFeatures::preview: the camera rays' first
+  // hits under a headlight, no path; compiled at once, much faster), so that a window never
+  // waits for the full compilation. A preview pass does not accumulate: the first pass after
+  // the pipeline is ready starts the accumulation. Default off (every pass is the path tracer's,
+  // compiled first if need be).
+  void setPreviewWhileCompiling(bool on) { this->PreviewWhileCompiling = on; }
+  bool previewWhileCompiling() const { return this->PreviewWhileCompiling; }
+  // Whether the last render() traced a preview.
+  bool previewed() const { return this->Previewed; }
 
   // Starts a new accumulation on the next render().
   void resetAccumulation() { this->AccumulationValid = false; }
@@ -365,6 +376,8 @@ private:
   uint32_t Width = 256;
   uint32_t Height = 256;
   uint32_t TraceReduction = 1;
+  bool PreviewWhileCompiling = false;
+  bool Previewed = false;
   Image Output;
   double SetupSeconds = 0;
   double FrameMilliseconds = 0;
@@ -384,6 +397,7 @@ private:
   uint64_t SceneGeneration = 0;
   uint64_t MaterialGeneration = 0;
   uint64_t EnvironmentGeneration = 0;
+  uint64_t PreviewGeneration = 0;
   uint32_t Accumulated = 0;
   double RenderSeconds = 0;
   uint64_t BvhBuilds = 0;
