@@ -1,8 +1,10 @@
 #include "svdag_render/Pipeline.h"
 
+
 #include "svdag_render/GpuLayout.h"
 #include "svdag_render/PipelineCacheFile.h"
 
+#include <chrono>
 #include <cstdint>
 #include <cstring>
 #include <stdexcept>
@@ -156,9 +158,12 @@ void PipelineLibrary::complete(
 {
   Program program;
   program.features = features;
+  const auto start = std::chrono::steady_clock::now();
   try
   {
     this->compile(program);
+    program.compileSeconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   }
   catch (...)
   {

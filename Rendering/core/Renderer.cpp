@@ -834,6 +834,15 @@ ShaderFeatures Renderer::shaderFeatures() const
   return f;
 }
 
+double Renderer::pipelineCompileSeconds() const
+{
+  const Gpu& g = *this->Device;
+  if (!g.scene)
+    return 0;
+  const auto& pipeline = g.pipelines[size_t(g.scene->backend())];
+  return pipeline ? pipeline->compileSeconds() : 0.0;
+}
+
 uint64_t Renderer::pipelineBuilds() const
 {
   uint64_t builds = 0;

@@ -6,11 +6,15 @@
 //     [--lod block|leaf|voxel|auto (default auto)] [--azimuth 30] [--elevation 20] [--zoom 1]
 //     [--view-angle 30] [--hide 0,5,7] [--frames 1] [--spp 1] [--bounces 4] [--seed 0]
 //     [--no-nee] [--denoise|--no-denoise] [--environment MAP.exr] [--sun AZ,EL]
-//     [--backend auto|rt|compute] [--restart]
+//     [--backend auto|rt|compute] [--restart] [--preview]
 //
 // Unset options take svdag::render::RenderSettings' defaults (LOD auto, bounces 4, seed 0, NEE
 // on, denoiser on, backend auto). --backend picks how rays find the blocks (RenderSettings.h; auto: per device). --restart makes
-// every frame start a new accumulation (what a frame costs while the camera moves).
+// every frame start a new accumulation (what a frame costs while the camera moves). --preview
+// previews while the pipeline compiles (Renderer::setPreviewWhileCompiling: the first frame of
+// a process is the small preview pipeline's, the full one compiles in the background).
+// The JSON's pipeline_compile_seconds is the compile time of the last frame's pipeline and
+// previewed whether that frame was a preview.
 // Every frame adds --spp path-traced samples per pixel to the accumulated image. --sun places a
 // disk sun (the renderer's default size and irradiance) at azimuth AZ (degrees from +x towards
 // +y) and elevation EL (degrees above the xy plane).
@@ -57,6 +61,7 @@ struct Options
   double sunAzimuth = 0, sunElevation = 0;
   svdag::render::Backend backend = defaults.backend;
   bool restart = false;
+  bool preview = false;
 };
 
 struct UsageError : std::invalid_argument
@@ -115,6 +120,11 @@ Options parse(int argc, char** argv)
     if (arg == "--restart")
     {
       o.restart = true;
+      continue;
+    }
+    if (arg == "--preview")
+    {
+      o.preview = true;
       continue;
     }
     if (i + 1 >= argc)
@@ -209,7 +219,7 @@ int main(int argc, char** argv)
               << "[--azimuth DEG] [--elevation DEG] [--zoom F] [--view-angle DEG] "
               << "[--hide I,J,...] [--frames N] [--spp N] [--bounces N] [--seed N] [--no-nee] "
               << "[--denoise|--no-denoise] [--environment MAP.exr] [--sun AZ,EL] [--backend "
-              << svdag::render::backendNames("|") << "] [--restart]\n";
+              << svdag::render::backendNames("|") << "] [--restart] [--preview]\n";
     return 1;
   }
   try
@@ -229,6 +239,7 @@ int main(int argc, char** argv)
     renderer.setSeed(o.seed);
     renderer.setNextEventEstimation(o.nee);
     renderer.setDenoise(o.denoise);
+    renderer.setPreviewWhileCompiling(o.preview);
     if (!o.environment.empty())
       renderer.setEnvironmentMap(o.environment);
     if (o.sun)
@@ -270,6 +281,7 @@ int main(int argc, char** argv)
                 "\"lod\": \"%s\", \"spp\": %u, \"bounces\": %u, \"nee\": %s, \"denoise\": %s, \"restart\": %s, "
                 "\"setup_seconds\": %.6f, \"render_seconds\": %.6f, \"ms_per_frame\": %.3f, "
                 "\"ms_median\": %.3f, \"bytes_blas\": %llu, \"bytes_tlas\": %llu, "
+                "\"pipeline_compile_seconds\": %.6f, \"previewed\": %s, "
                 "\"visible_blocks\": %llu, \"bytes_device\": {\"encoding\": %llu, "
                 "\"acceleration\": %llu, \"materials\": %llu, \"neighbours\": %llu, "
                 "\"images\": %llu, \"other\": %llu, \"total\": %llu}}\n",
@@ -277,7 +289,8 @@ int main(int argc, char** argv)
       o.width, o.height, svdag::render::lodName(o.lod), renderer.accumulatedSamples(), o.bounces,
       o.nee ? "true" : "false", o.denoise ? "true" : "false", o.restart ? "true" : "false", renderer.setupSeconds(),
       renderer.renderSeconds(), msPerFrame, msMedian, u(renderer.blasBytes()),
-      u(renderer.tlasBytes()), u(renderer.visibleBlocks()), u(bytes.encoding),
+      u(renderer.tlasBytes()), renderer.pipelineCompileSeconds(),
+      renderer.previewed() ? "true" : "false", u(renderer.visibleBlocks()), u(bytes.encoding),
       u(bytes.acceleration), u(bytes.materials), u(bytes.neighbours), u(bytes.images),
       u(bytes.other), u(bytes.total));
     return 0;

@@ -84,6 +84,7 @@ public:
     VkPipeline handle = VK_NULL_HANDLE;
     Buffer table;
     VkStridedDeviceAddressRegionKHR raygen{}, miss{}, hit{}, callable{};
+    double compileSeconds = 0; // wall time of its compilation (pipeline and binding table)
   };
 
   // context: the device's own (it counts the shader binding tables). backend: RayTracing (the
@@ -165,6 +166,8 @@ public:
   // Call only while no frame of this renderer is in flight (the renderer waits for every frame).
   bool setFeatures(const ShaderFeatures& features);
   const ShaderFeatures& features() const { return this->Current->features; }
+  // Seconds the device took to compile the current program (whoever asked for it first).
+  double compileSeconds() const { return this->Current->compileSeconds; }
   // Feature sets this renderer used so far (the constructor's included): a test sees what a
   // change asks for, whether or not another renderer compiled it already.
   uint64_t builds() const { return this->Used.size(); }

@@ -294,6 +294,9 @@ public:
   bool previewWhileCompiling() const { return this->PreviewWhileCompiling; }
   // Whether the last render() traced a preview.
   bool previewed() const { return this->Previewed; }
+  // Seconds the device took to compile the pipeline the last render() traced with (0 before
+  // one), whichever renderer asked for it first: the compile time of that feature set.
+  double pipelineCompileSeconds() const;
 
   // Starts a new accumulation on the next render().
   void resetAccumulation() { this->AccumulationValid = false; }
