@@ -213,7 +213,11 @@ void vtkSegmentationSVDAGRepresentation::SetRefineTimeLimit(double seconds)
 
 void vtkSegmentationSVDAGRepresentation::SetLookupTable(vtkScalarsToColors* table)
 {
-  this->Mapper->GetLabelProperties()->SetLookupTable(table);
+  if (this->LookupTable != table)
+  {
+    this->LookupTable = table;
+    this->LabelsModified.Modified();
+  }
 }
 
 void vtkSegmentationSVDAGRepresentation::SetOpacity(double opacity)
@@ -239,13 +243,40 @@ void vtkSegmentationSVDAGRepresentation::RemoveAllHiddenLabels()
 
 void vtkSegmentationSVDAGRepresentation::UpdateLabelProperties(vtkSegmentationSVDAG* volume)
 {
+  const vtkMTimeType tableTime = this->LookupTable ? this->LookupTable->GetMTime() : 0;
   if (!volume ||
     (volume == this->LabelsAppliedTo && this->LabelsAppliedTime >= this->LabelsModified &&
-      this->LabelsAppliedTime >= volume->GetMTime()))
+      this->LabelsAppliedTime >= volume->GetMTime() && this->LabelsAppliedTime >= tableTime))
   {
     return;
   }
   vtkSegmentationSVDAGLabelProperties* labels = this->Mapper->GetLabelProperties();
+  for (vtkTypeInt64 label : this->AnnotatedLabels)
+  {
+    labels->RemoveColor(label);
+  }
+  this->AnnotatedLabels.clear();
+  vtkScalarsToColors* table = this->LookupTable;
+  if (table && table->GetIndexedLookup())
+  {
+    labels->SetLookupTable(nullptr);
+    for (vtkIdType i = 0; i < table->GetNumberOfAnnotatedValues(); ++i)
+    {
+      bool valid = false;
+      const vtkTypeInt64 label = table->GetAnnotatedValue(i).ToTypeInt64(&valid);
+      if (valid)
+      {
+        double rgba[4];
+        table->GetAnnotationColor(table->GetAnnotatedValue(i), rgba);
+        labels->SetColor(label, rgba[0], rgba[1], rgba[2]);
+        this->AnnotatedLabels.push_back(label);
+      }
+    }
+  }
+  else
+  {
+    labels->SetLookupTable(table);
+  }
   labels->ShowAllLabels();
   vtkSmartPointer<vtkDataArray> values;
   values.TakeReference(volume->NewLabelValues());
@@ -258,7 +289,8 @@ void vtkSegmentationSVDAGRepresentation::UpdateLabelProperties(vtkSegmentationSV
     labels->SetVisibility(label, false);
   }
   this->LabelsAppliedTo = volume;
-  this->LabelsAppliedTime = std::max(this->LabelsModified.GetMTime(), volume->GetMTime());
+  this->LabelsAppliedTime =
+    std::max({ this->LabelsModified.GetMTime(), volume->GetMTime(), tableTime });
 }
 
 void vtkSegmentationSVDAGRepresentation::AddClippingPlane(vtkPlane* plane)

@@ -74,8 +74,10 @@ public:
   ///@}
 
   ///@{
-  /** Label appearance: colors from a lookup table (a categorical one: annotated values), one
-   * opacity for every label, labels never drawn (nor picked). */
+  /** Label appearance: colors from a lookup table, one opacity for every label, labels never
+   * drawn (nor picked). A categorical table (IndexedLookup, as ParaView's color map editor
+   * makes with "Interpret Values As Categories") colors its annotated values only: the other
+   * labels keep their default colors. Any other table colors every label by its value. */
   void SetLookupTable(vtkScalarsToColors* table);
   void SetOpacity(double opacity);
   void AddHiddenLabel(vtkTypeInt64 label);
@@ -121,6 +123,8 @@ private:
   bool DrawnType = true;                        // the representation type is ours
   double Opacity = 1.0;
   std::vector<vtkTypeInt64> HiddenLabels;
+  vtkSmartPointer<vtkScalarsToColors> LookupTable;
+  std::vector<vtkTypeInt64> AnnotatedLabels; // colored from LookupTable's annotations
   vtkSegmentationSVDAG* LabelsAppliedTo = nullptr; // the volume UpdateLabelProperties last saw
   vtkMTimeType LabelsAppliedTime = 0;
   vtkTimeStamp LabelsModified;
