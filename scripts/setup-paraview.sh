@@ -74,5 +74,8 @@ cat > "$OUT/env.sh" <<ENV
 export PYTHONPATH="$PYROOT/usr/lib/python3/dist-packages\${PYTHONPATH:+:\$PYTHONPATH}"
 export PV_PLUGIN_PATH="$PLUGIN_DIR"
 export PATH="$PYROOT/usr/bin:\$PATH"
+# ParaView's libraries through the view of /usr: pvpython then finds ParaView's vtkmodules next to
+# them (it looks beside libvtkCommonCore), not Debian VTK 9.1's in /usr/lib/python3/dist-packages.
+export LD_LIBRARY_PATH="$SDK/lib/x86_64-linux-gnu\${LD_LIBRARY_PATH:+:\$LD_LIBRARY_PATH}"
 ENV
 echo "ParaView plugin: $PLUGIN_DIR/vtkSVDAG.so (environment: source build-paraview/env.sh)"

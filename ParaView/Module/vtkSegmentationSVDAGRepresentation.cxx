@@ -306,6 +306,11 @@ void vtkSegmentationSVDAGRepresentation::RemoveAllClippingPlanes()
   this->Mapper->RemoveAllClippingPlanes();
 }
 
+int vtkSegmentationSVDAGRepresentation::GetAccumulatedSamples()
+{
+  return this->Mapper->GetInput() ? this->Mapper->GetAccumulatedSamples() : 0;
+}
+
 void vtkSegmentationSVDAGRepresentation::SetPickPixel(double x, double y)
 {
   this->PickedHit = 0;

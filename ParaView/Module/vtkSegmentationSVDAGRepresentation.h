@@ -97,6 +97,9 @@ public:
   vtkGetMacro(PickedLabel, vtkTypeInt64);
   ///@}
 
+  /** Samples per pixel accumulated by the last frame (0 before the first). */
+  int GetAccumulatedSamples();
+
   /** The mapper (for tests and applications in the same process). */
   vtkSegmentationSVDAGVolumeMapper* GetMapper() { return this->Mapper; }
 

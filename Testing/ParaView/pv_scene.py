@@ -79,8 +79,8 @@ def set_up_view(view, display):
     camera.Dolly(1.5)
     # Render settings the images depend on: every session kind draws the same frame.
     display.MaximumBounces = 1
-    display.TargetSamplesPerPixel = 4
-    display.SamplesPerPixel = 4
+    display.TargetSamplesPerPixel = 16
+    display.SamplesPerPixel = 16
 
 
 def main():
@@ -96,6 +96,8 @@ def main():
     if args.connect:
         Connect("127.0.0.1", args.connect)
         LoadPlugin(args.plugin, remote=True)
+        # The server's image comes uncompressed (the default compressors are lossy).
+        simple.GetSettingsProxy("RenderViewSettings").CompressorConfig = "NULL"
     LoadPlugin(args.plugin, remote=False)
     results = {}
     rank = servermanager.vtkProcessModule.GetProcessModule().GetPartitionId()
@@ -108,6 +110,8 @@ def main():
     Render(view)
     SaveScreenshot(os.path.join(args.out, "scene.png"), view, ImageResolution=list(SIZE))
     results["representation"] = display.GetXMLName()
+    display.UpdatePropertyInformation()
+    results["samples"] = display.GetProperty("AccumulatedSamples")[0]
     results["camera"] = camera_of(view)
     if not args.image_only:
         results["reader"] = field_numbers(reader)

@@ -8,6 +8,7 @@ import json
 import os
 import pathlib
 import shutil
+import socket
 import subprocess
 
 import numpy as np
@@ -25,6 +26,8 @@ ROOT = pathlib.Path(__file__).resolve().parents[2]
 BUILD = ROOT / "build-paraview"
 PLUGIN = BUILD / "lib" / "paraview-5.11" / "plugins" / "vtkSVDAG" / "vtkSVDAG.so"
 PV_PYTHON = BUILD / "paraview-python" / "usr" / "lib" / "python3" / "dist-packages"
+PV_LIBRARIES = BUILD / "paraview-sdk" / "usr" / "lib" / "x86_64-linux-gnu"
+PVPYTHON = BUILD / "paraview-python" / "usr" / "bin" / "pvpython"
 SCENE = ROOT / "Testing" / "ParaView" / "pv_scene.py"
 BASELINE = ROOT / "Testing" / "Data" / "Baseline" / "paraview"
 CELLS = ROOT / "examples" / "data" / "cells.nrrd"
@@ -35,8 +38,10 @@ pytestmark = pytest.mark.skipif(
 
 
 def paraview_env(**extra):
+    """build-paraview/env.sh's environment (ParaView's Python, not Debian's VTK)."""
     env = dict(os.environ)
     env["PYTHONPATH"] = str(PV_PYTHON)
+    env["LD_LIBRARY_PATH"] = str(PV_LIBRARIES)
     env.update(extra)
     return env
 
@@ -147,12 +152,47 @@ def test_paraview_hidden_labels_never_picked(scene, cells):
             assert a == b
 
 
+def assert_same_image(image, reference):
+    """Equal up to path-tracing noise: the sessions' sample sequences need not line up."""
+    assert image.shape == reference.shape
+    difference = np.abs(image - reference).max(axis=2)
+    assert difference.mean() < 1.5, difference.mean()
+    assert (difference <= 32).mean() >= 0.99, (difference <= 32).mean()
+
+
 def test_paraview_image_baseline(scene):
     out, _ = scene
-    image = png(out / "scene.png")
-    baseline = png(BASELINE / "scene.png")
-    assert image.shape == baseline.shape
-    assert np.abs(image - baseline).mean() < 2.0
+    assert_same_image(png(out / "scene.png"), png(BASELINE / "scene.png"))
+
+
+def free_port():
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def test_paraview_client_server_image(scene, tmp_path):
+    """pvserver on 127.0.0.1 renders the file on its side; the image the client saves equals
+    the built-in session's."""
+    out, _ = scene
+    port = free_port()
+    server = subprocess.Popen(
+        ["pvserver", f"--server-port={port}", "--force-offscreen-rendering"],
+        env=paraview_env(), stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    try:
+        for line in server.stdout:
+            if "Accepting connection" in line:
+                break
+        run_paraview([str(PVPYTHON), str(SCENE), "--connect", str(port), "--image-only"]
+                     + scene_args(tmp_path))
+        server.wait(timeout=60)
+    finally:
+        if server.poll() is None:
+            server.kill()
+            server.wait()
+    with open(tmp_path / "results.json") as f:
+        assert json.load(f)["representation"] == "SegmentationPathTracingRepresentation"
+    assert_same_image(png(tmp_path / "scene.png"), png(out / "scene.png"))
 
 
 def test_paraview_categorical_colors(scene):
