@@ -90,7 +90,7 @@ int vtkSegmentationSVDAGRepresentation::ProcessViewRequest(
     vtkPVView::SetPiece(inInfo, this, this->Cache);
     // The compressed volume cannot travel: render where the data is (server, every rank).
     vtkPVRenderView::SetRequiresDistributedRendering(inInfo, this, true);
-    if (this->Cache)
+    if (this->Cache && this->Cache->HasVolume())
     {
       // The mapper knows the voxels' world bounds (direction matrix included).
       this->Mapper->SetInputData(this->Cache);
@@ -100,6 +100,10 @@ int vtkSegmentationSVDAGRepresentation::ProcessViewRequest(
   else if (request_type == vtkPVView::REQUEST_RENDER())
   {
     auto* volume = vtkSegmentationSVDAG::SafeDownCast(vtkPVView::GetPiece(inInfo, this));
+    if (volume && !volume->HasVolume())
+    {
+      volume = nullptr; // an empty piece (this rank read nothing)
+    }
     if (this->Mapper->GetInput() != volume)
     {
       this->Mapper->SetInputData(volume);
