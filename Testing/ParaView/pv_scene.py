@@ -129,6 +129,17 @@ def main():
         results["picks_hidden"] = pick_grid(display)
         display.HiddenLabels = []
 
+        # A clipping plane through the centre (ResetCamera's focal point) keeping -x -z: the cut faces the camera.
+        centre = results["camera"]["focal_point"]
+        plane = servermanager.implicit_functions.Plane(Origin=centre, Normal=[-0.6, 0.0, -0.8])
+        display.ClippingPlanes = [plane]
+        Render(view)
+        results["clip_plane"] = {"origin": centre, "normal": [-0.6, 0.0, -0.8]}
+        results["picks_clipped"] = pick_grid(display)
+        SaveScreenshot(os.path.join(args.out, "clipped.png"), view, ImageResolution=list(SIZE))
+        display.ClippingPlanes = []
+        Render(view)  # picks read the last frame
+
         # Label colors from a categorical lookup table: the label at the centre turns red.
         centre = pick(display, SIZE[0] / 2, SIZE[1] / 2)
         lut = GetColorTransferFunction("SegmentationLabels")

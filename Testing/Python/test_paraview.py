@@ -101,10 +101,12 @@ def view_renderer(camera):
     return window, renderer
 
 
-def expected_picks(cells, camera, picks):
+def expected_picks(cells, camera, picks, clip_plane=None):
     window, renderer = view_renderer(camera)
     caster = vtkSegmentationSVDAGRayCaster()
     caster.SetInputData(cells.dataobject)
+    if clip_plane:
+        caster.AddClippingPlane(clip_plane["origin"], clip_plane["normal"])
     expected = []
     for x, y, _ in picks:
         hit = caster_pick(caster, *pixel_ray(renderer, x, y))
@@ -136,6 +138,18 @@ def test_paraview_picks_match_ray_caster(scene, cells):
     # Pixels on a label edge can round either way between float and double precision.
     assert agree >= 0.97 * len(picks), list(zip(picks, expected))[:20]
     assert len({label for label in got if label is not None}) > 10
+
+
+def test_paraview_clipping_plane_picks(scene, cells):
+    """A Plane proxy in ClippingPlanes cuts what is drawn and picked as the caster's plane."""
+    _, results = scene
+    picks = results["picks_clipped"]
+    expected = expected_picks(cells, results["camera"], picks, results["clip_plane"])
+    got = [label for _, _, label in picks]
+    assert sum(e == g for e, g in zip(expected, got)) >= 0.97 * len(picks)
+    # The cut changes what is seen.
+    unclipped = [label for _, _, label in results["picks"]]
+    assert sum(a != b for a, b in zip(unclipped, got)) > 0.05 * len(picks)
 
 
 def test_paraview_hidden_labels_never_picked(scene, cells):
