@@ -20,6 +20,9 @@ import paraview.simple as simple
 
 SIZE = (240, 200)
 STEP = 8  # pick every STEP-th pixel in x and y
+# The representation's properties whose XML defaults must be the C++ defaults.
+DEFAULTS = ("LOD", "Backend", "Shading", "SamplesPerPixel", "TargetSamplesPerPixel",
+            "MaximumBounces", "Exposure", "RefineTimeLimit")
 CAMERA_DIRECTION = (-1.0, -0.7, -0.5)  # from the focal point towards the camera is its negative
 
 
@@ -31,6 +34,13 @@ def field_numbers(proxy):
         info = fields.GetArrayInformation(name)
         numbers[name] = None if info is None else info.GetComponentRange(0)[0]
     return numbers
+
+
+def plain(value):
+    """A property's single value as a JSON type."""
+    if not isinstance(value, (str, int, float)):
+        value = value[0]
+    return value if isinstance(value, str) else float(value)
 
 
 def pick(display, x, y):
@@ -105,6 +115,7 @@ def main():
     reader = simple.SegmentationVolumeReader(FileName=args.file)
     view = CreateView("RenderView")
     display = Show(reader, view)
+    results["defaults"] = {name: plain(display.GetPropertyValue(name)) for name in DEFAULTS}
     set_up_view(view, display)
     display.SetRepresentationType("Segmentation Path Tracing")
     Render(view)

@@ -19,6 +19,8 @@ from vtkmodules.vtkRenderingCore import vtkRenderer, vtkRenderWindow
 
 import vtksvdag
 from vtksvdag.vtkSVDAGCore import vtkSegmentationSVDAGRayCaster
+from vtksvdag.vtkSVDAGRendering import (vtkSegmentationSVDAGRenderSettings,
+                                        vtkSegmentationSVDAGVolumeMapper)
 
 from conftest import caster_pick, pixel_ray
 
@@ -125,6 +127,18 @@ def test_paraview_information_numbers(scene, cells):
     # .svdag files open through OpenDataFile with the plugin's reader.
     assert results["svdag_reader"] == "SegmentationVolumeReader"
     assert results["representation"] == "SegmentationPathTracingRepresentation"
+
+
+def test_paraview_representation_defaults(scene):
+    """The proxy's defaults (pushed by ParaView on creation) are the C++ classes' defaults."""
+    _, results = scene
+    settings, mapper = vtkSegmentationSVDAGRenderSettings(), vtkSegmentationSVDAGVolumeMapper()
+    assert results["defaults"] == {
+        "LOD": settings.GetLODAsString(), "Backend": settings.GetBackendAsString(),
+        "Shading": settings.GetShadingAsString(), "SamplesPerPixel": settings.GetSamplesPerPixel(),
+        "TargetSamplesPerPixel": mapper.GetTargetSamplesPerPixel(),
+        "MaximumBounces": settings.GetMaximumBounces(), "Exposure": settings.GetExposure(),
+        "RefineTimeLimit": mapper.GetRefineTimeLimit()}
 
 
 def test_paraview_picks_match_ray_caster(scene, cells):
