@@ -14,6 +14,9 @@ fi
 # The installs a user makes (CMake package, out-of-tree example, pip into a fresh venv), before
 # the main suites so that the output ends with their summaries.
 xvfb-run -a -s "-screen 0 1024x768x24" bash scripts/test-install.sh || status=1
+# The ParaView plugin (build-paraview/); its tests are Testing/Python/test_paraview*.py, which
+# skip without it.
+bash scripts/setup-paraview.sh || { echo "setup-paraview failed"; status=1; }
 xvfb-run -a -s "-screen 0 1024x768x24" ctest --test-dir build --output-on-failure -j2 || status=1
 xvfb-run -a -s "-screen 0 1024x768x24" .venv/bin/python -m pytest -q Testing/Python || status=1
 exit $status
