@@ -348,6 +348,7 @@ int vtkSegmentationSVDAGRenderer::RequestData(
     camera.viewAngle = this->CameraViewAngle;
     r.setCamera(camera);
     r.setImageSize(uint32_t(this->Width), uint32_t(this->Height));
+    r.setTraceReduction(uint32_t(this->TraceReduction));
     svdag::render::RenderSettings settings = in.Session.settings()->GetCoreSettings();
     const std::array<double, 16> identity = svdag::vtkglue::identityMatrix();
     svdag::vtkglue::setClipping(settings, this->Internal->ClippingPlanes, identity, identity,
@@ -424,6 +425,9 @@ SVDAG_RENDERER_STATISTIC(vtkTypeInt64, NeighbourTableBytes, r->neighbourTableByt
 SVDAG_RENDERER_STATISTIC(int, NumberOfBLAS, r->blasCount())
 #undef SVDAG_RENDERER_STATISTIC
 
+// The header's clamp of TraceReduction is the core's range.
+static_assert(svdag::render::Renderer::MaximumTraceReduction == 8, "TraceReduction's clamp");
+
 double vtkSegmentationSVDAGRenderer::GetPassMilliseconds(int pass) const
 {
   const std::vector<double>& times = this->Internal->PassMilliseconds;
@@ -483,6 +487,7 @@ void vtkSegmentationSVDAGRenderer::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "Width: " << this->Width << "\n";
   os << indent << "Height: " << this->Height << "\n";
   os << indent << "PassesPerRender: " << this->PassesPerRender << "\n";
+  os << indent << "TraceReduction: " << this->TraceReduction << "\n";
   os << indent << "CameraPosition: ";
   triple(this->CameraPosition);
   os << indent << "CameraFocalPoint: ";

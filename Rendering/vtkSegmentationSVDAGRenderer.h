@@ -138,6 +138,15 @@ public:
   ///@}
 
   ///@{
+  /** Guided upsampling (default 1: off, at most 8): the paths are traced at
+   * ceil(Width / r) x ceil(Height / r) pixels and shown at the output's size, guided by every
+   * output pixel's own pixel-center label and depth (Label, Depth and Normal stay exact; see
+   * svdag_render/UpsampleLayout.h). A change restarts the accumulation. */
+  vtkSetClampMacro(TraceReduction, int, 1, 8);
+  vtkGetMacro(TraceReduction, int);
+  ///@}
+
+  ///@{
   /** The camera, in world coordinates, with VTK's semantics (view angle: vertical, degrees). */
   void SetCameraPosition(double x, double y, double z);
   void SetCameraPosition(const double p[3]) { this->SetCameraPosition(p[0], p[1], p[2]); }
@@ -268,6 +277,7 @@ protected:
   int Width = 256;
   int Height = 256;
   int PassesPerRender = 1;
+  int TraceReduction = 1;
   double CameraPosition[3] = { 0, 0, 1 };
   double CameraFocalPoint[3] = { 0, 0, 0 };
   double CameraViewUp[3] = { 0, 1, 0 };
