@@ -165,6 +165,17 @@ def _reference_pick(state, hidden=()):
     return None if hit is None else hit["label"]
 
 
+def _assert_row_selected(driver, label):
+    """The label's row of the segment list is the one marked selected."""
+    selected = lambda: [e.get_attribute("data-label") for e in driver.find_elements(  # noqa: E731
+        By.CSS_SELECTOR, '[data-testid="svdag-segment-list"] > .svdag-row-selected')]
+    try:
+        WebDriverWait(driver, 10).until(lambda _: selected() == [label])
+    except Exception:
+        raise AssertionError(f"rows marked selected: {selected()}, expected [{label}]; selected "
+                             f"label shown: {_by_id(driver, 'svdag-selected-label').text!r}") from None
+
+
 def _find_label_pixel(driver):
     """Click near the image's center until a label is selected; return (x, y, state)."""
     previous = None
@@ -193,9 +204,7 @@ def test_click_selects_the_label_vtksvdag_pick_finds(server, browser):
     _open(browser, server)
     x, y, state = _find_label_pixel(browser)
     assert int(state[0]) == _reference_pick(state)
-    # Its row is marked in the list, and the slice view answers with the same selection.
-    row = browser.find_element(By.CSS_SELECTOR, f'[data-testid="svdag-segment-list"] > [data-label="{state[0]}"]')
-    assert "svdag-row-selected" in row.get_attribute("class")
+    _assert_row_selected(browser, state[0])
 
 
 def test_search_and_hide_then_the_next_frame_does_not_pick_it(server, browser):
@@ -285,3 +294,83 @@ def test_beyond_loopback_a_token_is_required(browser):
         _open(browser, f"{base}/index.html?token={token}")
     finally:
         _stop(process)
+
+
+def _slice_pixels(driver):
+    import base64
+
+    src = _by_id(driver, "svdag-slice").get_attribute("src")
+    return np.asarray(Image.open(io.BytesIO(base64.b64decode(src.split(",", 1)[1]))).convert("RGB"))
+
+
+def test_slice_and_3d_selections_are_linked(server, browser):
+    import vtksvdag
+
+    _open(browser, server)
+    volume = vtksvdag.read(str(DATA))
+    labels = volume.slice("z", volume.dims[2] // 2)  # the slice shown first, (nx, ny)
+    in_image = lambda value: (labels == value).T[::-1]  # noqa: E731 (rows: y from the top)
+    before = _slice_pixels(browser)
+    # 2-D -> 3-D: a click on a voxel of the slice selects its label (read from the compressed
+    # form), the 3-D view's selection and the list show it, and the slice highlights its voxels.
+    image = _by_id(browser, "svdag-slice")
+    width, height = image.size["width"], image.size["height"]
+    nx, ny = labels.shape
+    u, v = nx // 2 + 7, ny // 2 - 5
+    first = int(labels[u, v])
+    assert first != volume.background
+    px, py = (u + 0.5) * width / nx, (ny - 1 - v + 0.5) * height / ny
+    ActionChains(browser).move_to_element_with_offset(image, int(px - width / 2), int(py - height / 2)) \
+        .click().perform()
+    element = _by_id(browser, "svdag-selected-label")
+    WebDriverWait(browser, TIMEOUT).until(lambda _: element.text == str(first))
+    _assert_row_selected(browser, str(first))
+    highlighted = _slice_pixels(browser)
+    assert np.array_equal(np.any(highlighted != before, axis=2), in_image(first))
+    # 3-D -> 2-D: a pick in the 3-D view moves the slice's highlight to the picked label.
+    x, y, state = _find_label_pixel(browser)
+    second = int(state[0])
+    if second != first:
+        changed = np.any(_slice_pixels(browser) != highlighted, axis=2)
+        assert np.array_equal(changed, in_image(first) | in_image(second))
+
+
+def test_touch_drag_orbits(server, browser):
+    before = _open(browser, server)
+    view = _by_id(browser, "svdag-view")
+    rect = browser.execute_script("const r = arguments[0].getBoundingClientRect(); return [r.left, r.top];", view)
+    x0, y0 = rect[0] + SIZE[0] / 2, rect[1] + SIZE[1] / 2
+
+    def touch(kind, points):
+        browser.execute_cdp_cmd("Input.dispatchTouchEvent", {
+            "type": kind, "touchPoints": [{"x": x, "y": y, "id": i} for i, (x, y) in enumerate(points)]})
+    touch("touchStart", [(x0, y0)])
+    for step in range(1, 9):
+        touch("touchMove", [(x0 + 8 * step, y0 + 2 * step)])
+    touch("touchEnd", [])
+    after = _wait_for_image(browser, differs_from=before)
+    assert np.abs(after - before).mean() > 4
+
+
+def test_cut_controls_and_full_quality_screenshot(server, browser):
+    import base64
+
+    before = _open(browser, server)
+    panel = browser.find_element(By.XPATH, "//button[contains(@class, 'v-expansion-panel-title')]"
+                                           "[.//text()[contains(., 'Clipping plane')]]")
+    panel.click()
+    switch = WebDriverWait(browser, TIMEOUT).until(lambda d: d.find_element(
+        By.XPATH, "//div[contains(@class, 'v-switch')][.//label[contains(., 'Clip')]]//input"))
+    browser.execute_script("arguments[0].click()", switch)
+    clipped = _wait_for_image(browser, differs_from=before)
+    assert np.abs(clipped - before).mean() > 4
+    # The screenshot: the view refined to its target samples, as a PNG of the view's size.
+    result = browser.execute_async_script(
+        "const done = arguments[arguments.length - 1];"
+        "window.trame.trigger('svdag_screenshot').then(r => done(r.src), e => done('error ' + e));")
+    assert result.startswith("data:image/png;base64,"), result[:200]
+    shot = np.asarray(Image.open(io.BytesIO(base64.b64decode(result.split(",", 1)[1]))).convert("RGB"))
+    assert shot.shape == (SIZE[1], SIZE[0], 3)
+    # The same cut view as the stream shows (JPEG there), to within compression and noise.
+    assert np.abs(shot.astype(np.int16) - _view_pixels(browser)).mean() < 12
+    browser.execute_script("arguments[0].click()", switch)

@@ -7,6 +7,7 @@ websocket under an image-stream name of its own. Shared state holds what every b
 alike: the segment list.
 """
 import asyncio
+import functools
 import itertools
 import json
 import logging
@@ -243,7 +244,19 @@ class ViewerApp:
                 "slice": session.slice_image(), **extra}
 
     def _setup_triggers(self):
-        trigger = self.server.trigger
+        def trigger(name):
+            # A bad or hostile request answers an error to its browser alone (wslink sends the
+            # exception to the caller); it is logged here, and the server goes on.
+            def register(function):
+                @functools.wraps(function)
+                def guarded(*args, **kwargs):
+                    try:
+                        return function(*args, **kwargs)
+                    except Exception as error:
+                        log.warning("%s%r failed: %s: %s", name, args, type(error).__name__, error)
+                        raise
+                return self.server.trigger(name)(guarded)
+            return register
 
         @trigger("svdag_open")
         def open_view():
@@ -305,10 +318,13 @@ class ViewerApp:
             return {}
 
         @trigger("svdag_screenshot")
-        async def screenshot():
-            session = self._session()
-            image = await asyncio.wait_for(session.refined_future(), SCREENSHOT_TIMEOUT)
-            return {"src": png_data_url(image)}
+        def screenshot():
+            session = self._session()  # the caller's, before any other message is handled
+
+            async def refined():
+                image = await asyncio.wait_for(session.refined_future(), SCREENSHOT_TIMEOUT)
+                return {"src": png_data_url(image)}
+            return refined()
 
     # -- page ------------------------------------------------------------------------------
     def _build_ui(self):
