@@ -374,3 +374,33 @@ def test_cut_controls_and_full_quality_screenshot(server, browser):
     # The same cut view as the stream shows (JPEG there), to within compression and noise.
     assert np.abs(shot.astype(np.int16) - _view_pixels(browser)).mean() < 12
     browser.execute_script("arguments[0].click()", switch)
+
+
+def test_hostile_messages_are_refused_and_the_view_goes_on(server, browser):
+    _open(browser, server)
+    # Calls a page's own script could make: wrong types, unknown labels and options, garbage
+    # interaction and size events, unknown methods. Each is answered (or dropped) alone.
+    answers = browser.execute_async_script("""
+        const done = arguments[arguments.length - 1];
+        const session = window.trame.client.getConnection().getSession();
+        const name = document.querySelector('[data-testid="svdag-view"]') && window.trame.state.get('view_name');
+        const calls = [
+          window.trame.trigger('svdag_pick', ['a', {}]),
+          window.trame.trigger('svdag_select', [123456789]),
+          window.trame.trigger('svdag_visibility', [null, 'x']),
+          window.trame.trigger('svdag_option', ['path', '/etc/passwd']),
+          window.trame.trigger('svdag_slice', ['w', 1e30]),
+          window.trame.trigger('svdag_pick_slice', [Infinity, -1]),
+          session.call('trame.rca.event', [name, 'x', {type: 5}]),
+          session.call('trame.rca.event', [name, 'x', {type: 'LeftButtonPress', x: 'a', y: null}]),
+          session.call('trame.rca.event', [name, 'x', {type: 'MouseWheel', spinY: 1e308}]),
+          session.call('trame.rca.size', [name, 'x', {w: -5, h: 'big'}]),
+          session.call('no.such.method', [1, 2, 3]),
+        ];
+        Promise.allSettled(calls).then(r => done(r.map(x => x.status)));
+    """)
+    assert len(answers) == 11
+    assert answers[:6] == ["rejected"] * 6
+    # The server still serves this view: a click still picks what vtksvdag.pick finds.
+    x, y, state = _find_label_pixel(browser)
+    assert int(state[0]) == _reference_pick(state)

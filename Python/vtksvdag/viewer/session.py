@@ -19,7 +19,7 @@ import numbers
 import numpy as np
 
 from .. import plotting
-from .._settingnames import names as _setting_names
+from .._settingnames import set_by_name
 from ..volume import check_axis
 
 #: Frames per second asked of the mapper while the pointer drags (its frame budget).
@@ -297,10 +297,7 @@ class ViewSession:
         """LOD, shading, clipping plane and crop box, by name (ValueError for a bad value)."""
         settings = self.mapper.GetSettings()
         if name in ("lod", "shading"):
-            setting = {"lod": "LOD", "shading": "Shading"}[name]
-            if value not in _setting_names(setting):
-                raise ValueError(f"{name} must be one of {list(_setting_names(setting))}")
-            getattr(settings, f"Set{setting}")(value)
+            set_by_name(settings, {"lod": "LOD", "shading": "Shading"}[name], value, name)
         elif name == "clip":
             if not isinstance(value, dict):
                 raise ValueError("clip is a dict (enabled, axis, position, flip)")
