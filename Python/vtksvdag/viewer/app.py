@@ -13,6 +13,7 @@ import json
 import logging
 import os
 import socket
+import time
 import webbrowser
 
 from trame_rca.utils import RcaViewAdapter
@@ -266,7 +267,9 @@ class ViewerApp:
         def pick(fx, fy):
             session = self._session()
             hit = session.pick(fx, fy)
-            return self._answer(session, selected=hit)
+            # When the pick was answered (ms, the clock of the frames' "st"): bench/view.py
+            # times the click to the first frame encoded after it.
+            return self._answer(session, selected={**hit, "server_ms": time.time_ns() // 1_000_000})
 
         @trigger("svdag_pick_slice")
         def pick_slice(fx, fy):

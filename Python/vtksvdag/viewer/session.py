@@ -90,6 +90,7 @@ class ViewSession:
         self._capture.ReadFrontBufferOff()
         self._capture.ShouldRerenderOff()
         self._capture.SetInputBufferTypeToRGB()
+        self._label_values = set(volume.labels.tolist())
         self.selected = None
         self.hidden = set()
         self.clip = {"enabled": False, "axis": "x", "position": 0.5, "flip": False}
@@ -99,13 +100,24 @@ class ViewSession:
         self._drag = None  # {"button", "start", "last", "moved"} while a button is held
         self._gesture = None
         self.frames = 0
+        self._coarse_next = False
         self._waiters = []
 
     # -- trame-rca's RemoteControlledAreaProtocol -----------------------------------------
     @property
     def img_cols_rows(self):
-        """Render one frame and return it as (rows x cols x 3 uint8, cols, rows)."""
-        self.render_window.Render()
+        """Render one frame and return it as (rows x cols x 3 uint8, cols, rows). The first
+        frame after a change (selection, visibility, cuts, options) keeps to the drag's budget,
+        so the change shows at once; the frames after it refine."""
+        coarse = self._coarse_next and self._drag is None and self._gesture is None
+        self._coarse_next = False
+        if coarse:
+            self.render_window.SetDesiredUpdateRate(DRAG_UPDATE_RATE)
+        try:
+            self.render_window.Render()
+        finally:
+            if coarse:
+                self.render_window.SetDesiredUpdateRate(STILL_UPDATE_RATE)
         self.frames += 1
         image = self._read_window()
         if self.refining:
@@ -253,12 +265,14 @@ class ViewSession:
             raise ValueError(f"{label!r} is not a label of the volume")
         self.selected = None if label is None else {"label": int(label), "position": position}
         self.actor.set_highlight(None if label is None else [int(label)])
+        self._changed()
+
+    def _changed(self):
+        self._coarse_next = True
         self.on_change()
 
     def _values(self):
-        if not hasattr(self, "_value_set"):
-            self._value_set = set(self.volume.labels.tolist())
-        return self._value_set
+        return self._label_values
 
     def selection(self):
         """The selected label's row (value, name, position, voxel count), or {}."""
@@ -277,7 +291,7 @@ class ViewSession:
             raise ValueError(f"{label!r} is not a label of the volume")
         (self.actor.hide if hidden else self.actor.show)(int(label))
         (self.hidden.add if hidden else self.hidden.discard)(int(label))
-        self.on_change()
+        self._changed()
 
     def show_only(self, labels):
         labels = {int(v) for v in labels} & self._values()
@@ -287,7 +301,7 @@ class ViewSession:
         if labels:
             self.actor.show(sorted(labels))
         self.hidden = set(others)
-        self.on_change()
+        self._changed()
 
     def show_all(self):
         self.show_only(self._values())
@@ -325,7 +339,7 @@ class ViewSession:
                 self.mapper.CroppingOn()
         else:
             raise ValueError(f"unknown view option {name!r}")
-        self.on_change()
+        self._changed()
 
     def _world_box(self):
         """The volume's world bounds (voxel boxes, axis-aligned volumes)."""
