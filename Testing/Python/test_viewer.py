@@ -136,9 +136,7 @@ def test_labels_cuts_and_slice(session):
     session.set_option("crop", None)
     assert not session.mapper.GetCropping()
     session.set_option("lod", "block")
-    from vtksvdag._settingnames import names
-
-    assert names("LOD")[session.mapper.GetSettings().GetLOD()] == "block"
+    assert session.mapper.GetSettings().GetLODAsString() == "block"
     session.set_option("lod", "auto")
     for name, value in (("lod", "fine"), ("shading", 3), ("clip", "on"), ("crop", [0, 1]), ("path", "/")):
         with pytest.raises(ValueError):

@@ -21,12 +21,11 @@ from trame_rca.utils import RcaViewAdapter
 from .._settingnames import names as setting_names
 from ..volume import SegmentationVolume
 from .security import required_token, token_middleware
+from .scheduler import ProgressiveScheduler
 from .session import ViewSession, png_data_url
 
 log = logging.getLogger("vtksvdag.viewer")
 
-#: Frames per second the image scheduler paces a view to at most.
-TARGET_FPS = 30
 #: JPEG quality of the frames while they change, and of the last one once the view is still.
 INTERACTIVE_QUALITY = 70
 STILL_QUALITY = 92
@@ -43,8 +42,8 @@ _STATE_DEFAULTS = {
     "search": "",
     "hidden": [],
     "slice": {"src": "", "axis": "z", "index": 0, "count": 1},
-    "lod": "auto",
-    "shading": "voxel",
+    "lod": None,  # the settings' own, set with the rest
+    "shading": None,
     "clip": {"enabled": False, "axis": "x", "position": 0.5, "flip": False},
     "crop": [0.0, 1.0, 0.0, 1.0, 0.0, 1.0],
     "crop_on": False,
@@ -93,7 +92,6 @@ class ViewerApp:
         # The first view is made now, so that the device, the upload and the pipelines are ready
         # when the first browser arrives; it is that browser's.
         self._spare = ViewSession(volume, size=self.size or (512, 512), options=self.options)
-        self._stream = None
         self._setup_state()
         self._setup_protocol()
         self._setup_triggers()
@@ -167,7 +165,10 @@ class ViewerApp:
         state.max_listed = MAX_LISTED
         state.dims = list(self.volume.dims)
         state.trame__title = "vtksvdag view"
-        for key, value in _STATE_DEFAULTS.items():
+        settings = self._spare.mapper.GetSettings()
+        defaults = {**_STATE_DEFAULTS, "lod": settings.GetLODAsString(),
+                    "shading": settings.GetShadingAsString()}
+        for key, value in defaults.items():
             state[key] = value
         state.client_only(*_STATE_DEFAULTS)
 
@@ -203,8 +204,6 @@ class ViewerApp:
 
     def _open(self):
         """A new view for the calling browser (its own camera, selection and stream)."""
-        from trame_rca.schedulers import RcaImageRenderScheduler
-
         client_id = self._client_id()
         if client_id in self.sessions:
             session, adapter = self.sessions[client_id]
@@ -212,9 +211,7 @@ class ViewerApp:
             session, self._spare = self._spare, None
             if session is None:
                 session = ViewSession(self.volume, size=self.size or (512, 512), options=self.options)
-            scheduler = RcaImageRenderScheduler(session, target_fps=TARGET_FPS,
-                                                interactive_quality=INTERACTIVE_QUALITY,
-                                                still_quality=STILL_QUALITY, rca_encoder="jpeg")
+            scheduler = ProgressiveScheduler(session, INTERACTIVE_QUALITY, STILL_QUALITY)
             adapter = _BrowserAdapter(session, f"svdag-view-{client_id}", scheduler=scheduler,
                                       client_id=client_id)
             session.on_change = adapter.schedule_render

@@ -23,12 +23,12 @@ from .._settingnames import set_by_name
 from ..volume import check_axis
 
 #: Frames per second asked of the mapper while the pointer drags (its frame budget).
-DRAG_UPDATE_RATE = 12.0
+DRAG_UPDATE_RATE = 15.0
 #: The desired update rate of a still view: VTK's still rate, so every render refines.
 STILL_UPDATE_RATE = 0.0001
 #: Pixels a press may move before it is a drag rather than a click.
 CLICK_SLOP = 4
-#: Slice pixels per voxel at most (the browser scales the image further, pixelated).
+#: The slice's colors for background (and hidden labels) and the selection's highlight.
 SLICE_BACKGROUND = (30, 30, 36)
 SLICE_HIGHLIGHT = np.array((255, 191, 0), float)
 
@@ -131,9 +131,14 @@ class ViewSession:
         return image, cols, rows
 
     @property
+    def dragging(self):
+        """True while a pointer drags or a touch gesture goes on."""
+        return self._drag is not None or self._gesture is not None
+
+    @property
     def refining(self):
         """True while frames still add samples (a still view not yet converged)."""
-        return self._drag is None and self._gesture is None and not self.mapper.IsConverged()
+        return not self.dragging and not self.mapper.IsConverged()
 
     def process_resize_event(self, width, height):
         width, height = max(16, int(width)), max(16, int(height))
