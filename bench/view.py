@@ -16,9 +16,10 @@ Rows (all in one run, on the same machine):
                             arrival time of each frame minus its server time stamp (trame-rca's
                             meta "st", taken as encoding starts), for the frames of a still,
                             refining view at --size.
-  drag-fps                  frames per second arriving in the browser while the pointer drags
-                            (orbit) for --drag seconds; the mapper keeps each to its frame budget
-                            (the drag's update rate: coarser LOD and reduced resolution).
+  drag-fps                  frames per second arriving in the browser while a pointer drags
+                            (orbit) for --drag seconds, moving every 16 ms (pointer events on the
+                            image, as a 60 Hz mouse sends); the mapper keeps each frame to its
+                            budget (the drag's update rate: coarser LOD, reduced resolution).
   click-to-highlight        from the click (the browser's click event) to the first frame
                             encoded after the pick was answered, which shows the highlight:
                             on a converged view, and on a view still refining (a still pass in
@@ -202,21 +203,31 @@ def click_to_highlight(driver, converged):
 
 
 def drag_fps(driver, seconds):
-    from selenium.webdriver.common.action_chains import ActionChains
-    from selenium.webdriver.common.by import By
-
-    view = driver.find_element(By.CSS_SELECTOR, '[data-testid="svdag-view"]')
+    """Frames per second arriving while a pointer drags across the view for ``seconds``, its
+    moves sent every 16 ms (a 60 Hz mouse) as pointer events on the image."""
     frames(driver)
-    ActionChains(driver).move_to_element(view).click_and_hold().perform()
-    start = time.time()
-    step = 0
-    while time.time() - start < seconds:
-        step += 1
-        ActionChains(driver).move_by_offset(6 if (step // 20) % 2 == 0 else -6, 0).perform()
-    received = [f for f in frames(driver) if f[0] / 1000 >= start]
-    duration = time.time() - start
-    ActionChains(driver).release().perform()
-    return len(received) / duration, len(received), duration
+    return driver.execute_async_script("""
+        const [seconds, done] = [arguments[0], arguments[arguments.length - 1]];
+        const target = document.querySelector('[data-testid="svdag-view"] .remote-controlled-area');
+        const r = target.getBoundingClientRect();
+        const at = (x) => ({clientX: r.left + x, clientY: r.top + r.height / 2, pointerId: 1,
+                            pointerType: 'mouse', isPrimary: true, buttons: 1, button: 0,
+                            bubbles: true});
+        let x = r.width / 2, dx = 4;
+        target.dispatchEvent(new PointerEvent('pointerdown', at(x)));
+        const start = Date.now();
+        const timer = setInterval(() => {
+          if (x > r.width * 0.8 || x < r.width * 0.2) dx = -dx;
+          x += dx;
+          target.dispatchEvent(new PointerEvent('pointermove', at(x)));
+          if (Date.now() - start > seconds * 1000) {
+            clearInterval(timer);
+            const duration = (Date.now() - start) / 1000;
+            const count = window.__frames.filter(f => f[0] >= start).length;
+            target.dispatchEvent(new PointerEvent('pointerup', {...at(x), buttons: 0}));
+            done([count / duration, count, duration]);
+          }
+        }, 16);""", seconds)
 
 
 def first_image_pyvista(volume, size):
