@@ -99,7 +99,6 @@ class ViewSession:
         self.slice_index = volume.dims[2] // 2
         self._drag = None  # {"button", "start", "last", "moved"} while a button is held
         self._gesture = None
-        self.frames = 0
         self._coarse_next = False
         self._waiters = []
 
@@ -109,7 +108,7 @@ class ViewSession:
         """Render one frame and return it as (rows x cols x 3 uint8, cols, rows). The first
         frame after a change (selection, visibility, cuts, options) keeps to the drag's budget,
         so the change shows at once; the frames after it refine."""
-        coarse = self._coarse_next and self._drag is None and self._gesture is None
+        coarse = self._coarse_next and not self.dragging
         self._coarse_next = False
         if coarse:
             self.render_window.SetDesiredUpdateRate(DRAG_UPDATE_RATE)
@@ -118,15 +117,14 @@ class ViewSession:
         finally:
             if coarse:
                 self.render_window.SetDesiredUpdateRate(STILL_UPDATE_RATE)
-        self.frames += 1
         image = self._read_window()
-        if self.refining:
-            self.on_change()
-        else:
+        if self.mapper.IsConverged():
             waiters, self._waiters = self._waiters, []
             for future in waiters:
                 if not future.done():
                     future.set_result(image)
+        elif not self.dragging:
+            self.on_change()
         rows, cols = image.shape[:2]
         return image, cols, rows
 
