@@ -123,11 +123,12 @@ def _open(driver, url):
 def _selected(driver, previous=None):
     """Wait for the selection to change from ``previous`` (the data-x/y/camera of a new pick)
     and return (label text, pick details)."""
-    element = _by_id(driver, "svdag-selected-label")
-
     def changed(_):
-        state = (element.text, element.get_attribute("data-camera"), element.get_attribute("data-x"),
-                 element.get_attribute("data-y"))
+        # One read of all four, so that no answer lands between them.
+        state = tuple(driver.execute_script("""
+            const e = document.querySelector('[data-testid="svdag-selected-label"]');
+            return [e.textContent.trim(), e.getAttribute('data-camera'), e.getAttribute('data-x'),
+                    e.getAttribute('data-y')];"""))
         return state if state[1] and state != previous else False
     state = WebDriverWait(driver, TIMEOUT, poll_frequency=0.2).until(changed)
     return state
@@ -201,9 +202,12 @@ def test_page_shows_the_volume_and_segment_list(server, browser):
 
 
 def test_click_selects_the_label_vtksvdag_pick_finds(server, browser):
-    _open(browser, server)
+    before = _open(browser, server)
     x, y, state = _find_label_pixel(browser)
     assert int(state[0]) == _reference_pick(state)
+    # Highlighted: the other labels are dimmed in the next frames (the background stays).
+    WebDriverWait(browser, TIMEOUT, poll_frequency=0.5).until(
+        lambda _: _view_pixels(browser).mean() < before.mean() - 5)
     _assert_row_selected(browser, state[0])
 
 

@@ -31,6 +31,8 @@ CLICK_SLOP = 4
 #: The slice's colors for background (and hidden labels) and the selection's highlight.
 SLICE_BACKGROUND = (30, 30, 36)
 SLICE_HIGHLIGHT = np.array((255, 191, 0), float)
+#: The other labels' brightness while one is selected (the pyvista explorer example's).
+HIGHLIGHT_DIM = 0.35
 
 
 def _number(event, key, default=None):
@@ -267,7 +269,7 @@ class ViewSession:
         if label is not None and label not in self._values():
             raise ValueError(f"{label!r} is not a label of the volume")
         self.selected = None if label is None else {"label": int(label), "position": position}
-        self.actor.set_highlight(None if label is None else [int(label)])
+        self.actor.set_highlight(None if label is None else [int(label)], dim=HIGHLIGHT_DIM)
         self._changed()
 
     def _changed(self):
