@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
 # Installs the Debian packages vtkSVDAG builds and runs with (idempotent; needs root or sudo).
+# chromium and chromium-driver: the browser viewer's tests drive Debian's headless chromium.
 # Mesa comes from bookworm-backports: Debian 12's own lavapipe has no ray tracing.
 set -euo pipefail
 SUDO=""; [ "$(id -u)" -eq 0 ] || SUDO="sudo"
@@ -23,6 +24,7 @@ PKGS=(
   libvulkan-dev glslang-tools spirv-tools vulkan-tools vulkan-validationlayers
   libglm-dev libopenexr-dev
   xvfb xauth
+  chromium chromium-driver
 )
 missing=()
 for p in "${PKGS[@]}" mesa-vulkan-drivers; do

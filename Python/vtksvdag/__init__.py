@@ -38,6 +38,11 @@ def __getattr__(name):
         from .legend import add_label_legend
 
         return add_label_legend
+    # The viewer needs the optional extra "viewer" (trame).
+    if name == "view":
+        from .viewer import view
+
+        return view
     raise AttributeError(f"module 'vtksvdag' has no attribute {name!r}")
 
 
@@ -55,5 +60,6 @@ __all__ = [
     "read",
     "read_label_table",
     "refine",
+    "view",
     "__version__",
 ]

@@ -7,12 +7,12 @@ import argparse
 import sys
 
 from . import __version__
-from .commands import compress, decompress, info, render
+from .commands import compress, decompress, info, render, view
 from .commands._common import UsageError
 
 #: Every subcommand, in the order ``--help`` lists them. A new command is a module in
 #: ``vtksvdag/commands/`` plus one entry here.
-COMMANDS = [compress, decompress, info, render]
+COMMANDS = [compress, decompress, info, render, view]
 
 PROG = "vtksvdag"
 
