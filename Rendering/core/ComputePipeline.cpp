@@ -59,5 +59,22 @@ void ComputePipeline::dispatch(VkCommandBuffer cmd, VkDeviceAddress params, uint
   vkCmdDispatch(cmd, (width + groupSize - 1) / groupSize, (height + groupSize - 1) / groupSize, 1);
 }
 
+void ComputePipeline::dispatchBetweenBarriers(VkCommandBuffer cmd, VkDeviceAddress params,
+  uint32_t width, uint32_t height, uint32_t groupSize) const
+{
+  VkMemoryBarrier before{ VK_STRUCTURE_TYPE_MEMORY_BARRIER };
+  before.srcAccessMask = VK_ACCESS_MEMORY_WRITE_BIT;
+  before.dstAccessMask = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT;
+  vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_ALL_COMMANDS_BIT,
+    VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, 0, 1, &before, 0, nullptr, 0, nullptr);
+  this->dispatch(cmd, params, width, height, groupSize);
+  VkMemoryBarrier after{ VK_STRUCTURE_TYPE_MEMORY_BARRIER };
+  after.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT;
+  after.dstAccessMask = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_HOST_READ_BIT;
+  vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
+    VK_PIPELINE_STAGE_ALL_COMMANDS_BIT | VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &after, 0, nullptr, 0,
+    nullptr);
+}
+
 } // namespace render
 } // namespace svdag

@@ -47,18 +47,7 @@ void DepthPass::record(VkCommandBuffer cmd, const gpu::DepthParams& params)
   const uint32_t width = limits ? params.sizes.z : params.sizes.x;
   const uint32_t height = limits ? params.sizes.w : params.sizes.y;
 
-  VkMemoryBarrier before{ VK_STRUCTURE_TYPE_MEMORY_BARRIER };
-  before.srcAccessMask = VK_ACCESS_MEMORY_WRITE_BIT;
-  before.dstAccessMask = VK_ACCESS_SHADER_READ_BIT;
-  vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_ALL_COMMANDS_BIT,
-    VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, 0, 1, &before, 0, nullptr, 0, nullptr);
-  this->Program.dispatch(cmd, address, width, height, SVDAG_DEPTH_GROUP_SIZE);
-  VkMemoryBarrier after{ VK_STRUCTURE_TYPE_MEMORY_BARRIER };
-  after.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT;
-  after.dstAccessMask = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_HOST_READ_BIT;
-  vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
-    VK_PIPELINE_STAGE_ALL_COMMANDS_BIT | VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &after, 0, nullptr, 0,
-    nullptr);
+  this->Program.dispatchBetweenBarriers(cmd, address, width, height, SVDAG_DEPTH_GROUP_SIZE);
 }
 
 } // namespace render

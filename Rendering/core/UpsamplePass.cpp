@@ -21,19 +21,8 @@ UpsamplePass::UpsamplePass(Context& context)
 void UpsamplePass::record(VkCommandBuffer cmd, const gpu::UpsampleParams& params)
 {
   std::memcpy(this->Params.mapped(), &params, sizeof(params));
-  VkMemoryBarrier before{ VK_STRUCTURE_TYPE_MEMORY_BARRIER };
-  before.srcAccessMask = VK_ACCESS_MEMORY_WRITE_BIT;
-  before.dstAccessMask = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT;
-  vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_ALL_COMMANDS_BIT,
-    VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, 0, 1, &before, 0, nullptr, 0, nullptr);
-  this->Program.dispatch(
+  this->Program.dispatchBetweenBarriers(
     cmd, this->Params.address(), params.sizes.x, params.sizes.y, SVDAG_UPSAMPLE_GROUP_SIZE);
-  VkMemoryBarrier after{ VK_STRUCTURE_TYPE_MEMORY_BARRIER };
-  after.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT;
-  after.dstAccessMask = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_HOST_READ_BIT;
-  vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
-    VK_PIPELINE_STAGE_ALL_COMMANDS_BIT | VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &after, 0, nullptr, 0,
-    nullptr);
 }
 
 } // namespace render

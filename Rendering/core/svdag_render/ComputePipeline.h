@@ -26,6 +26,10 @@ public:
   // groupSize x groupSize over width x height.
   void dispatch(VkCommandBuffer cmd, VkDeviceAddress params, uint32_t width, uint32_t height,
     uint32_t groupSize) const;
+  // The same after every earlier write of the device (a trace's outputs) and before every later
+  // read (the next pass, the host, another API): a pass of its own in a submission.
+  void dispatchBetweenBarriers(VkCommandBuffer cmd, VkDeviceAddress params, uint32_t width,
+    uint32_t height, uint32_t groupSize) const;
 
 private:
   Context& Ctx;
