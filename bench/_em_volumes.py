@@ -5,8 +5,8 @@ shared 256^3 volumes in two ways that matter to a ray: thousands of labels, and 
 (label 0) between the cells: membranes a few voxels wide around every cell and whole regions
 nobody annotated. Rays there cross many cells whose blocks they pass by before they hit.
 
-``em_like(n)``: Voronoi cells (synthetic.voronoi, ~2,500 labels at every edge n after the
-removals below) with their faces warped by smooth sines (curved, irregular shapes like
+``em_like(n)``: Voronoi cells (synthetic.voronoi, ~2,500 labels at n = 512 after the removals
+below, the same cell size at every n) with their faces warped by smooth sines (curved, irregular shapes like
 neurites' cross sections rather than polyhedra), a membrane of label 0 where a voxel's label
 differs from a neighbour's within MEMBRANE voxels, and a quarter of the cells removed (label 0:
 unannotated space between the remaining ones). Deterministic (seeded).
@@ -42,9 +42,13 @@ def _warp_offsets(n, a, b):
     return np.rint(total).astype(np.int32)
 
 
-def em_like(n: int = 512, seeds: int = SEEDS) -> np.ndarray:
-    """An n^3 EM-like label volume, uint16, indexed [z, y, x] (see the module docstring)."""
+def em_like(n: int = 512, seeds: int | None = None) -> np.ndarray:
+    """An n^3 EM-like label volume, uint16, indexed [z, y, x] (see the module docstring); seeds
+    default to SEEDS at n = 512 and the same cell size at other n."""
     from vtksvdag import synthetic
+
+    if seeds is None:
+        seeds = max(8, int(round(SEEDS * (n / 512.0) ** 3)))
 
     cells = synthetic.voronoi((n, n, n), seeds, seed=SEED, dtype=np.uint16)
     # Warped sampling: every axis displaced by sines of the two others, clamped to the volume;

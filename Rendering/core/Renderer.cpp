@@ -1105,7 +1105,7 @@ const Image& Renderer::render(PassUse use)
   u = sized(u, traced, tracedWidth, tracedHeight);
   // The step counters (compute backend only), of this trace (not the guides': their address
   // stays 0, which the shader does not write).
-  const bool countSteps = features.stepStatistics && backend == Backend::Compute;
+  const bool countSteps = traceFeatures.stepStatistics && backend == Backend::Compute;
   if (countSteps)
   {
     const uint64_t bytes =
