@@ -18,7 +18,10 @@
 #include "vtkSmartPointer.h"
 #include "vtkStreamingDemandDrivenPipeline.h"
 #include "vtkUnsignedCharArray.h"
+#include "vtkUnsignedIntArray.h"
 
+#include <svdag/Layout.h>
+#include <svdag/Traversal.h>
 #include <svdag_render/ImageFiles.h>
 #include <svdag_render/Renderer.h>
 
@@ -40,6 +43,7 @@ struct vtkSegmentationSVDAGRenderer::Internals
   // Whether the last execution succeeded (Render()'s result), and its passes' frame times.
   bool Succeeded = false;
   std::vector<double> PassMilliseconds;
+  vtkNew<vtkUnsignedIntArray> StepCounts;
 };
 
 vtkStandardNewMacro(vtkSegmentationSVDAGRenderer);
@@ -354,6 +358,7 @@ int vtkSegmentationSVDAGRenderer::RequestData(
     svdag::vtkglue::setClipping(settings, this->Internal->ClippingPlanes, identity, identity,
       this->Cropping != 0, this->CroppingRegionPlanes);
     r.setSettings(settings);
+    r.setStepStatistics(this->StepStatistics != 0);
     in.PassMilliseconds.clear();
     using PassUse = svdag::render::Renderer::PassUse;
     for (int pass = 0; pass < this->PassesPerRender; ++pass)
@@ -428,6 +433,26 @@ SVDAG_RENDERER_STATISTIC(int, NumberOfBLAS, r->blasCount())
 // The header's clamp of TraceReduction is the core's range.
 static_assert(svdag::render::Renderer::MaximumTraceReduction == 8, "TraceReduction's clamp");
 
+vtkUnsignedIntArray* vtkSegmentationSVDAGRenderer::GetStepCounts()
+{
+  static const char* const names[] = { "rays", "cells", "cells_with_blocks", "blocks",
+    "dag_walks", "dag_steps", "shadow_rays", "hits" };
+  static_assert(sizeof(names) / sizeof(names[0]) == svdag::traversal::SVDAG_STAT_COUNT,
+    "one name per step counter");
+  vtkUnsignedIntArray* a = this->Internal->StepCounts;
+  const svdag::render::Renderer* r = this->Internal->Session.renderer();
+  const std::vector<uint32_t> empty;
+  const std::vector<uint32_t>& counts = r ? r->stepCounts() : empty;
+  a->SetName("StepCounts");
+  a->SetNumberOfComponents(int(svdag::traversal::SVDAG_STAT_COUNT));
+  for (int c = 0; c < int(svdag::traversal::SVDAG_STAT_COUNT); ++c)
+    a->SetComponentName(c, names[c]);
+  a->SetNumberOfTuples(vtkIdType(counts.size() / svdag::traversal::SVDAG_STAT_COUNT));
+  if (!counts.empty())
+    std::memcpy(a->GetPointer(0), counts.data(), counts.size() * sizeof(uint32_t));
+  return a;
+}
+
 double vtkSegmentationSVDAGRenderer::GetPassMilliseconds(int pass) const
 {
   const std::vector<double>& times = this->Internal->PassMilliseconds;
@@ -488,6 +513,7 @@ void vtkSegmentationSVDAGRenderer::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "Height: " << this->Height << "\n";
   os << indent << "PassesPerRender: " << this->PassesPerRender << "\n";
   os << indent << "TraceReduction: " << this->TraceReduction << "\n";
+  os << indent << "StepStatistics: " << this->StepStatistics << "\n";
   os << indent << "CameraPosition: ";
   triple(this->CameraPosition);
   os << indent << "CameraFocalPoint: ";

@@ -90,6 +90,7 @@
 #include <memory> // for std::unique_ptr
 
 class vtkPlane;
+class vtkUnsignedIntArray;
 class vtkPlaneCollection;
 class vtkSegmentationSVDAG;
 class vtkSegmentationSVDAGLabelProperties;
@@ -144,6 +145,19 @@ public:
    * svdag_render/UpsampleLayout.h). A change restarts the accumulation. */
   vtkSetClampMacro(TraceReduction, int, 1, 8);
   vtkGetMacro(TraceReduction, int);
+  ///@}
+
+  ///@{
+  /** Step statistics (compute backend; default off): the passes count, per traced pixel,
+   * where its rays spend their steps, in a pipeline variant compiled with the counters (off,
+   * they are compiled out). GetStepCounts after a pass: 8 components per pixel (named: rays,
+   * cells, cells_with_blocks, blocks, dag_walks, dag_steps, shadow_rays, hits; Traversal.h's
+   * SVDAG_STAT_*), summed over the last pass's rays, pixels in output order; no tuples where
+   * nothing was counted (off, or the ray tracing backend). The array belongs to the renderer. */
+  vtkSetMacro(StepStatistics, vtkTypeBool);
+  vtkGetMacro(StepStatistics, vtkTypeBool);
+  vtkBooleanMacro(StepStatistics, vtkTypeBool);
+  vtkUnsignedIntArray* GetStepCounts();
   ///@}
 
   ///@{
@@ -278,6 +292,7 @@ protected:
   int Height = 256;
   int PassesPerRender = 1;
   int TraceReduction = 1;
+  vtkTypeBool StepStatistics = 0;
   double CameraPosition[3] = { 0, 0, 1 };
   double CameraFocalPoint[3] = { 0, 0, 0 };
   double CameraViewUp[3] = { 0, 1, 0 };

@@ -16,7 +16,13 @@ Run from the repository root:
    one sample) and a restarting one (after ResetAccumulation: what every frame costs while the
    camera moves), interleaved so that drifts of the shared machine hit both alike; medians.
    Device bytes per part: encoding (block and DAG streams), acceleration (BLAS + TLAS + instances
-   + primitive map, or the cell grid + hidden-label bits), and the renderer's total.
+   + primitive map, or the cell grid + hidden-label bits), and the renderer's total. Beside each
+   compute frame, where its rays spend their steps (one more restarting frame with the step
+   counters on): cells visited, block records read, DAG walks and their iterations per ray, their
+   sum (steps per ray), and the divergence of the 4 x 2 pixel quads traced side by side (the
+   mean over quads of the busiest pixel's steps, and the mean over that). Then the generated
+   EM-like volumes (--generated; bench/_em_volumes.py: thousands of labels, unlabelled space
+   between the cells) at voxel and block LOD.
 2. Volcanite (when a binary is given by --volcanite, the VOLCANITE environment variable or found
    on PATH; it is not a dependency): its frame time on each volume through --volcanite-command
    (a template; the last "<number> ms" it prints is taken), beside ours; without a binary, the
@@ -54,6 +60,7 @@ import numpy as np
 
 REPO = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+import _em_volumes  # noqa: E402
 import _scenes  # noqa: E402
 # The real volumes: ../shared/data, or where VTKSVDAG_SHARED_DATA points (as the tests).
 SHARED_DATA = pathlib.Path(os.environ.get("VTKSVDAG_SHARED_DATA") or REPO.parent / "shared" / "data")
@@ -64,6 +71,9 @@ COLUMNS = [
     "frames", "ms_median", "ms_min", "ms_restart_median", "restart_ratio", "seconds", "rmse",
     "mean_rel_error", "setup_seconds", "bytes_blas", "bytes_tlas", "bytes_encoding",
     "bytes_acceleration", "bytes_device",
+    # Step statistics of the compute backend's frames (one extra frame with the counters on):
+    "rays_per_pixel", "cells_per_ray", "blocks_per_ray", "walks_per_ray", "dag_steps_per_ray",
+    "steps_per_ray", "quad_max_steps", "quad_efficiency",
 ]
 LODS = {"block": 0, "leaf": 1, "voxel": 2}
 BACKENDS = ("rt", "compute")
@@ -134,6 +144,7 @@ def frame_times(volume, name, sizes, frames, configs):
                     render(r)
                     restart.append(r.GetLastFrameMilliseconds())
                 median, restart_median = statistics.median(times), statistics.median(restart)
+                steps = step_statistics(r, size) if backend == "compute" else {}
                 rows.append(dict(
                     kind="frame", volume=name, device=r.GetDeviceName(), backend=backend,
                     width=size, height=size, lod=lod, bounces=bounces, nee=int(nee), spp=1,
@@ -142,12 +153,48 @@ def frame_times(volume, name, sizes, frames, configs):
                     restart_ratio=round(restart_median / median, 3),
                     setup_seconds=round(r.GetSetupSeconds(), 6), bytes_blas=r.GetBLASBytes(),
                     bytes_tlas=r.GetTLASBytes(), bytes_encoding=r.GetEncodingBytes(),
-                    bytes_acceleration=r.GetAccelerationBytes(), bytes_device=r.GetDeviceBytes()))
+                    bytes_acceleration=r.GetAccelerationBytes(), bytes_device=r.GetDeviceBytes(),
+                    **steps))
                 print(f"  {name:<24} {size:>4} {lod:>6} {bounces} bounce{'s' if bounces > 1 else ' '} "
                       f"NEE {'on ' if nee else 'off'} {backend:>7}: {median:8.2f} ms "
                       f"(restarting {restart_median:.2f}, x{restart_median / median:.2f}), "
-                      f"{(r.GetEncodingBytes() + r.GetAccelerationBytes()) / 1e6:.2f} MB", flush=True)
+                      f"{(r.GetEncodingBytes() + r.GetAccelerationBytes()) / 1e6:.2f} MB"
+                      + (f", {steps['steps_per_ray']:.1f} steps per ray "
+                         f"(cells {steps['cells_per_ray']:.2f}, blocks {steps['blocks_per_ray']:.2f}, "
+                         f"DAG steps {steps['dag_steps_per_ray']:.2f}; 4x2 quads: max "
+                         f"{steps['quad_max_steps']:.1f}, efficiency {steps['quad_efficiency']:.2f})"
+                         if steps else ""), flush=True)
     return rows
+
+
+def step_statistics(renderer, size):
+    """Where the compute backend's rays spend their steps in one restarting frame traced with
+    the step counters on (a pipeline variant of its own, so the timed frames do not count):
+    per ray, cells visited, block records read, DAG walks and their iterations, and their sum
+    (steps_per_ray); the divergence of the 4 x 2 pixel quads whose rays run side by side
+    (camera.comp; lavapipe's SIMD8): the mean over quads of the largest pixel's steps, and
+    the mean steps over that (1: no lane waits for another)."""
+    from vtkmodules.util.numpy_support import vtk_to_numpy
+
+    renderer.SetStepStatistics(True)
+    renderer.ResetAccumulation()
+    render(renderer)
+    counts = vtk_to_numpy(renderer.GetStepCounts()).astype(np.int64).reshape(size, size, 8)
+    renderer.SetStepStatistics(False)
+    rays, cells, _, blocks, walks, dag_steps = (counts[:, :, i].sum() for i in range(6))
+    per_pixel = counts[:, :, 1] + counts[:, :, 3] + counts[:, :, 5]  # [y, x]
+    quads = per_pixel[: size - size % 2, : size - size % 4]
+    quads = quads.reshape(quads.shape[0] // 2, 2, quads.shape[1] // 4, 4).transpose(0, 2, 1, 3)
+    quads = quads.reshape(-1, 8)
+    busiest = float(quads.max(axis=1).mean())
+    rays = max(int(rays), 1)
+    return dict(
+        rays_per_pixel=round(rays / (size * size), 4), cells_per_ray=round(cells / rays, 4),
+        blocks_per_ray=round(blocks / rays, 4), walks_per_ray=round(walks / rays, 4),
+        dag_steps_per_ray=round(dag_steps / rays, 4),
+        steps_per_ray=round((cells + blocks + dag_steps) / rays, 4),
+        quad_max_steps=round(busiest, 3),
+        quad_efficiency=round(float(quads.mean()) / busiest, 4) if busiest > 0 else 1.0)
 
 
 def print_frame_table(rows, name):
@@ -156,7 +203,7 @@ def print_frame_table(rows, name):
     print(f"\n{name}: ms per frame, 1 spp (accumulating / restarting), and device bytes of encoding + "
           "acceleration   [paper code on lavapipe, voronoi256, NEE off: reported, not measured here]")
     print(f"{'size':>9} {'LOD':>6} {'b':>2} {'NEE':>4} | {'rt':>15} | {'compute':>15} | {'rt/compute':>10} | "
-          f"{'rt MB':>6} {'cmp MB':>6}   paper")
+          f"{'rt MB':>6} {'cmp MB':>6} | {'steps/ray':>9} {'quad max':>8} {'quad eff':>8}   paper")
     keys = []
     for r in rows:
         key = (r["width"], r["lod"], r["bounces"], r["nee"])
@@ -173,7 +220,9 @@ def print_frame_table(rows, name):
               f"{by['rt']['ms_median']:6.1f} / {by['rt']['ms_restart_median']:6.1f} | "
               f"{by['compute']['ms_median']:6.1f} / {by['compute']['ms_restart_median']:6.1f} | "
               f"{by['rt']['ms_median'] / by['compute']['ms_median']:10.2f} | "
-              f"{mb('rt'):6.2f} {mb('compute'):6.2f}   {anchor}")
+              f"{mb('rt'):6.2f} {mb('compute'):6.2f} | {by['compute'].get('steps_per_ray', float('nan')):9.2f} "
+              f"{by['compute'].get('quad_max_steps', float('nan')):8.1f} "
+              f"{by['compute'].get('quad_efficiency', float('nan')):8.2f}   {anchor}")
 
 
 def find_volcanite(path):
@@ -342,6 +391,10 @@ def main(argv=None) -> int:
     parser.add_argument("--error-size", type=int, default=128, help="image size of the error study")
     parser.add_argument("--reference-spp", type=int, default=2048, help="samples of the reference")
     parser.add_argument("--max-spp", type=int, default=256, help="last checkpoint of the error curves")
+    parser.add_argument("--generated", nargs="*", default=None,
+                        help="generated volumes to time as well (bench/_em_volumes.py: em_like<n>, "
+                             "tiled2_<shared volume>; built once, kept in --out as .svdag); "
+                             "default em_like512 (--quick: em_like48)")
     parser.add_argument("--volcanite", help="path of a Volcanite binary (else $VOLCANITE or PATH)")
     parser.add_argument("--volcanite-command", default=DEFAULT_VOLCANITE_COMMAND,
                         help="how Volcanite renders one volume (placeholders {binary} {volume} "
@@ -379,6 +432,16 @@ def main(argv=None) -> int:
             print(f"Frame times, {other}:")
             rows += frame_times(read(str(path)), other, sizes, args.frames, configurations(other, False))
             print_frame_table(rows, other)
+    generated = args.generated if args.generated is not None else (
+        ["em_like48"] if args.quick else ["em_like512"])
+    for other in generated:
+        built = time.perf_counter()
+        em = _em_volumes.cached_volume(other, out, SHARED_DATA)
+        print(f"Frame times, {other} (generated, {' x '.join(str(d) for d in em.dims)} voxels, "
+              f"{len(em.labels)} labels, ready in {time.perf_counter() - built:.1f} s):")
+        configs = configurations(other, True) if args.quick else [(lod, 1, True) for lod in ("voxel", "block")]
+        rows += frame_times(em, other, sizes, args.frames, configs)
+        print_frame_table(rows, other)
 
     binary = find_volcanite(args.volcanite)
     if binary:

@@ -280,6 +280,7 @@ void PipelineLibrary::compile(Program& program)
   constants[SVDAG_CONSTANT_EMISSION] = f.emission;
   constants[SVDAG_CONSTANT_TRANSMISSION] = f.transmission;
   constants[SVDAG_CONSTANT_PREVIEW] = f.preview;
+  constants[SVDAG_CONSTANT_STEP_STATISTICS] = f.stepStatistics;
   VkSpecializationMapEntry entries[SVDAG_CONSTANT_COUNT];
   for (uint32_t i = 0; i < SVDAG_CONSTANT_COUNT; ++i)
     entries[i] = { i, uint32_t(i * sizeof(VkBool32)), sizeof(VkBool32) };

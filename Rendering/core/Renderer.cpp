@@ -11,6 +11,8 @@
 #include "svdag_render/Scene.h"
 
 #include <svdag/RayCaster.h>
+#include <svdag/Layout.h>
+#include <svdag/Traversal.h>
 
 #include <algorithm>
 #include <chrono>
@@ -240,6 +242,8 @@ struct Renderer::Gpu
   uint64_t compositedGeneration = 0;
   uint64_t depthAllocations = 0;
   std::unique_ptr<DepthPass> depthPass;
+  // The step counters of the statistics variant (Renderer::setStepStatistics), made on first use.
+  Buffer stepCounts;
   ViewRays tracedRays;
   double tracedAdvance = 0;
   // Per-label materials (host-visible: an edit is a memcpy) and the environment's tables.
@@ -824,6 +828,7 @@ ShaderFeatures Renderer::shaderFeatures() const
   f.sun = sun.on && (sun.irradiance[0] > 0 || sun.irradiance[1] > 0 || sun.irradiance[2] > 0);
   f.emission = false;
   f.transmission = false;
+  f.stepStatistics = this->StepStatisticsOn;
   for (const Material& m : this->Materials)
   {
     if (!visible(m))
@@ -1098,6 +1103,17 @@ const Image& Renderer::render(PassUse use)
   else
     g.guideState.clear();
   u = sized(u, traced, tracedWidth, tracedHeight);
+  // The step counters (compute backend only), of this trace (not the guides': their address
+  // stays 0, which the shader does not write).
+  const bool countSteps = traceFeatures.stepStatistics && backend == Backend::Compute;
+  if (countSteps)
+  {
+    const uint64_t bytes =
+      uint64_t(tracedWidth) * tracedHeight * svdag::traversal::SVDAG_STAT_COUNT * sizeof(uint32_t);
+    if (g.stepCounts.size() != bytes)
+      g.stepCounts = Buffer(g.context, bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUse::Readback);
+    u.stepStatistics = addresses(g.stepCounts.address(), 0);
+  }
   const gpu::DepthParams limitsParams =
     depthLimits ? limitsFor(traced, tracedWidth, tracedHeight) : gpu::DepthParams{};
 
@@ -1221,6 +1237,11 @@ const Image& Renderer::render(PassUse use)
     size_t(pixels) * 3 * sizeof(float));
   this->readColor();
   read(out.variance, g.full.variance, pixels);
+  if (countSteps)
+    read(this->StepCounts, g.stepCounts,
+      size_t(tracedWidth) * tracedHeight * svdag::traversal::SVDAG_STAT_COUNT);
+  else
+    this->StepCounts.clear();
   double sum = 0;
   for (float v : out.variance)
     sum += v;

@@ -24,6 +24,16 @@ uvec2 pixelOfInvocation()
 
 SvdagPayload payload;
 
+// Step statistics (Traversal.h's SVDAG_STAT): this invocation's counts over its pass, written
+// per pixel at the end. A specialization constant: off, the counting is compiled out.
+layout(constant_id = SVDAG_CONSTANT_STEP_STATISTICS) const bool featureStepStatistics = false;
+uint gStepCounts[8];
+#define SVDAG_STAT(counter)                                                                        \
+  {                                                                                                \
+    if (featureStepStatistics)                                                                     \
+      gStepCounts[(counter)] += 1u;                                                                \
+  }
+
 #include "Streams.glsl"
 #include "HitPayload.glsl"
 
@@ -108,5 +118,19 @@ void main()
   gCellStarts = SvdagWords(frame.cellGrid.xy);
   gAnyHidden = frame.cellGrid.z != 0u || frame.cellGrid.w != 0u;
   gHidden = SvdagWords(frame.cellGrid.zw);
-  svdagRenderPixel(pixelOfInvocation());
+  if (featureStepStatistics)
+  {
+    for (uint c = 0u; c < SVDAG_STAT_COUNT; ++c)
+      gStepCounts[c] = 0u;
+  }
+  uvec2 pixel = pixelOfInvocation();
+  svdagRenderPixel(pixel);
+  if (featureStepStatistics && pixel.x < frame.image.x && pixel.y < frame.image.y &&
+    (frame.stepStatistics.x != 0u || frame.stepStatistics.y != 0u))
+  {
+    SvdagUintOutput counts = SvdagUintOutput(frame.stepStatistics.xy);
+    uint base = SVDAG_STAT_COUNT * (pixel.x + frame.image.x * pixel.y);
+    for (uint c = 0u; c < SVDAG_STAT_COUNT; ++c)
+      counts.v[base + c] = gStepCounts[c];
+  }
 }

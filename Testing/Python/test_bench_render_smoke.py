@@ -16,7 +16,10 @@ COLUMNS = [
     "frames", "ms_median", "ms_min", "ms_restart_median", "restart_ratio", "seconds", "rmse",
     "mean_rel_error", "setup_seconds", "bytes_blas", "bytes_tlas", "bytes_encoding",
     "bytes_acceleration", "bytes_device",
+    "rays_per_pixel", "cells_per_ray", "blocks_per_ray", "walks_per_ray", "dag_steps_per_ray",
+    "steps_per_ray", "quad_max_steps", "quad_efficiency",
 ]
+STEP_COLUMNS = COLUMNS[COLUMNS.index("rays_per_pixel"):]
 
 
 @pytest.fixture(scope="module")
@@ -38,10 +41,27 @@ def test_csv_columns_and_rows(quick_run):
     frames = [r for r in rows if r["kind"] == "frame"]
     errors = [r for r in rows if r["kind"] == "error"]
     assert len(frames) + len(errors) == len(rows)
-    # 3 configurations (voxel and block with NEE, voxel without) x both backends at one size.
-    assert sorted((r["lod"], r["nee"], r["backend"]) for r in frames) == sorted(
-        (lod, nee, backend) for lod, nee in (("voxel", "1"), ("block", "1"), ("voxel", "0"))
-        for backend in ("rt", "compute"))
+    # A shared volume and a generated EM-like one, each: 3 configurations (voxel and block with
+    # NEE, voxel without) x both backends at one size.
+    assert sorted({r["volume"] for r in frames}) == ["em_like48", "plantseg_1135_mini"]
+    for volume in ("plantseg_1135_mini", "em_like48"):
+        assert sorted((r["lod"], r["nee"], r["backend"]) for r in frames if r["volume"] == volume) == sorted(
+            (lod, nee, backend) for lod, nee in (("voxel", "1"), ("block", "1"), ("voxel", "0"))
+            for backend in ("rt", "compute"))
+    # Step statistics beside the compute frames (none for rt): every ray visits at most the cells
+    # of the grid, steps per ray is the sum of its parts, quads' busiest pixel >= the mean.
+    for r in frames:
+        if r["backend"] == "rt":
+            assert all(r[c] == "" for c in STEP_COLUMNS)
+            continue
+        v = {c: float(r[c]) for c in STEP_COLUMNS}
+        assert v["rays_per_pixel"] >= 1.0
+        assert v["walks_per_ray"] <= v["blocks_per_ray"] <= v["steps_per_ray"]
+        assert abs(v["cells_per_ray"] + v["blocks_per_ray"] + v["dag_steps_per_ray"]
+                   - v["steps_per_ray"]) < 1e-3
+        assert 0.0 < v["quad_efficiency"] <= 1.0 and v["quad_max_steps"] > 0
+        if r["lod"] == "block":
+            assert v["dag_steps_per_ray"] == 0.0  # block LOD hits the box: no DAG walk
     for r in frames:
         assert float(r["ms_median"]) > 0 and float(r["ms_min"]) <= float(r["ms_median"])
         assert float(r["ms_restart_median"]) > 0
@@ -51,7 +71,8 @@ def test_csv_columns_and_rows(quick_run):
         # The compute backend holds no BVH; the rt one does, and more acceleration bytes.
         assert (int(r["bytes_blas"]) > 0) == (r["backend"] == "rt")
     for lod, nee in (("voxel", "1"), ("block", "1")):
-        pair = {r["backend"]: r for r in frames if (r["lod"], r["nee"]) == (lod, nee)}
+        pair = {r["backend"]: r for r in frames
+                if (r["volume"], r["lod"], r["nee"]) == ("plantseg_1135_mini", lod, nee)}
         assert int(pair["rt"]["bytes_acceleration"]) > int(pair["compute"]["bytes_acceleration"])
         assert pair["rt"]["bytes_encoding"] == pair["compute"]["bytes_encoding"]
     # Error curves per LOD and estimator at 1, 2, 4, 8 spp, time growing with the samples.

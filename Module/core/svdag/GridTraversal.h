@@ -109,6 +109,11 @@ SVDAG_FN SvdagGridHit svdagCastGrid(SVDAG_STREAMS_PARAM SVDAG_GRID_PARAM SVDAG_G
   result.voxel = ivec3(0);
   result.normal = ivec3(0);
   result.lod = lod;
+  SVDAG_STAT(SVDAG_STAT_RAYS);
+  if (anyHit)
+  {
+    SVDAG_STAT(SVDAG_STAT_SHADOW_RAYS);
+  }
   if (!(smin <= smax) || dims.x <= 0 || dims.y <= 0 || dims.z <= 0)
     return result;
 
@@ -153,12 +158,14 @@ SVDAG_FN SvdagGridHit svdagCastGrid(SVDAG_STREAMS_PARAM SVDAG_GRID_PARAM SVDAG_G
   uint maxSteps = uint(cells.x) + uint(cells.y) + uint(cells.z) + 1u;
   for (uint i = 0u; i < maxSteps; ++i)
   {
+    SVDAG_STAT(SVDAG_STAT_CELLS);
     uint cellIndex = uint(cell.x) + uint(cells.x) * (uint(cell.y) + uint(cells.y) * uint(cell.z));
     SVDAG_GRID_INDEX first;
     SVDAG_GRID_INDEX end;
     SVDAG_GRID_CELL_BLOCKS(cellIndex, first, end);
     if (first != end)
     {
+      SVDAG_STAT(SVDAG_STAT_FULL_CELLS);
       // Re-anchored: relative to the cell's corner, at the cell entry.
       vec3 local;
       for (int a = 0; a < 3; ++a)
@@ -173,6 +180,7 @@ SVDAG_FN SvdagGridHit svdagCastGrid(SVDAG_STREAMS_PARAM SVDAG_GRID_PARAM SVDAG_G
         uvec3 hi;
         uint rootRef;
         uint label;
+        SVDAG_STAT(SVDAG_STAT_BLOCKS);
         SVDAG_GRID_BLOCK(b, lo, hi, rootRef, label);
         if (SVDAG_GRID_SKIP(label))
           continue;
@@ -199,6 +207,7 @@ SVDAG_FN SvdagGridHit svdagCastGrid(SVDAG_STREAMS_PARAM SVDAG_GRID_PARAM SVDAG_G
       {
         result.s = s + SVDAG_GRID_REAL(best);
         result.cell = cell;
+        SVDAG_STAT(SVDAG_STAT_HITS);
         return result;
       }
     }

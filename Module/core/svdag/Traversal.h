@@ -117,6 +117,22 @@ SVDAG_CONST SVDAG_LOD_LEAF = 1u;
 SVDAG_CONST SVDAG_LOD_VOXEL = 2u;
 SVDAG_CONST SVDAG_MAX_STEPS = 64u;
 
+/* Step statistics: SVDAG_STAT(counter) is called where a ray spends work (here and in
+ * GridTraversal.h); an includer that counts defines it (the compute backend's statistics
+ * variant, camera.comp; a test), everyone else gets nothing. The counters: */
+SVDAG_CONST SVDAG_STAT_RAYS = 0u;        // grid walks (camera, bounce and shadow rays)
+SVDAG_CONST SVDAG_STAT_CELLS = 1u;       // cells visited
+SVDAG_CONST SVDAG_STAT_FULL_CELLS = 2u;  // cells visited that hold blocks
+SVDAG_CONST SVDAG_STAT_BLOCKS = 3u;      // block records read (the cells' blocks tested)
+SVDAG_CONST SVDAG_STAT_WALKS = 4u;       // DAG walks (the ray enters the block's box)
+SVDAG_CONST SVDAG_STAT_NODE_STEPS = 5u;  // iterations of the DAG walks (regions classified)
+SVDAG_CONST SVDAG_STAT_SHADOW_RAYS = 6u; // grid walks of occlusion rays (among RAYS)
+SVDAG_CONST SVDAG_STAT_HITS = 7u;        // grid walks that hit
+SVDAG_CONST SVDAG_STAT_COUNT = 8u;
+#ifndef SVDAG_STAT
+#define SVDAG_STAT(counter)
+#endif
+
 /* Direction components below this magnitude are treated as zero (their reciprocal, at most 1e30,
  * keeps every t finite: no inf, and never 0 * inf = NaN). Beyond every finite t below. */
 #define SVDAG_PARALLEL_EPS 1.0e-30f
@@ -260,6 +276,7 @@ SVDAG_FN SvdagBlockHit svdagIntersectBlock(SVDAG_STREAMS_PARAM uvec3 lo, uvec3 h
     return result;
   }
 
+  SVDAG_STAT(SVDAG_STAT_WALKS);
   bool rootInverted = refComplement(rootRef);
   SVDAG_OFFSET_T rootOffset = SVDAG_OFFSET_T(refTarget(rootRef));
   uint rootHeader;
@@ -275,6 +292,7 @@ SVDAG_FN SvdagBlockHit svdagIntersectBlock(SVDAG_STREAMS_PARAM uvec3 lo, uvec3 h
 
   for (uint iteration = 0u; iteration < SVDAG_MAX_STEPS; ++iteration)
   {
+    SVDAG_STAT(SVDAG_STAT_NODE_STEPS);
     // Classify the largest uniform aligned region around the voxel: size 8, 4 or 1.
     uvec3 local = uvec3(voxel);
     uint octant8 = octant(local.x, local.y, local.z, MID_SIZE);

@@ -93,7 +93,9 @@ typedef uint32_t uint;
 #define SVDAG_CONSTANT_EMISSION 3
 #define SVDAG_CONSTANT_TRANSMISSION 4
 #define SVDAG_CONSTANT_PREVIEW 5
-#define SVDAG_CONSTANT_COUNT 6
+/* The compute backend's step statistics (camera.comp; the ray tracing shaders have none). */
+#define SVDAG_CONSTANT_STEP_STATISTICS 6
+#define SVDAG_CONSTANT_COUNT 7
 
 /* The compute backend's workgroup: SVDAG_COMPUTE_GROUP_SIZE^2 pixels (camera.comp). */
 #define SVDAG_COMPUTE_GROUP_SIZE 8
@@ -169,6 +171,9 @@ SVDAG_UNIFORMS_BEGIN(FrameUniforms)
   uvec4 cellGrid;      // addresses: xy each cell's first block (uint32, cells + 1 entries, Scene.h),
                        // zw the hidden label bits (bit l of word l / 32; 0: none hidden)
   uvec4 volumeDims;    // xyz: voxels along x, y, z; w: cells along z
+  uvec4 stepStatistics; // addresses: xy per-pixel step counters (the statistics variant only:
+                       // Traversal.h's SVDAG_STAT_COUNT uint32 per pixel, counter c of pixel i
+                       // at i * SVDAG_STAT_COUNT + c, summed over the pass's rays); z, w unused
   // Clipping (Module/core/svdag/Clipping.h): every ray, primary and secondary, is clipped to the
   // region the planes keep. x: planes used in clipPlanes (0: no clipping); y, z, w unused.
   uvec4 clipping;
@@ -203,8 +208,8 @@ SVDAG_GPU_FN vec3 svdagLabelColor(uint labelIndex)
 }
 
 #ifdef __cplusplus
-// 34 members and the clipping plane array (a vec4 array has a 16-byte stride in std140 too).
-static_assert(sizeof(FrameUniforms) == (34 + SVDAG_CLIP_MAX_SLOTS) * 16,
+// 35 members and the clipping plane array (a vec4 array has a 16-byte stride in std140 too).
+static_assert(sizeof(FrameUniforms) == (35 + SVDAG_CLIP_MAX_SLOTS) * 16,
   "FrameUniforms must stay a list of 16-byte members");
 } // namespace gpu
 } // namespace render

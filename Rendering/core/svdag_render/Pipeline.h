@@ -60,11 +60,14 @@ struct ShaderFeatures
   bool transmission = false;
   // The preview (PathTracer.h's SVDAG_FEATURE_PREVIEW): primary hits only, a small pipeline.
   bool preview = false;
+  // The compute backend's per-pixel step counters (Renderer::setStepStatistics); the ray
+  // tracing backend ignores it.
+  bool stepStatistics = false;
   bool operator==(const ShaderFeatures& o) const
   {
     return nextEventEstimation == o.nextEventEstimation && environmentMap == o.environmentMap &&
       sun == o.sun && emission == o.emission && transmission == o.transmission &&
-      preview == o.preview;
+      preview == o.preview && stepStatistics == o.stepStatistics;
   }
   bool operator!=(const ShaderFeatures& o) const { return !(*this == o); }
 };

@@ -298,6 +298,19 @@ public:
   // one), whichever renderer asked for it first: the compile time of that feature set.
   double pipelineCompileSeconds() const;
 
+  // Step statistics of the compute backend: from the next render() on, a pipeline variant that
+  // counts where each pixel's rays spend their steps (Traversal.h's SVDAG_STAT_* counters: grid
+  // walks, cells visited, cells with blocks, block records read, DAG walks, DAG walk iterations,
+  // occlusion rays, hits), summed over the pass's rays. Off (default): that variant is not used
+  // and the counting is compiled out. The ray tracing backend counts nothing.
+  void setStepStatistics(bool on) { this->StepStatisticsOn = on; }
+  bool stepStatistics() const { return this->StepStatisticsOn; }
+  // After a render() with step statistics on the compute backend: SVDAG_STAT_COUNT counters per
+  // traced pixel (pixel i's counter c at i * SVDAG_STAT_COUNT + c, pixels in image() order; the
+  // traced size is ceil(width / traceReduction()) x ceil(height / traceReduction())); empty
+  // otherwise.
+  const std::vector<uint32_t>& stepCounts() const { return this->StepCounts; }
+
   // Starts a new accumulation on the next render().
   void resetAccumulation() { this->AccumulationValid = false; }
   // Samples per pixel in the current image (0 before the first render()).
@@ -387,6 +400,8 @@ private:
   double ReadbackMilliseconds = 0;
   double ErrorEstimate = 0;
   bool ShareColor = false;
+  bool StepStatisticsOn = false;
+  std::vector<uint32_t> StepCounts;
 
   std::vector<uint32_t> ExplicitHidden;
   uint32_t BlockChunkShift = Scene::MaxBlockChunkShift;
