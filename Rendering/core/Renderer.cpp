@@ -1067,6 +1067,7 @@ const Image& Renderer::render(PassUse use)
 
   // A reduced frame's guides: the pixel-center hits of the full image (no bounce, no light),
   // traced again only when they change.
+  g.guideMilliseconds = 0;
   if (r > 1)
   {
     gpu::FrameUniforms guide = sized(u, g.full, this->Width, this->Height);
@@ -1075,7 +1076,8 @@ const Image& Renderer::render(PassUse use)
     guide.sunRadiance.w = 0.0f;
     guide.sampling = glm::uvec4(0u, 1u, settings.seed, guide.sampling.w);
     guide.display = glm::vec4(0.0f);
-    // The preview's guides (block boxes) are not the path tracer's.
+    // A visibility change is a scene change (the hidden labels' blocks go); the preview's
+    // guides (block boxes) are not the path tracer's.
     const uint64_t guideGenerations[2] = { this->SceneGeneration, preview ? 1u : 0u };
     std::vector<unsigned char> guideState(sizeof(guide) + sizeof(guideGenerations));
     std::memcpy(guideState.data(), &guide, sizeof(guide));
@@ -1097,8 +1099,6 @@ const Image& Renderer::render(PassUse use)
         std::chrono::duration<double, std::milli>(Clock::now() - guideStart).count();
       g.guideState = std::move(guideState);
     }
-    else
-      g.guideMilliseconds = 0;
   }
   else
     g.guideState.clear();

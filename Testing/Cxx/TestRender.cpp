@@ -866,5 +866,18 @@ TEST(RenderUpsampling, GuidesAreExactAndColorsStayWithinTheirLabel)
     EXPECT_LT(guided, 0.7 * replicated) << int(backend) << " " << guided << " " << replicated;
     std::cout << "backend " << int(backend) << ": guided SSE " << guided << ", replicated " << replicated
               << ", crossed " << crossed << " of " << foreground << "\n";
+    // The guides follow what is visible: a label hidden by its material, then by the hidden set.
+    svdag::render::Material invisible = reduced->material(0);
+    invisible.baseColorVisibility.a = 0;
+    reduced->setMaterial(0, invisible);
+    const svdag::render::Image withoutRed = reduced->render();
+    EXPECT_EQ(std::count(withoutRed.label.begin(), withoutRed.label.end(), 1u), 0);
+    EXPECT_GT(std::count(withoutRed.label.begin(), withoutRed.label.end(), 2u), 0);
+    invisible.baseColorVisibility.a = 1;
+    reduced->setMaterial(0, invisible);
+    reduced->setHiddenLabels({ 1 });
+    const svdag::render::Image withoutBlue = reduced->render();
+    EXPECT_EQ(std::count(withoutBlue.label.begin(), withoutBlue.label.end(), 2u), 0);
+    EXPECT_GT(std::count(withoutBlue.label.begin(), withoutBlue.label.end(), 1u), 0);
   }
 }
