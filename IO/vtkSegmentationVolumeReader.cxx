@@ -6,6 +6,7 @@
 #include "vtkObjectFactory.h"
 #include "vtkSVDAGParallel.h"
 #include "vtkSegmentationSVDAG.h"
+#include "vtkStreamingDemandDrivenPipeline.h"
 #include "vtkUnsignedCharArray.h"
 
 #include "svdagSVDAGFileSlabSource.h"
@@ -153,6 +154,8 @@ int vtkSegmentationVolumeReader::RequestInformation(
     vtkErrorMacro("Cannot read " << name << ": " << e.what());
     return fail(vtkErrorCode::UnknownError);
   }
+  // Parallel pipelines (ParaView's ranks) ask for pieces: each is read and compressed alone.
+  out->GetInformationObject(0)->Set(vtkAlgorithm::CAN_HANDLE_PIECE_REQUEST(), 1);
   return 1;
 }
 
@@ -186,8 +189,29 @@ int vtkSegmentationVolumeReader::RequestData(
     const svdag::Geometry& geometry = source->geometry();
     const svdag::ScalarType type = source->scalarType();
 
-    // A compressed file whose labels need no change is passed through as it is.
-    if (const auto volume = source->compressedVolume())
+    // The piece asked for: z-slices [zBegin, zEnd), whole slabs (Builder::pieceZRange).
+    vtkInformation* outInfo = out->GetInformationObject(0);
+    const int pieces = std::max(1, outInfo->Has(vtkStreamingDemandDrivenPipeline::UPDATE_NUMBER_OF_PIECES())
+        ? outInfo->Get(vtkStreamingDemandDrivenPipeline::UPDATE_NUMBER_OF_PIECES())
+        : 1);
+    const int piece = outInfo->Has(vtkStreamingDemandDrivenPipeline::UPDATE_PIECE_NUMBER())
+      ? outInfo->Get(vtkStreamingDemandDrivenPipeline::UPDATE_PIECE_NUMBER())
+      : 0;
+    if (piece < 0 || piece >= pieces)
+    {
+      vtkErrorMacro("Cannot read " << name << ": piece " << piece << " of " << pieces
+                                   << " was requested.");
+      return 0;
+    }
+    const auto [zBegin, zEnd] = svdag::Builder::pieceZRange(geometry.dims[2], piece, pieces);
+    if (zBegin == zEnd && geometry.dims[2] > 0)
+    {
+      this->UpdateProgress(1.0);
+      return 1; // more pieces than slabs: this one is empty
+    }
+
+    // A compressed file whose labels need no change is passed through as it is (whole).
+    if (const auto volume = source->compressedVolume(); volume && pieces == 1)
     {
       uint64_t background = 0;
       svdag::scalarStore(type, &background, 0, options.background);
@@ -212,21 +236,25 @@ int vtkSegmentationVolumeReader::RequestData(
       this->SetErrorCode(vtkErrorCode::OutOfDiskSpaceError);
       return 0;
     }
-    svdag::Builder builder(geometry, type, options, vtkSVDAGParallelFor());
+    svdag::Builder builder(
+      geometry.zRange(zBegin, zEnd), type, options, vtkSVDAGParallelFor());
     // Not value-initialised: the source overwrites every byte.
     std::unique_ptr<uint8_t[]> slabMemory(new uint8_t[size_t(slabBytes)]);
     uint8_t* slab = slabMemory.get();
-    for (int32_t z0 = 0; z0 < geometry.dims[2]; z0 += svdag::Builder::SlabDepth)
+    // Slabs before the piece are read and dropped: sources serve slabs in order from the first
+    // (compressed streams cannot seek), so a piece costs reading time, never more memory.
+    for (int32_t z0 = 0; z0 < zEnd; z0 += svdag::Builder::SlabDepth)
     {
       if (this->GetAbortExecute())
       {
         vtkWarningMacro("Reading " << name << " was aborted.");
         return 0;
       }
-      const int32_t nz = std::min(svdag::Builder::SlabDepth, geometry.dims[2] - z0);
+      const int32_t nz = std::min(svdag::Builder::SlabDepth, zEnd - z0);
       source->readSlab(z0, nz, slab);
-      builder.addSlab(z0, nz, slab);
-      this->UpdateProgress(double(z0 + nz) / geometry.dims[2]);
+      if (z0 >= zBegin)
+        builder.addSlab(z0 - zBegin, nz, slab);
+      this->UpdateProgress(double(z0 + nz) / zEnd);
     }
     reportWarnings(this, *source, name, warningsReported);
     output->SetVolume(std::make_shared<const svdag::Volume>(builder.finish()));

@@ -7,6 +7,12 @@
  * compressed output (exception: NIfTI with qfac = -1, see below). Cells of a slab are scanned
  * in parallel with vtkSMPTools; the output does not depend on the thread count.
  *
+ * Piece requests (UPDATE_PIECE_NUMBER of UPDATE_NUMBER_OF_PIECES, what ParaView's MPI ranks and
+ * UpdatePiece ask for): the output is the piece's z-range of whole slabs
+ * (svdag::Builder::pieceZRange), compressed alone, its origin that of its first slice; the
+ * slabs before it are read and dropped. A piece beyond the slab count is empty. A .svdag file
+ * is passed through whole only when one piece is asked for.
+ *
  * The format is detected from the file's content, not its name:
  * - NRRD (.nrrd, detached .nhdr; raw or gzip; 3D Slicer .seg.nrrd with one labelmap layer),
  *   geometry from space directions/space origin or spacings, in the file's own space;

@@ -388,14 +388,21 @@ bool vtkSegmentationSVDAGLabelProperties::GetDisplayColor(
     std::copy(c, c + 3, rgb);
     return true;
   }
-  const glm::vec4 linear = svdag::render::Renderer::defaultMaterial(uint32_t(index)).baseColorVisibility;
+  vtkSegmentationSVDAGLabelProperties::GetDefaultColor(index, rgb);
+  return true;
+}
+
+void vtkSegmentationSVDAGLabelProperties::GetDefaultColor(vtkIdType labelIndex, double rgb[3])
+{
+  const glm::vec4 linear =
+    svdag::render::Renderer::defaultMaterial(uint32_t(std::max<vtkIdType>(labelIndex, 0)))
+      .baseColorVisibility;
   for (int c = 0; c < 3; ++c)
   {
     // linear -> sRGB display value, the inverse of linearFromSrgb.
     const double l = clampTo(double(linear[c]), 0.0, 1.0);
     rgb[c] = l <= 0.0031308 ? 12.92 * l : 1.055 * std::pow(l, 1.0 / 2.4) - 0.055;
   }
-  return true;
 }
 
 void vtkSegmentationSVDAGLabelProperties::PrintSelf(ostream& os, vtkIndent indent)

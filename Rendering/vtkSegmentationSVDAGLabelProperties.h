@@ -80,6 +80,10 @@ public:
    * (rgb untouched) when the volume does not hold the label. What legends and label tables
    * show. */
   bool GetDisplayColor(vtkSegmentationSVDAG* volume, vtkTypeInt64 label, double rgb[3]);
+  /** The default color (display sRGB) of the label at `labelIndex` in its volume's table (the
+   * labels sorted by value): what a label without SetColor or lookup table is drawn with. A
+   * volume split into pieces colors each piece's labels by their indices in the whole table. */
+  static void GetDefaultColor(vtkIdType labelIndex, double rgb[3]);
   /** Forgets the label's color only: the lookup table or the hash colors it again. */
   void RemoveColor(vtkTypeInt64 label);
   void SetOpacity(vtkTypeInt64 label, double opacity);

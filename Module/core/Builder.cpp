@@ -426,6 +426,21 @@ void Builder::addVolume(const Volume& part)
   m.nextZ += pd[2];
 }
 
+std::array<int32_t, 2> Builder::pieceZRange(int32_t depth, int piece, int pieces)
+{
+  if (pieces < 1 || piece < 0 || piece >= pieces || depth < 0)
+    throw std::invalid_argument("piece " + std::to_string(piece) + " of " +
+      std::to_string(pieces) + " of " + std::to_string(depth) + " slices does not exist");
+  const int64_t slabs = (int64_t(depth) + SlabDepth - 1) / SlabDepth;
+  if (piece >= slabs)
+    return { { 0, 0 } };
+  const int64_t count = std::min<int64_t>(pieces, slabs);
+  const int64_t first = piece * (slabs / count) + std::min<int64_t>(piece, slabs % count);
+  const int64_t n = slabs / count + (piece < slabs % count ? 1 : 0);
+  return { { int32_t(first * SlabDepth),
+    int32_t(std::min<int64_t>(depth, (first + n) * SlabDepth)) } };
+}
+
 Builder::Builder(
   const Geometry& geometry, ScalarType type, const BuildOptions& options, ParallelFor parallel)
   : impl(new Impl)

@@ -6,6 +6,7 @@
 #include <limits>
 #include <memory>
 #include <stdexcept>
+#include <string>
 
 namespace svdag
 {
@@ -99,6 +100,18 @@ std::array<int32_t, 3> Geometry::cellCounts() const
     n[a] = int32_t((int64_t(dims[a]) + layout::CELL_SIZE - 1) / layout::CELL_SIZE);
   }
   return n;
+}
+
+Geometry Geometry::zRange(int32_t z0, int32_t z1) const
+{
+  if (z0 < 0 || z1 < z0 || z1 > dims[2])
+    throw std::out_of_range("z-range [" + std::to_string(z0) + ", " + std::to_string(z1) +
+      ") is outside the volume's " + std::to_string(dims[2]) + " slices");
+  Geometry part = *this;
+  part.dims[2] = z1 - z0;
+  for (int a = 0; a < 3; ++a)
+    part.origin[a] += direction[3 * a + 2] * spacing[2] * double(z0);
+  return part;
 }
 
 uint64_t Geometry::cellCount() const

@@ -20,9 +20,9 @@ void SetOneValue(vtkFieldData* fields, const char* name, T value)
 
 void svdag::paraview::AddInformationArrays(vtkSegmentationSVDAG* volume)
 {
-  if (!volume)
+  if (!volume || !volume->HasVolume())
   {
-    return;
+    return; // an empty piece (more ranks than slabs) adds nothing to the ranks' ranges
   }
   vtkFieldData* fields = volume->GetFieldData();
   const vtkTypeInt64 voxels = volume->GetNumberOfVoxels();
@@ -31,4 +31,11 @@ void svdag::paraview::AddInformationArrays(vtkSegmentationSVDAG* volume)
   SetOneValue<vtkTypeInt64Array>(fields, "CompressedBytes", bytes);
   SetOneValue<vtkDoubleArray>(
     fields, "BitsPerVoxel", voxels > 0 ? 8.0 * double(bytes) / double(voxels) : 0.0);
+  int dims[3];
+  volume->GetDimensions(dims);
+  vtkNew<vtkTypeInt64Array> dimensions;
+  dimensions->SetName("Dimensions");
+  dimensions->SetNumberOfComponents(3);
+  dimensions->InsertNextTuple3(dims[0], dims[1], dims[2]);
+  fields->AddArray(dimensions);
 }

@@ -1,8 +1,11 @@
 #include "vtkSegmentationSVDAGRepresentation.h"
 
+#include "vtkCamera.h"
 #include "vtkDataArray.h"
+#include "vtkDoubleArray.h"
 #include "vtkInformation.h"
 #include "vtkInformationVector.h"
+#include "vtkMultiProcessController.h"
 #include "vtkObjectFactory.h"
 #include "vtkPVRenderView.h"
 #include "vtkPlane.h"
@@ -13,11 +16,15 @@
 #include "vtkSegmentationSVDAGRenderSettings.h"
 #include "vtkSegmentationSVDAGVolumeMapper.h"
 #include "vtkStringArray.h"
+#include "vtkTypeInt64Array.h"
+#include "vtkTypeUInt64Array.h"
 #include "vtkVariant.h"
 #include "vtkVolume.h"
 
 #include <algorithm>
 #include <cstring>
+
+#include "svdag/Volume.h"
 
 vtkStandardNewMacro(vtkSegmentationSVDAGRepresentation);
 
@@ -35,6 +42,54 @@ vtkStringArray* NamesArray(vtkStringArray* array, int count, const char* (*name)
     array->InsertNextValue(name(i));
   }
   return array;
+}
+
+// The controller of the ranks the data is split across, or null in a single process.
+vtkMultiProcessController* RanksController()
+{
+  vtkMultiProcessController* controller = vtkMultiProcessController::GetGlobalController();
+  return controller && controller->GetNumberOfProcesses() > 1 ? controller : nullptr;
+}
+
+// Collective over the ranks: the index of each of `piece`'s labels in the table of the whole
+// volume, the union of every rank's labels sorted by value (the order of a label table), or
+// empty in a single process.
+std::vector<vtkIdType> GatherWholeTableIndices(vtkSegmentationSVDAG* piece)
+{
+  vtkMultiProcessController* controller = RanksController();
+  if (!controller)
+  {
+    return {};
+  }
+  const svdag::Volume* volume = piece && piece->HasVolume() ? piece->GetVolume().get() : nullptr;
+  vtkNew<vtkTypeUInt64Array> mine;
+  vtkNew<vtkTypeUInt64Array> everyones;
+  if (volume)
+  {
+    mine->SetNumberOfValues(vtkIdType(volume->labels.size()));
+    for (size_t i = 0; i < volume->labels.size(); ++i)
+    {
+      mine->SetValue(vtkIdType(i), volume->labels[i].value);
+    }
+  }
+  controller->AllGatherV(mine, everyones);
+  if (!volume)
+  {
+    return {};
+  }
+  const svdag::ScalarType type = volume->scalarType;
+  const auto less = [type](uint64_t a, uint64_t b) { return svdag::scalarLess(type, a, b); };
+  std::vector<uint64_t> whole(everyones->GetPointer(0),
+    everyones->GetPointer(0) + everyones->GetNumberOfValues());
+  std::sort(whole.begin(), whole.end(), less);
+  whole.erase(std::unique(whole.begin(), whole.end()), whole.end());
+  std::vector<vtkIdType> indices;
+  for (const svdag::LabelInfo& label : volume->labels)
+  {
+    indices.push_back(
+      std::lower_bound(whole.begin(), whole.end(), label.value, less) - whole.begin());
+  }
+  return indices;
 }
 }
 
@@ -75,6 +130,8 @@ int vtkSegmentationSVDAGRepresentation::RequestData(
       this->Cache->ShallowCopy(input);
     }
   }
+  this->WholeTableIndices = GatherWholeTableIndices(this->Cache);
+  this->LabelsModified.Modified();
   return this->Superclass::RequestData(request, inputVector, outputVector);
 }
 
@@ -255,15 +312,18 @@ void vtkSegmentationSVDAGRepresentation::UpdateLabelProperties(vtkSegmentationSV
     return;
   }
   vtkSegmentationSVDAGLabelProperties* labels = this->Mapper->GetLabelProperties();
-  for (vtkTypeInt64 label : this->AnnotatedLabels)
+  for (vtkTypeInt64 label : this->ColoredLabels)
   {
     labels->RemoveColor(label);
   }
-  this->AnnotatedLabels.clear();
+  this->ColoredLabels.clear();
+  vtkSmartPointer<vtkDataArray> values;
+  values.TakeReference(volume->NewLabelValues());
   vtkScalarsToColors* table = this->LookupTable;
-  if (table && table->GetIndexedLookup())
+  const bool categorical = table && table->GetIndexedLookup();
+  labels->SetLookupTable(categorical ? nullptr : table);
+  if (categorical)
   {
-    labels->SetLookupTable(nullptr);
     for (vtkIdType i = 0; i < table->GetNumberOfAnnotatedValues(); ++i)
     {
       bool valid = false;
@@ -273,17 +333,27 @@ void vtkSegmentationSVDAGRepresentation::UpdateLabelProperties(vtkSegmentationSV
         double rgba[4];
         table->GetAnnotationColor(table->GetAnnotatedValue(i), rgba);
         labels->SetColor(label, rgba[0], rgba[1], rgba[2]);
-        this->AnnotatedLabels.push_back(label);
+        this->ColoredLabels.push_back(label);
       }
     }
   }
-  else
+  if ((!table || categorical) &&
+    this->WholeTableIndices.size() == size_t(values->GetNumberOfTuples()))
   {
-    labels->SetLookupTable(table);
+    // A piece: the labels the lookup table leaves to their defaults take the whole volume's.
+    for (vtkIdType i = 0; i < values->GetNumberOfTuples(); ++i)
+    {
+      const vtkTypeInt64 label = values->GetVariantValue(i).ToTypeInt64();
+      double rgb[3];
+      if (!labels->GetColor(label, rgb))
+      {
+        vtkSegmentationSVDAGLabelProperties::GetDefaultColor(this->WholeTableIndices[i], rgb);
+        labels->SetColor(label, rgb[0], rgb[1], rgb[2]);
+        this->ColoredLabels.push_back(label);
+      }
+    }
   }
   labels->ShowAllLabels();
-  vtkSmartPointer<vtkDataArray> values;
-  values.TakeReference(volume->NewLabelValues());
   for (vtkIdType i = 0; i < values->GetNumberOfTuples(); ++i)
   {
     labels->SetOpacity(values->GetVariantValue(i).ToTypeInt64(), this->Opacity);
@@ -319,9 +389,46 @@ void vtkSegmentationSVDAGRepresentation::SetPickPixel(double x, double y)
 {
   this->PickedHit = 0;
   this->PickedLabel = 0;
+  if (x < 0 || y < 0)
+  {
+    return; // the property's default (pushed when the proxy is made): no pick, on every rank
+  }
+  double depth = 0;
   if (this->Renderer && this->Mapper->GetInput() && this->Mapper->Pick(this->Renderer, x, y))
   {
     this->PickedHit = 1;
     this->PickedLabel = this->Mapper->GetPickedLabel();
+    double position[3], eye[3], forward[3];
+    this->Mapper->GetPickedPosition(position);
+    vtkCamera* camera = this->Renderer->GetActiveCamera();
+    camera->GetPosition(eye);
+    camera->GetDirectionOfProjection(forward);
+    for (int a = 0; a < 3; ++a)
+    {
+      depth += (position[a] - eye[a]) * forward[a];
+    }
+  }
+  // Collective over the ranks (every rank runs this property's update): the nearest of their
+  // hits is the hit of the undivided volume, since each rank traced the same ray.
+  if (vtkMultiProcessController* controller = RanksController())
+  {
+    vtkNew<vtkTypeInt64Array> hitLabel, hitLabels;
+    vtkNew<vtkDoubleArray> hitDepth, hitDepths;
+    hitLabel->InsertNextValue(this->PickedHit);
+    hitLabel->InsertNextValue(this->PickedLabel);
+    hitDepth->InsertNextValue(depth);
+    controller->AllGatherV(hitLabel, hitLabels);
+    controller->AllGatherV(hitDepth, hitDepths);
+    this->PickedHit = 0;
+    this->PickedLabel = 0;
+    for (vtkIdType r = 0; r < hitDepths->GetNumberOfValues(); ++r)
+    {
+      if (hitLabels->GetValue(2 * r) && (!this->PickedHit || hitDepths->GetValue(r) < depth))
+      {
+        this->PickedHit = 1;
+        this->PickedLabel = hitLabels->GetValue(2 * r + 1);
+        depth = hitDepths->GetValue(r);
+      }
+    }
   }
 }

@@ -15,6 +15,13 @@
  * interactor while the user interacts) gives the mapper its time budget; still renders refine
  * to TargetSamplesPerPixel when RefineStillRenders is on (the default).
  *
+ * Pieces (MPI ranks): the reader gives each rank a z-range of whole slabs (its piece), and each
+ * rank's labels take the default colors of their indices in the whole volume's label table
+ * (gathered from the ranks in RequestData), so the composited image has the colors of the
+ * undivided volume. A pick is made on every rank and the nearest hit wins. Shadow and bounce
+ * rays end at the rank's piece: light that crosses a piece boundary is not traced (see the
+ * README's ParaView section).
+ *
  * Picking: SetPickPixel(x, y) (display pixels of the view, origin bottom left, like VTK's)
  * picks on the last traced frame; GetPickedHit and GetPickedLabel (information properties
  * PickedHit, PickedLabel) report the result.
@@ -127,10 +134,13 @@ private:
   double Opacity = 1.0;
   std::vector<vtkTypeInt64> HiddenLabels;
   vtkSmartPointer<vtkScalarsToColors> LookupTable;
-  std::vector<vtkTypeInt64> AnnotatedLabels; // colored from LookupTable's annotations
+  std::vector<vtkTypeInt64> ColoredLabels; // given colors (annotations, whole-table defaults)
   vtkSegmentationSVDAG* LabelsAppliedTo = nullptr; // the volume UpdateLabelProperties last saw
   vtkMTimeType LabelsAppliedTime = 0;
   vtkTimeStamp LabelsModified;
+  // The index in the whole volume's label table of each of Cache's labels, when the volume is
+  // split across ranks (else empty: the piece is the whole volume).
+  std::vector<vtkIdType> WholeTableIndices;
   int PickedHit = 0;
   vtkTypeInt64 PickedLabel = 0;
 };

@@ -528,3 +528,31 @@ TEST(Builder, AddVolumeRejectsPartsThatDoNotFit)
     EXPECT_THROW(b.addVolume(tail), std::logic_error); // nothing left
   }
 }
+
+TEST(Builder, PiecesShareOutWholeSlabsInOrder)
+{
+  // 70 slices: 5 slabs; 3 pieces take 2, 2 and 1 of them, the last one 6 slices deep.
+  using R = std::array<int32_t, 2>;
+  EXPECT_EQ(svdag::Builder::pieceZRange(70, 0, 3), (R{ { 0, 32 } }));
+  EXPECT_EQ(svdag::Builder::pieceZRange(70, 1, 3), (R{ { 32, 64 } }));
+  EXPECT_EQ(svdag::Builder::pieceZRange(70, 2, 3), (R{ { 64, 70 } }));
+  EXPECT_EQ(svdag::Builder::pieceZRange(70, 0, 1), (R{ { 0, 70 } }));
+  // More pieces than slabs: the last ones are empty.
+  EXPECT_EQ(svdag::Builder::pieceZRange(20, 1, 4), (R{ { 16, 20 } }));
+  EXPECT_EQ(svdag::Builder::pieceZRange(20, 2, 4), (R{ { 0, 0 } }));
+  EXPECT_THROW(svdag::Builder::pieceZRange(20, 4, 4), std::invalid_argument);
+  EXPECT_THROW(svdag::Builder::pieceZRange(20, -1, 4), std::invalid_argument);
+  EXPECT_THROW(svdag::Builder::pieceZRange(20, 0, 0), std::invalid_argument);
+
+  svdag::Geometry g;
+  g.dims = { { 4, 5, 70 } };
+  g.spacing = { { 1, 1, 2 } };
+  g.origin = { { 1, 2, 3 } };
+  g.direction = { { 0, 0, -1, 0, 1, 0, 1, 0, 0 } }; // the third axis points along -x
+  const svdag::Geometry part = g.zRange(32, 64);
+  EXPECT_EQ(part.dims, (std::array<int32_t, 3>{ { 4, 5, 32 } }));
+  EXPECT_EQ(part.origin, (std::array<double, 3>{ { 1 - 64, 2, 3 } }));
+  EXPECT_EQ(part.direction, g.direction);
+  EXPECT_THROW(g.zRange(64, 71), std::out_of_range);
+  EXPECT_THROW(g.zRange(10, 9), std::out_of_range);
+}

@@ -4,7 +4,7 @@ for the test to check against vtksvdag (which runs on Debian's VTK, not ParaView
 
     pvbatch pv_scene.py --plugin vtkSVDAG.so --file cells.nrrd --svdag cells.svdag --out DIR
     pvpython pv_scene.py ... --connect PORT     (client-server: pvserver on 127.0.0.1:PORT)
-    mpiexec -n 2 pvbatch pv_scene.py ... --image-only
+    mpiexec -n 2 pvbatch --symmetric pv_scene.py ... --image-only --pieces
 
 The view and the render settings are fixed here (SIZE, CAMERA_*) so that every session kind
 renders the same image.
@@ -69,7 +69,7 @@ def camera_of(view):
     }
 
 
-def set_up_view(view, display):
+def set_up_view(view, display, bounces):
     view.ViewSize = list(SIZE)
     view.OrientationAxesVisibility = 0
     view.Background = [0.1, 0.1, 0.12]
@@ -88,9 +88,23 @@ def set_up_view(view, display):
     ResetCamera(view)
     camera.Dolly(1.5)
     # Render settings the images depend on: every session kind draws the same frame.
-    display.MaximumBounces = 1
+    display.MaximumBounces = bounces
     display.TargetSamplesPerPixel = 16
     display.SamplesPerPixel = 16
+
+
+def write_piece(reader, rank, out):
+    """This rank's piece (the reader's output here) and the process's peak memory."""
+    import resource
+
+    fields = reader.GetClientSideObject().GetOutputDataObject(0).GetFieldData()
+    info = {"rank": rank, "peak_rss_kib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss}
+    for name in ("LabelCount", "CompressedBytes", "Dimensions"):
+        array = fields.GetArray(name)
+        info[name] = None if array is None else [
+            array.GetComponent(0, c) for c in range(array.GetNumberOfComponents())]
+    with open(os.path.join(out, f"piece-{rank}.json"), "w") as f:
+        json.dump(info, f)
 
 
 def main():
@@ -101,6 +115,9 @@ def main():
     parser.add_argument("--out", required=True)
     parser.add_argument("--connect", type=int)
     parser.add_argument("--image-only", action="store_true")
+    parser.add_argument("--bounces", type=int, default=1)
+    parser.add_argument("--pieces", action="store_true",
+                        help="write piece-RANK.json: what this rank's reader holds")
     args = parser.parse_args()
 
     if args.connect:
@@ -116,7 +133,7 @@ def main():
     view = CreateView("RenderView")
     display = Show(reader, view)
     results["defaults"] = {name: plain(display.GetPropertyValue(name)) for name in DEFAULTS}
-    set_up_view(view, display)
+    set_up_view(view, display, args.bounces)
     display.SetRepresentationType("Segmentation Path Tracing")
     Render(view)
     SaveScreenshot(os.path.join(args.out, "scene.png"), view, ImageResolution=list(SIZE))
@@ -124,9 +141,14 @@ def main():
     display.UpdatePropertyInformation()
     results["samples"] = display.GetProperty("AccumulatedSamples")[0]
     results["camera"] = camera_of(view)
+    if not args.connect:
+        # Every rank picks (the representation's pick is collective). (A client reads the
+        # pick's information properties from its own representation, not the server's.)
+        results["picks"] = pick_grid(display)
+    if args.pieces:
+        write_piece(reader, rank, args.out)
     if not args.image_only:
         results["reader"] = field_numbers(reader)
-        results["picks"] = pick_grid(display)
 
         # Hidden labels: the three labels picked most often are hidden, and never picked.
         counts = {}

@@ -11,6 +11,7 @@
 #include "svdag/Parallel.h"
 #include "svdag/Volume.h"
 
+#include <array>
 #include <memory>
 #include <string>
 #include <vector>
@@ -28,6 +29,13 @@ class Builder
 {
 public:
   static constexpr int32_t SlabDepth = 16;
+
+  // The z-slices [z0, z1) of piece `piece` of `pieces` (a parallel reader's share) of a volume
+  // `depth` slices deep: its slabs shared out in order as evenly as possible, the first pieces
+  // taking one more, so that every piece starts on a slab (cell) boundary and the pieces' cells
+  // are the whole volume's. {0, 0} for a piece beyond the slab count. Throws
+  // std::invalid_argument unless 0 <= piece < pieces and depth >= 0.
+  static std::array<int32_t, 2> pieceZRange(int32_t depth, int piece, int pieces);
 
   // Throws std::invalid_argument when checkGeometry (Volume.h) fails.
   Builder(const Geometry& geometry, ScalarType type, const BuildOptions& options = {},

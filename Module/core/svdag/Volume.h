@@ -48,6 +48,10 @@ struct Geometry
   std::array<int32_t, 3> cellCounts() const;
   // Number of 16^3 cells, saturated at UINT64_MAX (absurd dimensions cannot overflow).
   uint64_t cellCount() const;
+  // The geometry of z-slices [z0, z1) of this one (0 <= z0 <= z1 <= dims[2]): the same x and y,
+  // the origin moved by z0 steps along the third axis, direction included. Throws
+  // std::out_of_range for a range outside the volume.
+  Geometry zRange(int32_t z0, int32_t z1) const;
   bool operator==(const Geometry& o) const;
 };
 
