@@ -111,7 +111,7 @@ def run_once(ranks, volume, size, out):
     script.write_text(CHILD)
     command = ["mpiexec", "--allow-run-as-root", "--oversubscribe", "-n", str(ranks), "pvbatch",
                "--symmetric", str(script), str(volume), str(size), str(PLUGIN), str(folder)]
-    for _ in range(2):  # ParaView's X window sometimes fails to open on Xvfb: once more
+    for _ in range(3):  # ParaView's X window sometimes fails to open on Xvfb: again
         done = subprocess.run(command, capture_output=True, text=True, env=paraview_env(),
                               timeout=1800)
         if done.returncode == 0 or "bad X server connection" not in done.stdout + done.stderr:
