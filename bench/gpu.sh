@@ -6,8 +6,9 @@
 # for each backend, of a restarting frame with the denoiser on (the others run with it off), and
 # the device bytes (encoding + what the backend finds blocks with). Then the start-up of each
 # backend on the first file: seconds of a whole one-frame run with every cache empty (the
-# driver's disk cache off: __GL_SHADER_DISK_CACHE=0, MESA_SHADER_CACHE_DISABLE=true) and again
-# with only our pipeline cache (PipelineCacheFile.h) warm.
+# driver's disk cache off: __GL_SHADER_DISK_CACHE=0, MESA_SHADER_CACHE_DISABLE=true), the same
+# with --preview (first frame from the preview pipeline), and with only our pipeline cache
+# (PipelineCacheFile.h) warm; each with its frame's pipeline compile seconds.
 #
 # Here (to prepare the files from the shared volumes):
 #   for f in ../shared/data/*.nrrd; do .venv/bin/vtksvdag compress "$f" -o "DIR/$(basename "$f" .nrrd).svdag"; done
@@ -87,17 +88,29 @@ for f in "${files[@]}"; do
   done
 done
 
-# Start-up: a whole one-frame run per backend, every cache empty, then with our cache warm.
+# Start-up: a whole one-frame run per backend, every cache empty (with the full pipeline, then
+# with --preview: the first frame from the small preview pipeline while the full one compiles),
+# then with our cache warm. The JSON's pipeline_compile_seconds: the frame's pipeline's compile.
 startup="$out/startup.txt"
 for backend in rt compute; do
   cache="$out/cache-$backend"
-  for state in cold ours-warm; do
+  for state in cold cold-preview ours-warm; do
+    flags=()
+    run_cache="$cache"
+    if [ "$state" = cold-preview ]; then
+      flags=(--preview)
+      run_cache="$out/cache-$backend-preview"
+    fi
     begin=$(date +%s.%N)
-    if XDG_CACHE_HOME="$cache" __GL_SHADER_DISK_CACHE=0 MESA_SHADER_CACHE_DISABLE=true \
+    if json=$(XDG_CACHE_HOME="$run_cache" __GL_SHADER_DISK_CACHE=0 MESA_SHADER_CACHE_DISABLE=true \
       "$tool" "${files[0]}" "$out/frame.png" --width "$width" --height "$height" --spp 1 \
-      --frames 1 --backend "$backend" >/dev/null 2>"$out/err"; then
+      --frames 1 --backend "$backend" "${flags[@]}" 2>"$out/err"); then
       end=$(date +%s.%N)
-      echo "$backend $state $(python3 -c "print(f'{$end - $begin:.3f}')")" >>"$startup"
+      echo "$backend $state $(python3 -c "
+import json, sys
+r = json.loads(sys.argv[1])
+print(f'{$end - $begin:.3f} s, compile {r[\"pipeline_compile_seconds\"]:.3f} s, previewed {r[\"previewed\"]}')
+" "$json")" >>"$startup"
     else
       echo "FAILED: start-up $backend $state: $(cat "$out/err")" >&2
       status=1
@@ -135,7 +148,8 @@ for (name, lod, bounces), runs in sorted(rows.items()):
           f"{ms('compute', 'restart'):8.2f} {ms('compute', 'restart+denoise'):8.2f} | {ratio:6.2f} | "
           f"{mb('rt'):6.2f} {mb('compute'):6.2f}")
 try:
-    print("\nstart-up, seconds of a one-frame run (every cache empty / only our pipeline cache warm)")
+    print("\nstart-up, seconds of a one-frame run (every cache empty; empty with --preview; only our"
+          " pipeline cache warm)")
     for line in open(startup).read().splitlines():
         print("  " + line)
 except FileNotFoundError:

@@ -39,11 +39,14 @@ def test_gpu_script_prints_one_table(tmp_path):
         # Per backend: accumulating, restarting, restarting denoised; the ratio; the bytes.
         numbers = [float(v) for v in r[3:] if v != "|"]
         assert len(numbers) == 9 and all(n > 0 for n in numbers), r
-    # The start-up of each backend, every cache empty and with our pipeline cache warm.
-    startup = [line.split() for line in lines[end + 2:]]
+    # The start-up of each backend: every cache empty (with the full pipeline, and with the
+    # preview's first frame), and with our pipeline cache warm; each with its compile seconds.
+    startup = [line.replace(",", "").split() for line in lines[end + 2:]]
     assert sorted((s[0], s[1]) for s in startup) == sorted(
-        (b, state) for b in ("rt", "compute") for state in ("cold", "ours-warm"))
-    assert all(float(s[2]) > 0 for s in startup)
+        (b, state) for b in ("rt", "compute") for state in ("cold", "cold-preview", "ours-warm"))
+    for s in startup:
+        assert float(s[2]) > 0 and s[4] == "compile" and float(s[5]) > 0, s
+        assert s[8] == ("True" if s[1] == "cold-preview" else "False"), s
     # A missing input or an empty folder is an error, not an empty table.
     bad = subprocess.run(["bash", str(REPO / "bench" / "gpu.sh"), str(tmp_path / "none")],
                          capture_output=True, text=True, timeout=60)
