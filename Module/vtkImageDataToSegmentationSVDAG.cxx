@@ -34,14 +34,63 @@ int vtkImageDataToSegmentationSVDAG::FillInputPortInformation(int, vtkInformatio
   return 1;
 }
 
+namespace
+{
+// The z-range [z0, z1) of the input's whole extent that the output's piece request covers
+// (Builder::pieceZRange; index z, not offsets), or false when the request names no piece.
+bool PieceZRange(vtkInformation* outInfo, const int whole[6], int& z0, int& z1)
+{
+  const int pieces = outInfo->Has(vtkStreamingDemandDrivenPipeline::UPDATE_NUMBER_OF_PIECES())
+    ? outInfo->Get(vtkStreamingDemandDrivenPipeline::UPDATE_NUMBER_OF_PIECES())
+    : 1;
+  const int piece = outInfo->Has(vtkStreamingDemandDrivenPipeline::UPDATE_PIECE_NUMBER())
+    ? outInfo->Get(vtkStreamingDemandDrivenPipeline::UPDATE_PIECE_NUMBER())
+    : 0;
+  if (pieces < 1 || piece < 0 || piece >= pieces)
+    return false;
+  const auto range = svdag::Builder::pieceZRange(std::max(0, whole[5] - whole[4] + 1), piece, pieces);
+  z0 = whole[4] + range[0];
+  z1 = whole[4] + range[1];
+  return true;
+}
+}
+
+int vtkImageDataToSegmentationSVDAG::RequestInformation(
+  vtkInformation*, vtkInformationVector**, vtkInformationVector* out)
+{
+  out->GetInformationObject(0)->Set(vtkAlgorithm::CAN_HANDLE_PIECE_REQUEST(), 1);
+  return 1;
+}
+
 int vtkImageDataToSegmentationSVDAG::RequestUpdateExtent(
-  vtkInformation*, vtkInformationVector** in, vtkInformationVector*)
+  vtkInformation*, vtkInformationVector** in, vtkInformationVector* out)
 {
   vtkInformation* info = in[0]->GetInformationObject(0);
   if (info && info->Has(vtkStreamingDemandDrivenPipeline::WHOLE_EXTENT()))
   {
-    info->Set(vtkStreamingDemandDrivenPipeline::UPDATE_EXTENT(),
-      info->Get(vtkStreamingDemandDrivenPipeline::WHOLE_EXTENT()), 6);
+    int extent[6];
+    info->Get(vtkStreamingDemandDrivenPipeline::WHOLE_EXTENT(), extent);
+    int z0 = 0, z1 = 0;
+    if (PieceZRange(out->GetInformationObject(0), extent, z0, z1))
+    {
+      if (z0 == z1)
+      {
+        // An empty piece asks for nothing (VTK's empty extent).
+        extent[0] = extent[2] = extent[4] = 0;
+        extent[1] = extent[3] = extent[5] = -1;
+      }
+      else
+      {
+        extent[4] = z0;
+        extent[5] = z1 - 1;
+      }
+    }
+    info->Set(vtkStreamingDemandDrivenPipeline::UPDATE_EXTENT(), extent, 6);
+    // The extent is the request: upstream readers that split pieces themselves (the XML
+    // readers) would otherwise cut their own share instead.
+    info->Set(vtkStreamingDemandDrivenPipeline::UPDATE_PIECE_NUMBER(), 0);
+    info->Set(vtkStreamingDemandDrivenPipeline::UPDATE_NUMBER_OF_PIECES(), 1);
+    info->Set(vtkStreamingDemandDrivenPipeline::UPDATE_NUMBER_OF_GHOST_LEVELS(), 0);
   }
   return 1;
 }
@@ -55,6 +104,19 @@ int vtkImageDataToSegmentationSVDAG::RequestData(
   {
     vtkErrorMacro("Missing input image or output.");
     return 0;
+  }
+  output->Initialize();
+  // The piece's slices [zBegin, zEnd) of the whole extent, when a piece was asked for.
+  vtkInformation* inInfo = in[0]->GetInformationObject(0);
+  bool piece = false;
+  int zBegin = 0, zEnd = 0;
+  if (inInfo->Has(vtkStreamingDemandDrivenPipeline::WHOLE_EXTENT()))
+  {
+    int whole[6];
+    inInfo->Get(vtkStreamingDemandDrivenPipeline::WHOLE_EXTENT(), whole);
+    piece = PieceZRange(out->GetInformationObject(0), whole, zBegin, zEnd);
+    if (piece && zBegin == zEnd)
+      return 1; // more pieces than slabs: this one is empty
   }
   vtkDataArray* labels = this->GetInputArrayToProcess(0, in);
   if (!labels)
@@ -84,8 +146,25 @@ int vtkImageDataToSegmentationSVDAG::RequestData(
                                          << geometry.voxelCount() << " voxels.");
     return 0;
   }
+  // The input may hold more slices than the piece asked for (a source that cannot stream),
+  // never fewer.
+  if (!piece)
+  {
+    zBegin = extent[4];
+    zEnd = extent[5] + 1;
+  }
+  else if (zBegin < extent[4] || zEnd > extent[5] + 1)
+  {
+    vtkErrorMacro("The input image holds slices " << extent[4] << " .. " << extent[5]
+                                                  << ", not the piece's " << zBegin << " .. "
+                                                  << zEnd - 1 << ".");
+    return 0;
+  }
+  const size_t sliceValues = size_t(geometry.dims[0]) * size_t(geometry.dims[1]);
+  const size_t firstValue = size_t(zBegin - extent[4]) * sliceValues;
+  geometry.dims[2] = zEnd - zBegin;
   double origin[3];
-  image->TransformIndexToPhysicalPoint(extent[0], extent[2], extent[4], origin);
+  image->TransformIndexToPhysicalPoint(extent[0], extent[2], zBegin, origin);
   const double* spacing = image->GetSpacing();
   for (int a = 0; a < 3; ++a)
   {
@@ -103,7 +182,7 @@ int vtkImageDataToSegmentationSVDAG::RequestData(
     svdag::Builder builder(geometry, type, options, vtkSVDAGParallelFor());
     const size_t slice = size_t(geometry.dims[0]) * size_t(geometry.dims[1]) *
       size_t(svdag::scalarSize(type));
-    const auto* data = static_cast<const uint8_t*>(labels->GetVoidPointer(0));
+    const auto* data = static_cast<const uint8_t*>(labels->GetVoidPointer(vtkIdType(firstValue)));
     for (int32_t z0 = 0; z0 < geometry.dims[2]; z0 += svdag::Builder::SlabDepth)
     {
       if (this->GetAbortExecute())

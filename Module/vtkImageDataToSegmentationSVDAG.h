@@ -7,6 +7,11 @@
  * z-slices; cells of a slab are scanned in parallel with vtkSMPTools, and the result does not
  * depend on the number of threads. Voxels equal to BackgroundLabel, or to an excluded label,
  * are not stored and decode as background (see vtkSegmentationSVDAGAlgorithm).
+ *
+ * Piece requests (UPDATE_PIECE_NUMBER of UPDATE_NUMBER_OF_PIECES, ParaView's MPI ranks): the
+ * output is the piece's z-range of whole 16-slice slabs of the input's whole extent
+ * (svdag::Builder::pieceZRange), compressed alone, and only that range is requested upstream
+ * (an input that brings more is cut to it). A piece beyond the slab count is empty.
  */
 #ifndef vtkImageDataToSegmentationSVDAG_h
 #define vtkImageDataToSegmentationSVDAG_h
@@ -30,6 +35,7 @@ protected:
   ~vtkImageDataToSegmentationSVDAG() override;
 
   int FillInputPortInformation(int port, vtkInformation* info) override;
+  int RequestInformation(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
   int RequestUpdateExtent(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
   int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
 

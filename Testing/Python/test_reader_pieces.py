@@ -1,7 +1,8 @@
-"""vtkSegmentationVolumeReader's piece requests (UpdatePiece, what ParaView's ranks send): each
-piece is the volume's z-range of whole 16-slice slabs, read and compressed alone, with the
-geometry of those slices, and the pieces together are the whole volume bit for bit. The
-reference is numpy's slicing of the array the file was written from (pynrrd, tifffile)."""
+"""Piece requests (UpdatePiece, what ParaView's ranks send) to vtkSegmentationVolumeReader and
+vtkImageDataToSegmentationSVDAG: each piece is the volume's z-range of whole 16-slice slabs,
+read and compressed alone, with the geometry of those slices, and the pieces together are the
+whole volume bit for bit. The reference is numpy's slicing of the array the file was written
+from (pynrrd, tifffile, VTK's XML writer)."""
 import nrrd
 import numpy as np
 import pytest
@@ -9,6 +10,11 @@ import tifffile
 
 import vtksvdag
 from vtksvdag.volume import SegmentationVolume
+from vtkmodules.util.numpy_support import numpy_to_vtk
+from vtkmodules.vtkCommonDataModel import vtkImageData
+from vtkmodules.vtkIOXML import vtkXMLImageDataReader, vtkXMLImageDataWriter
+
+from vtksvdag.vtkSVDAGCore import vtkImageDataToSegmentationSVDAG
 from vtksvdag.vtkSVDAGIO import vtkSegmentationVolumeReader
 
 from conftest import capture_errors
@@ -127,3 +133,62 @@ def test_a_piece_outside_the_pieces_is_an_error(files):
     reader.UpdatePiece(3, 2, 0)
     assert not reader.GetOutput().HasVolume()
     assert errors and "piece 3 of 2" in errors[-1], errors
+
+
+def label_image(labels):
+    """`labels` (z, y, x) as a vtkImageData with extent starting at (2, -3, 5), the test's
+    spacing, origin and direction."""
+    image = vtkImageData()
+    image.SetExtent(2, 2 + SHAPE[2] - 1, -3, -3 + SHAPE[1] - 1, 5, 5 + SHAPE[0] - 1)
+    image.SetSpacing(SPACING)
+    image.SetOrigin(ORIGIN)
+    image.SetDirectionMatrix(DIRECTION.ravel())
+    image.GetPointData().SetScalars(numpy_to_vtk(labels.ravel(), deep=True))
+    return image
+
+
+@pytest.mark.parametrize("source", ["image", "vti"])
+@pytest.mark.parametrize("pieces", [1, 3, 7])
+def test_compress_filter_pieces(labels, tmp_path, source, pieces):
+    """The compress filter's pieces: from an image in memory (which brings its whole extent:
+    the filter cuts the piece out) and from the XML reader (which reads the requested extent)."""
+    image = label_image(labels)
+    whole = SegmentationVolume(run_filter(image, 0, 1))
+    np.testing.assert_array_equal(whole.to_numpy(axis_order="zyx"), labels)
+    if source == "vti":
+        writer = vtkXMLImageDataWriter()
+        writer.SetFileName(str(tmp_path / "labels.vti"))
+        writer.SetInputData(image)
+        assert writer.Write() == 1
+        upstream = vtkXMLImageDataReader()
+        upstream.SetFileName(str(tmp_path / "labels.vti"))
+    else:
+        upstream = image
+    parts = []
+    for piece, z_range in enumerate(expected_ranges(SHAPE[0], pieces)):
+        output = run_filter(upstream, piece, pieces)
+        if z_range is None:
+            assert not output.HasVolume()
+            continue
+        z0, z1 = z_range
+        volume = SegmentationVolume(output)
+        assert volume.dims == (SHAPE[2], SHAPE[1], z1 - z0)
+        np.testing.assert_allclose(volume.origin, world(whole, (0, 0, z0)), atol=1e-12)
+        np.testing.assert_allclose(volume.direction, DIRECTION, atol=1e-12)
+        if source == "vti":  # only the piece's slices were read
+            assert upstream.GetOutput().GetExtent()[4:] == (5 + z0, 5 + z1 - 1)
+        parts.append(volume.to_numpy(axis_order="zyx"))
+        np.testing.assert_array_equal(parts[-1], labels[z0:z1])
+    np.testing.assert_array_equal(np.concatenate(parts), labels)
+
+
+def run_filter(upstream, piece, pieces):
+    compress = vtkImageDataToSegmentationSVDAG()
+    if isinstance(upstream, vtkImageData):
+        compress.SetInputData(upstream)
+    else:
+        compress.SetInputConnection(upstream.GetOutputPort())
+    errors = capture_errors(compress)
+    compress.UpdatePiece(piece, pieces, 0)
+    assert not errors, errors
+    return compress.GetOutput()
