@@ -6,7 +6,6 @@
 #include "vtkObjectFactory.h"
 #include "vtkSVDAGParallel.h"
 #include "vtkSegmentationSVDAG.h"
-#include "vtkStreamingDemandDrivenPipeline.h"
 #include "vtkUnsignedCharArray.h"
 
 #include "svdagSVDAGFileSlabSource.h"
@@ -189,21 +188,15 @@ int vtkSegmentationVolumeReader::RequestData(
     const svdag::Geometry& geometry = source->geometry();
     const svdag::ScalarType type = source->scalarType();
 
-    // The piece asked for: z-slices [zBegin, zEnd), whole slabs (Builder::pieceZRange).
-    vtkInformation* outInfo = out->GetInformationObject(0);
-    const int pieces = std::max(1, outInfo->Has(vtkStreamingDemandDrivenPipeline::UPDATE_NUMBER_OF_PIECES())
-        ? outInfo->Get(vtkStreamingDemandDrivenPipeline::UPDATE_NUMBER_OF_PIECES())
-        : 1);
-    const int piece = outInfo->Has(vtkStreamingDemandDrivenPipeline::UPDATE_PIECE_NUMBER())
-      ? outInfo->Get(vtkStreamingDemandDrivenPipeline::UPDATE_PIECE_NUMBER())
-      : 0;
-    if (piece < 0 || piece >= pieces)
+    // The piece asked for: z-slices [zBegin, zEnd), whole slabs.
+    int piece = 0, pieces = 1, zBegin = 0, zEnd = 0;
+    if (!vtkSegmentationSVDAGAlgorithm::GetRequestedPiece(
+          out->GetInformationObject(0), geometry.dims[2], piece, pieces, zBegin, zEnd))
     {
       vtkErrorMacro("Cannot read " << name << ": piece " << piece << " of " << pieces
                                    << " was requested.");
       return 0;
     }
-    const auto [zBegin, zEnd] = svdag::Builder::pieceZRange(geometry.dims[2], piece, pieces);
     if (zBegin == zEnd && geometry.dims[2] > 0)
     {
       this->UpdateProgress(1.0);

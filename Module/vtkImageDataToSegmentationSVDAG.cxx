@@ -37,20 +37,15 @@ int vtkImageDataToSegmentationSVDAG::FillInputPortInformation(int, vtkInformatio
 namespace
 {
 // The z-range [z0, z1) of the input's whole extent that the output's piece request covers
-// (Builder::pieceZRange; index z, not offsets), or false when the request names no piece.
+// (index z, not offsets), or false when the request names no piece.
 bool PieceZRange(vtkInformation* outInfo, const int whole[6], int& z0, int& z1)
 {
-  const int pieces = outInfo->Has(vtkStreamingDemandDrivenPipeline::UPDATE_NUMBER_OF_PIECES())
-    ? outInfo->Get(vtkStreamingDemandDrivenPipeline::UPDATE_NUMBER_OF_PIECES())
-    : 1;
-  const int piece = outInfo->Has(vtkStreamingDemandDrivenPipeline::UPDATE_PIECE_NUMBER())
-    ? outInfo->Get(vtkStreamingDemandDrivenPipeline::UPDATE_PIECE_NUMBER())
-    : 0;
-  if (pieces < 1 || piece < 0 || piece >= pieces)
+  int piece = 0, pieces = 1;
+  if (!vtkSegmentationSVDAGAlgorithm::GetRequestedPiece(
+        outInfo, whole[5] - whole[4] + 1, piece, pieces, z0, z1))
     return false;
-  const auto range = svdag::Builder::pieceZRange(std::max(0, whole[5] - whole[4] + 1), piece, pieces);
-  z0 = whole[4] + range[0];
-  z1 = whole[4] + range[1];
+  z0 += whole[4];
+  z1 += whole[4];
   return true;
 }
 }

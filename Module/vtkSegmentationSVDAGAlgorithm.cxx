@@ -9,6 +9,8 @@
 
 #include "svdag/Builder.h"
 
+#include <algorithm>
+
 vtkStandardNewMacro(vtkSegmentationSVDAGAlgorithm);
 
 vtkSegmentationSVDAGAlgorithm::vtkSegmentationSVDAGAlgorithm()
@@ -107,6 +109,23 @@ vtkIdType vtkSegmentationSVDAGAlgorithm::GetNumberOfExcludedLabels() const
 vtkTypeInt64 vtkSegmentationSVDAGAlgorithm::GetExcludedLabel(vtkIdType i) const
 {
   return (i >= 0 && i < this->GetNumberOfExcludedLabels()) ? this->ExcludedLabels[size_t(i)] : 0;
+}
+
+bool vtkSegmentationSVDAGAlgorithm::GetRequestedPiece(
+  vtkInformation* outInfo, int depth, int& piece, int& pieces, int& z0, int& z1)
+{
+  pieces = outInfo->Has(vtkStreamingDemandDrivenPipeline::UPDATE_NUMBER_OF_PIECES())
+    ? outInfo->Get(vtkStreamingDemandDrivenPipeline::UPDATE_NUMBER_OF_PIECES())
+    : 1;
+  piece = outInfo->Has(vtkStreamingDemandDrivenPipeline::UPDATE_PIECE_NUMBER())
+    ? outInfo->Get(vtkStreamingDemandDrivenPipeline::UPDATE_PIECE_NUMBER())
+    : 0;
+  if (pieces < 1 || piece < 0 || piece >= pieces)
+    return false;
+  const auto range = svdag::Builder::pieceZRange(std::max(0, depth), piece, pieces);
+  z0 = range[0];
+  z1 = range[1];
+  return true;
 }
 
 svdag::BuildOptions vtkSegmentationSVDAGAlgorithm::GetBuildOptions() const

@@ -55,6 +55,17 @@ public:
   vtkTypeBool ProcessRequest(
     vtkInformation* request, vtkInformationVector** in, vtkInformationVector* out) override;
 
+#ifndef __VTK_WRAP__
+  /**
+   * The piece an output request asks for (UPDATE_PIECE_NUMBER of UPDATE_NUMBER_OF_PIECES; 0 of
+   * 1 without them) and its z-slices [z0, z1) of a volume `depth` slices deep
+   * (svdag::Builder::pieceZRange: whole slabs; z0 == z1 for a piece beyond the slab count).
+   * False, with piece and pieces set, when the piece does not exist (z0, z1 untouched).
+   */
+  static bool GetRequestedPiece(
+    vtkInformation* outInfo, int depth, int& piece, int& pieces, int& z0, int& z1);
+#endif
+
 protected:
   vtkSegmentationSVDAGAlgorithm();
   ~vtkSegmentationSVDAGAlgorithm() override;
@@ -71,6 +82,7 @@ protected:
   /** The builder's options from BackgroundLabel and the excluded labels. */
   svdag::BuildOptions GetBuildOptions() const;
 #endif
+
 
   vtkTypeInt64 BackgroundLabel = 0;
   std::vector<vtkTypeInt64> ExcludedLabels;
