@@ -10,10 +10,15 @@
 #include "vtkMatrix3x3.h"
 #include "vtkObjectFactory.h"
 #include "vtkPointData.h"
+#include "vtkNew.h"
 #include "vtkSVDAGParallel.h"
+#include "vtkStringArray.h"
+#include "vtkTable.h"
+#include "vtkTypeInt64Array.h"
 #include "vtkType.h"
 
 #include "svdag/Decoder.h"
+#include "svdag/EncodingAnalysis.h"
 #include "svdag/LabelAdjacency.h"
 #include "svdag/LabelColoring.h"
 #include "svdag/LabelStatistics.h"
@@ -24,6 +29,7 @@
 #include <new>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 
 vtkStandardNewMacro(vtkSegmentationSVDAG);
 
@@ -526,6 +532,74 @@ bool vtkSegmentationSVDAG::ComputeLabelAdjacency(vtkIdTypeArray* pairs) const
     pairs->SetTypedComponent(vtkIdType(i), 0, vtkIdType(found[i][0]));
     pairs->SetTypedComponent(vtkIdType(i), 1, vtkIdType(found[i][1]));
   }
+  return true;
+}
+
+bool vtkSegmentationSVDAG::ComputeEncodingStatistics(vtkTable* table) const
+{
+  if (!this->Volume)
+  {
+    vtkErrorMacro("ComputeEncodingStatistics: no compressed volume");
+    return false;
+  }
+  if (!table)
+  {
+    vtkErrorMacro("ComputeEncodingStatistics: no output table");
+    return false;
+  }
+  svdag::EncodingAnalysis analysis;
+  try
+  {
+    analysis = svdag::analyzeEncoding(*this->Volume, vtkSVDAGParallelFor());
+  }
+  catch (const std::exception& e)
+  {
+    vtkErrorMacro("ComputeEncodingStatistics: " << e.what());
+    return false;
+  }
+  const vtkIdType rows = svdag::EncodingLevelCount;
+  while (table->GetNumberOfColumns() > 0)
+  {
+    table->RemoveColumn(table->GetNumberOfColumns() - 1);
+  }
+  vtkNew<vtkStringArray> level;
+  level->SetName("level");
+  level->SetNumberOfValues(rows);
+  for (vtkIdType r = 0; r < rows; ++r)
+  {
+    level->SetValue(r, svdag::encodingLevelName(static_cast<svdag::EncodingLevel>(r)));
+  }
+  table->AddColumn(level);
+  auto addColumn = [&](const char* name, auto field) {
+    using Value = std::decay_t<decltype(analysis.levels[0].*field)>;
+    using Array = std::conditional_t<std::is_floating_point<Value>::value, vtkDoubleArray,
+      vtkTypeInt64Array>;
+    vtkNew<Array> column;
+    column->SetName(name);
+    column->SetNumberOfValues(rows);
+    for (vtkIdType r = 0; r < rows; ++r)
+    {
+      column->SetValue(r, static_cast<typename Array::ValueType>(analysis.levels[size_t(r)].*field));
+    }
+    table->AddColumn(column);
+  };
+  using L = svdag::LevelAnalysis;
+  addColumn("nodes", &L::nodes);
+  addColumn("bits", &L::bits);
+  addColumn("header_bits", &L::headerBits);
+  addColumn("reference_bits", &L::referenceBits);
+  addColumn("references", &L::references);
+  addColumn("reference_width", &L::referenceWidth);
+  addColumn("incoming_references", &L::incomingReferences);
+  addColumn("referenced_once", &L::referencedOnce);
+  addColumn("max_incoming", &L::maxIncoming);
+  addColumn("top1_percent_share", &L::top1PercentShare);
+  addColumn("top10_percent_share", &L::top10PercentShare);
+  addColumn("reference_entropy_bits", &L::referenceEntropyBits);
+  addColumn("mirror_classes", &L::mirrorClasses);
+  addColumn("mirror_bits", &L::mirrorBits);
+  addColumn("symmetry_classes", &L::symmetryClasses);
+  addColumn("symmetry_bits", &L::symmetryBits);
   return true;
 }
 

@@ -27,6 +27,7 @@ class vtkImageData;
 class vtkInformation;
 class vtkInformationVector;
 class vtkMatrix3x3;
+class vtkTable;
 #ifndef __VTK_WRAP__
 namespace svdag
 {
@@ -123,6 +124,16 @@ public:
    * the table indices a < b of the two labels, sorted. The background is no label.
    */
   bool ComputeLabelAdjacency(vtkIdTypeArray* pairs) const;
+  /**
+   * Where the bytes go (svdag/EncodingAnalysis.h): one row per level ("blocks", "roots",
+   * "mids", "leaves"; column "level") with, in bits or counts: "nodes", "bits", "header_bits",
+   * "reference_bits", "references", "reference_width" (into the next level); of the references
+   * into the level: "incoming_references", "referenced_once", "max_incoming",
+   * "top1_percent_share", "top10_percent_share", "reference_entropy_bits"; and what sharing
+   * nodes equal up to a mirror (a cube symmetry) would store: "mirror_classes", "mirror_bits",
+   * "symmetry_classes", "symmetry_bits". The table's previous columns are removed.
+   */
+  bool ComputeEncodingStatistics(vtkTable* table) const;
   /**
    * The default categorical colors (svdag/LabelColoring.h), display sRGB, 3 components per
    * label in table order: palette colors assigned over the label adjacency so that touching

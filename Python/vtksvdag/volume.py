@@ -686,6 +686,59 @@ class SegmentationVolume:
             return np.empty((0, 2), dtype=self._dtype)
         return self.labels[vtk_to_numpy(pairs).reshape(-1, 2)]
 
+    def encoding_statistics(self):
+        """Where the compressed bytes go, level by level, and what known remedies would save.
+
+        The levels are the block records (``blocks``) and the three node pools of the occupancy
+        DAG (``roots`` 16^3, ``mids`` 8^3, ``leaves`` 4^3; see ``Module/core/svdag/Layout.h``).
+
+        Returns
+        -------
+        pandas.DataFrame
+            One row per level, indexed by ``level``. Today's encoding: ``nodes``, ``bits``,
+            ``bytes``, ``header_bits`` (masks, or the blocks' cell, bounds and label fields),
+            ``reference_bits``, ``references`` and ``reference_width`` (the level's references
+            into the next one). Skew of the references *into* the level:
+            ``incoming_references``, ``referenced_once`` (nodes used once), ``max_incoming``,
+            ``top1_percent_share`` and ``top10_percent_share`` (share of the references that
+            the most used 1% and 10% of the nodes receive), ``reference_entropy_bits`` (bits an
+            ideal static code would spend per reference, against the parent's
+            ``reference_width``). Symmetry-aware sharing: ``mirror_classes`` and
+            ``symmetry_classes`` (distinct nodes if nodes equal up to one of the 8 mirrors, or
+            one of the 48 symmetries of the cube, were stored once; complements are shared as
+            today), and ``mirror_bytes`` and ``symmetry_bytes``, the level's bytes in such a DAG
+            (3 or 6 more bits per reference name the transform).
+
+        Examples
+        --------
+        >>> import numpy as np, vtksvdag
+        >>> labels = np.zeros((16, 16, 16), dtype=np.uint8)
+        >>> labels[:, :, :3] = 1      # a slab on the x = 0 side ...
+        >>> labels[:, :, -3:] = 2     # ... and its mirror image
+        >>> table = vtksvdag.from_numpy(labels).encoding_statistics()
+        >>> int(table.loc["leaves", "nodes"]), int(table.loc["leaves", "mirror_classes"])
+        (2, 1)
+        """
+        import pandas as pd
+        from vtkmodules.vtkCommonDataModel import vtkTable
+
+        table = vtkTable()
+        with vtk_errors_raised(self._obj, ValueError):
+            self._obj.ComputeEncodingStatistics(table)
+        columns = {}
+        for c in range(table.GetNumberOfColumns()):
+            array = table.GetColumn(c)
+            name = array.GetName()
+            if name == "level":
+                columns[name] = [array.GetValue(r) for r in range(array.GetNumberOfValues())]
+            else:
+                columns[name] = vtk_to_numpy(array).copy()
+        frame = pd.DataFrame(columns).set_index("level")
+        for bits in ("bits", "mirror_bits", "symmetry_bits"):
+            frame.insert(frame.columns.get_loc(bits) + 1, bits.replace("bits", "bytes"),
+                         (frame[bits] + 7) // 8)
+        return frame
+
     def distinct_colors(self):
         """The default label colors: a categorical palette assigned over :meth:`label_adjacency`
         so that touching labels get clearly different colors (the C++ core's
