@@ -37,7 +37,7 @@ from vtkmodules.util.numpy_support import numpy_to_vtk, vtk_to_numpy
 from vtkmodules.vtkCommonCore import vtkSMPTools
 from vtkmodules.vtkCommonDataModel import vtkImageData
 
-from vtksvdag import synthetic
+from vtksvdag import SegmentationVolume, synthetic
 from vtksvdag.vtkSVDAGCore import vtkImageDataToSegmentationSVDAG, vtkSegmentationSVDAGToImageData
 
 try:
@@ -46,6 +46,9 @@ except ImportError:  # an older build without the IO module
     vtkSegmentationVolumeReader = None
 
 REPO = pathlib.Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO / "bench"))
+import _em_volumes  # noqa: E402  (bench/ is not a package)
+
 SHARED = REPO.parent / "shared"
 # The real volumes: ../shared/data, or where VTKSVDAG_SHARED_DATA points (as the tests).
 DATA = pathlib.Path(os.environ.get("VTKSVDAG_SHARED_DATA") or SHARED / "data")
@@ -73,6 +76,8 @@ GENERATED_VOLUMES = {
     "tubes256": lambda: synthetic.tubes((256, 256, 256), 60, 3.0, seed=2024),
     "checkerboard64_p1": lambda: synthetic.checkerboard((64, 64, 64), 2, 1),
     "checkerboard64_p2": lambda: synthetic.checkerboard((64, 64, 64), 2, 2),
+    # Electron-microscopy-like: ~2,500 warped cells, membranes and unannotated space.
+    "em_like512": lambda: _em_volumes.em_like(512),
 }
 QUICK_GENERATED_VOLUMES = {
     "voronoi64_100": lambda: synthetic.voronoi((64, 64, 64), 100, seed=2024),
@@ -353,7 +358,109 @@ def measure_volume(name, source, labels, file_path, repeats, baseline_kb) -> dic
         raise BenchError(f"{name}: the label table and background account for {distinct} distinct "
                          "values, numpy finds another number")
     row["ours_over_zstd19"] = total / row["zstd19_bytes"]
+    row["levels"] = SegmentationVolume(svdag).encoding_statistics()
     return row
+
+
+# ------------------------------------------------------------------ where the bytes go
+LEVEL_COLUMNS = [
+    "volume", "level", "nodes", "bytes", "header_bits", "reference_bits", "references",
+    "reference_width", "incoming_references", "referenced_once", "max_incoming",
+    "top1_percent_share", "top10_percent_share", "reference_entropy_bits",
+    "mirror_classes", "mirror_bytes", "symmetry_classes", "symmetry_bytes",
+]
+SYMMETRY_REF_BITS = 6  # bits naming one of the 48 symmetries (as the C++ analysis counts)
+
+
+def remedy_bytes(levels) -> dict:
+    """Bytes of blocks + DAG under each remedy, estimated from the per-level counts.
+
+    "mirror" and "symmetry" share nodes equal up to a mirror (a cube symmetry) on every level;
+    "leaf symmetry" only the leaves (the mids' leaf references gain the transform's bits, the
+    upper levels stay); "entropy refs" keeps the nodes but spends on each reference the entropy of
+    its level's target distribution (a bound for a static code: no random access, a file form);
+    "inline leaves" stores each leaf referenced once inside its mid node instead of a reference
+    (the unused mixed-and-full child state would mark it), so the leaf pool keeps only shared
+    leaves and the references into it narrow.
+    """
+    today = int(levels["bytes"].sum())
+    mids, leaves = levels.loc["mids"], levels.loc["leaves"]
+    leaf_width = max(int(leaves["symmetry_classes"]) - 1, 0).bit_length() + 1 + SYMMETRY_REF_BITS
+    leaf_symmetry = (
+        levels.loc["blocks", "bytes"] + levels.loc["roots", "bytes"] + leaves["symmetry_bytes"]
+        + (mids["header_bits"] + mids["references"] * leaf_width + 7) // 8
+    )
+    # References into the next level at that level's entropy.
+    entropy_bits = sum(
+        levels.loc[parent, "header_bits"] + levels.loc[parent, "references"]
+        * levels.loc[child, "reference_entropy_bits"]
+        for parent, child in (("blocks", "roots"), ("roots", "mids"), ("mids", "leaves"))
+    ) + leaves["header_bits"]
+    width = lambda units: max(int(units) - 1, 0).bit_length() + 1  # noqa: E731
+    once = int(leaves["referenced_once"])
+    shared_leaves = int(leaves["nodes"]) - once
+    mid_bits = mids["header_bits"] + (mids["references"] - once) * width(shared_leaves) + once * 64
+    root_bits = levels.loc["roots", "header_bits"] + levels.loc["roots", "references"] * width(mid_bits)
+    block_bits = levels.loc["blocks", "header_bits"] + levels.loc["blocks", "references"] * width(root_bits)
+    inline_bits = block_bits + root_bits + mid_bits + 64 * shared_leaves
+    return {
+        "today": today,
+        "mirror": int(levels["mirror_bytes"].sum()),
+        "symmetry": int(levels["symmetry_bytes"].sum()),
+        "leaf symmetry": int(leaf_symmetry),
+        "entropy refs": int(np.ceil(entropy_bits / 8)),
+        "inline leaves": int(np.ceil(inline_bits / 8)),
+    }
+
+
+def print_levels(rows):
+    table = []
+    for r in rows:
+        levels = r["levels"]
+        total = levels["bytes"].sum()
+        for level, x in levels.iterrows():
+            table.append([
+                r["volume"], level, int(x["nodes"]), int(x["bytes"]),
+                100.0 * x["bytes"] / total if total else 0.0,
+                int(x["reference_width"]), int(x["references"]),
+                100.0 * x["referenced_once"] / x["nodes"] if level != "blocks" and x["nodes"] else None,
+                x["top10_percent_share"] if level != "blocks" else None,
+                x["reference_entropy_bits"] if level != "blocks" else None,
+                100.0 * x["mirror_classes"] / x["nodes"] if x["nodes"] else None,
+                100.0 * x["symmetry_classes"] / x["nodes"] if x["nodes"] else None,
+            ])
+    print_table(
+        "Where the bytes go (measured: SegmentationVolume.encoding_statistics; once% = nodes "
+        "referenced once, top10 = share of the references into the level that its most used 10% "
+        "of nodes receive, H = entropy bits per reference into the level, mirror%/sym% = distinct "
+        "nodes up to the 8 mirrors / 48 cube symmetries, in % of today's)",
+        ["volume", "level", "nodes", "bytes", "% of DAG+blocks", "ref bits", "refs", "once%",
+         "top10", "H bits", "mirror%", "sym%"],
+        table,
+    )
+    remedies = []
+    for r in rows:
+        est = remedy_bytes(r["levels"])
+        other = r["bytes_total"] - est["today"]  # the label table, unchanged by every remedy
+        remedies.append([r["volume"]] + [(v + other) / r["cseg_bytes"] for v in est.values()])
+    print_table(
+        "Remedies, estimated from the counts above (total bytes / compressed_segmentation's; "
+        "target 0.5)",
+        ["volume"] + [f"{name}/cseg" for name in remedy_bytes(rows[0]["levels"])],
+        remedies,
+    )
+
+
+def write_levels_csv(rows, path: pathlib.Path):
+    with open(path, "w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=LEVEL_COLUMNS)
+        writer.writeheader()
+        for r in rows:
+            for level, x in r["levels"].iterrows():
+                values = {"volume": r["volume"], "level": level}
+                values.update({k: x[k] for k in LEVEL_COLUMNS[2:]})
+                writer.writerow({k: (f"{v:.6g}" if isinstance(v, float) else v)
+                                 for k, v in values.items()})
 
 
 # ------------------------------------------------------------------------------- anchors
@@ -512,14 +619,17 @@ def run(args) -> int:
             print(f"  {name}: {rows[-1]['bytes_total'] / MB:.3f} MB, round trips ok", flush=True)
 
     print_report(rows, read_anchors(ANCHORS))
+    print_levels(rows)
+    levels_path = out / "compression_levels.csv"
+    write_levels_csv(rows, levels_path)
     csv_path, png_path = out / "compression.csv", out / "compression.png"
     with open(csv_path, "w", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=COLUMNS, restval="")
+        writer = csv.DictWriter(f, fieldnames=COLUMNS, restval="", extrasaction="ignore")
         writer.writeheader()
         for r in rows:
             writer.writerow({k: (f"{v:.6g}" if isinstance(v, float) else v) for k, v in r.items()})
     write_plot(rows, png_path)
-    print(f"\nwrote {csv_path} and {png_path}")
+    print(f"\nwrote {csv_path}, {levels_path} and {png_path}")
     return 0
 
 

@@ -38,8 +38,8 @@ import time
 
 REPO = pathlib.Path(__file__).resolve().parents[1]
 SHARED_DATA = pathlib.Path(os.environ.get("VTKSVDAG_SHARED_DATA") or REPO.parent / "shared" / "data")
-BUILD = REPO / "build-paraview"
-PLUGIN = BUILD / "lib" / "paraview-5.11" / "plugins" / "vtkSVDAG" / "vtkSVDAG.so"
+sys.path.insert(0, str(REPO / "bench"))
+from _paraview_env import PLUGIN, paraview_env  # noqa: E402
 ROUTES = ["pvbatch", "pyvista"]
 FIELDS = ["route", "repeat", "first_image_s", "frame_ms"]
 
@@ -88,14 +88,6 @@ for _ in range(frames):
     print(f"FRAME_MS {(time.perf_counter() - start) * 1e3:.3f}", flush=True)
 plotter.close()
 """
-
-
-def paraview_env():
-    """build-paraview/env.sh's variables (ParaView's Python and libraries)."""
-    env = os.environ.copy()
-    env["PYTHONPATH"] = str(BUILD / "paraview-python" / "usr" / "lib" / "python3" / "dist-packages")
-    env["LD_LIBRARY_PATH"] = str(BUILD / "paraview-sdk" / "usr" / "lib" / "x86_64-linux-gnu")
-    return env
 
 
 def run_once(route, volume, size, frames, out_png):

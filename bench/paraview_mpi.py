@@ -41,8 +41,7 @@ import sys
 REPO = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO / "bench"))
 SHARED_DATA = pathlib.Path(os.environ.get("VTKSVDAG_SHARED_DATA") or REPO.parent / "shared" / "data")
-BUILD = REPO / "build-paraview"
-PLUGIN = BUILD / "lib" / "paraview-5.11" / "plugins" / "vtkSVDAG" / "vtkSVDAG.so"
+from _paraview_env import PLUGIN, paraview_env  # noqa: E402
 FIELDS = ["ranks", "repeat", "rank", "baseline_mib", "read_peak_mib", "peak_mib", "piece_mib",
           "read_s"]
 
@@ -84,14 +83,6 @@ with open(os.path.join(out, f"rank-{rank}.json"), "w") as f:
                "piece_mib": 0.0 if piece is None else piece.GetValue(0) / 2**20,
                "read_s": read_s}, f)
 """
-
-
-def paraview_env():
-    """build-paraview/env.sh's variables (ParaView's Python and libraries)."""
-    env = os.environ.copy()
-    env["PYTHONPATH"] = str(BUILD / "paraview-python" / "usr" / "lib" / "python3" / "dist-packages")
-    env["LD_LIBRARY_PATH"] = str(BUILD / "paraview-sdk" / "usr" / "lib" / "x86_64-linux-gnu")
-    return env
 
 
 def raw_nrrd(name, out):

@@ -23,8 +23,9 @@
  * README's ParaView section).
  *
  * Picking: SetPickPixel(x, y) (display pixels of the view, origin bottom left, like VTK's)
- * picks on the last traced frame; GetPickedHit and GetPickedLabel (information properties
- * PickedHit, PickedLabel) report the result.
+ * picks on the last traced frame; GetPickedHit and GetPickedLabel report the result. Sessions
+ * reach them through vtkSegmentationSVDAGPicker (proxy misc/SegmentationPicker), which runs
+ * them where the frame was traced.
  */
 #ifndef vtkSegmentationSVDAGRepresentation_h
 #define vtkSegmentationSVDAGRepresentation_h

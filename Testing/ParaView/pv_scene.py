@@ -43,13 +43,24 @@ def plain(value):
     return value if isinstance(value, str) else float(value)
 
 
+def picker_for(display):
+    """The documented pick: a misc/SegmentationPicker on the display (one per display)."""
+    if not hasattr(picker_for, "made"):
+        picker_for.made = {}
+    key = display.GetGlobalIDAsString()
+    if key not in picker_for.made:
+        picker_for.made[key] = servermanager.misc.SegmentationPicker(Representation=display)
+    return picker_for.made[key]
+
+
 def pick(display, x, y):
-    """The documented pick: PickPixel, then the information properties PickedHit and PickedLabel."""
-    display.PickPixel = [x, y]
-    display.UpdatePropertyInformation()
-    if not display.GetProperty("PickedHit")[0]:
+    """PickPixel, then the information properties PickedHit and PickedLabel."""
+    picker = picker_for(display)
+    picker.PickPixel = [x, y]
+    picker.UpdatePropertyInformation()
+    if not picker.GetProperty("PickedHit")[0]:
         return None
-    return int(display.GetProperty("PickedLabel")[0])
+    return int(picker.GetProperty("PickedLabel")[0])
 
 
 def pick_grid(display):
@@ -138,13 +149,12 @@ def main():
     Render(view)
     SaveScreenshot(os.path.join(args.out, "scene.png"), view, ImageResolution=list(SIZE))
     results["representation"] = display.GetXMLName()
-    display.UpdatePropertyInformation()
-    results["samples"] = display.GetProperty("AccumulatedSamples")[0]
+    picker = picker_for(display)
+    picker.UpdatePropertyInformation()
+    results["samples"] = picker.GetProperty("AccumulatedSamples")[0]
     results["camera"] = camera_of(view)
-    if not args.connect:
-        # Every rank picks (the representation's pick is collective). (A client reads the
-        # pick's information properties from its own representation, not the server's.)
-        results["picks"] = pick_grid(display)
+    # Every rank picks (the representation's pick is collective); a client reads the server's.
+    results["picks"] = pick_grid(display)
     if args.pieces:
         write_piece(reader, rank, args.out)
     if not args.image_only:

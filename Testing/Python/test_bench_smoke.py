@@ -97,6 +97,28 @@ def test_report_and_plot(quick_run):
         assert f"{name}: " in stdout and "round trips ok" in stdout
 
 
+def test_levels_csv_adds_up_to_the_bytes(quick_run):
+    out, stdout = quick_run
+    _, rows = read_rows(out)
+    with open(out / "compression_levels.csv", newline="") as f:
+        levels = list(csv.DictReader(f))
+    assert [(r["volume"], r["level"]) for r in levels] == [
+        (name, level) for name in EXPECTED_ROWS for level in ("blocks", "roots", "mids", "leaves")
+    ]
+    for r in rows:
+        mine = {x["level"]: x for x in levels if x["volume"] == r["volume"]}
+        assert int(mine["blocks"]["bytes"]) == int(r["bytes_blocks"])
+        assert int(mine["roots"]["nodes"]) == int(r["root_nodes"])
+        assert int(mine["mids"]["nodes"]) == int(r["mid_nodes"])
+        assert int(mine["leaves"]["nodes"]) == int(r["leaf_nodes"])
+        # The DAG's bytes count the node streams in whole 32-bit words, the levels in bytes.
+        dag = int(mine["leaves"]["bytes"]) + sum(int(mine[level]["bytes"]) for level in ("roots", "mids"))
+        assert dag <= int(r["bytes_dag"]) <= dag + 8
+        for x in mine.values():
+            assert int(x["symmetry_classes"]) <= int(x["mirror_classes"]) <= int(x["nodes"])
+    assert "Where the bytes go" in stdout and "Remedies, estimated" in stdout
+
+
 def load_bench_module():
     import importlib.util
 

@@ -245,16 +245,21 @@ def client_server_run(out):
 
 def test_paraview_client_server_image(scene, tmp_path):
     """pvserver on 127.0.0.1 renders the file on its side; the image the client saves equals
-    the built-in session's."""
-    out, _ = scene
+    the built-in session's, and the client's picks (SegmentationPicker, read from the server)
+    and accumulated samples are the built-in session's."""
+    out, local = scene
     for attempt in range(3):
         if not client_server_run(tmp_path):
             break
     else:
         pytest.fail(f"the X server refused ParaView three times ({X_REFUSED})")
     with open(tmp_path / "results.json") as f:
-        assert json.load(f)["representation"] == "SegmentationPathTracingRepresentation"
+        remote = json.load(f)
+    assert remote["representation"] == "SegmentationPathTracingRepresentation"
     assert_same_image(png(tmp_path / "scene.png"), png(out / "scene.png"))
+    assert remote["samples"] == local["samples"] > 0
+    assert remote["picks"] == local["picks"]
+    assert sum(label is not None for _, _, label in remote["picks"]) > 100
 
 
 def test_paraview_categorical_colors(scene):
