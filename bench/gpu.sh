@@ -3,8 +3,9 @@
 # bounces, on every .svdag file given (or in the folder given), through the C++ tool
 # vtksvdag-render (no VTK needed, Rendering/README.md "On a GPU machine"). Prints one table:
 # per file, LOD and bounces, the median milliseconds of an accumulating and of a restarting frame
-# for each backend, of a restarting frame with the denoiser on (the others run with it off), and
-# the device bytes (encoding + what the backend finds blocks with). Then the start-up of each
+# for each backend, of a restarting frame with the denoiser on (the others run with it off), of
+# one traced at half resolution per axis and upsampled guided by labels and depth, denoised (what
+# the VTK mapper's interactive frames do: --trace-reduction 2), and the device bytes (encoding + what the backend finds blocks with). Then the start-up of each
 # backend on the first file: seconds of a whole one-frame run with every cache empty (the
 # driver's disk cache off: __GL_SHADER_DISK_CACHE=0, MESA_SHADER_CACHE_DISABLE=true), the same
 # with --preview (first frame from the preview pipeline), and with only our pipeline cache
@@ -72,7 +73,8 @@ for f in "${files[@]}"; do
   for lod in voxel block; do
     for bounces in 1 4; do
       for backend in rt compute; do
-        for variant in "--no-denoise" "--restart --no-denoise" "--restart --denoise"; do
+        for variant in "--no-denoise" "--restart --no-denoise" "--restart --denoise" \
+          "--restart --denoise --trace-reduction 2"; do
           line=$("$tool" "$f" "$out/frame.png" --width "$width" --height "$height" --spp 1 \
             --frames "$frames" --lod "$lod" --bounces "$bounces" --backend "$backend" $variant \
             2>"$out/err")
@@ -133,10 +135,12 @@ for line in lines:
     device = run["device"]
     key = (r["file"], run["lod"], run["bounces"])
     kind = ("restart+denoise" if run.get("denoise") else "restart") if run["restart"] else "accumulate"
+    if run.get("trace_reduction", 1) > 1:
+        kind += f"+r{run['trace_reduction']}"
     rows.setdefault(key, {})[(run["backend"], kind)] = run
 print(f"{device}, {width}x{height}, 1 spp, median of {int(frames) - 1} frames after a warm-up (ms)")
-print(f"{'volume':<26} {'LOD':>6} {'b':>2} | {'rt acc':>8} {'rt rst':>8} {'rt dn':>8} | "
-      f"{'cmp acc':>8} {'cmp rst':>8} {'cmp dn':>8} | {'rt/cmp':>6} | {'rt MB':>6} {'cmp MB':>6}")
+print(f"{'volume':<26} {'LOD':>6} {'b':>2} | {'rt acc':>8} {'rt rst':>8} {'rt dn':>8} {'rt dn/2':>8} | "
+      f"{'cmp acc':>8} {'cmp rst':>8} {'cmp dn':>8} {'cmp dn/2':>8} | {'rt/cmp':>6} | {'rt MB':>6} {'cmp MB':>6}")
 for (name, lod, bounces), runs in sorted(rows.items()):
     ms = lambda b, k: runs[(b, k)]["ms_median"] if (b, k) in runs else float("nan")
     mb = lambda b: ((runs[(b, "accumulate")]["bytes_device"]["encoding"] +
@@ -144,9 +148,10 @@ for (name, lod, bounces), runs in sorted(rows.items()):
                     if (b, "accumulate") in runs else float("nan"))
     ratio = ms("rt", "accumulate") / ms("compute", "accumulate")
     print(f"{name:<26} {lod:>6} {bounces:>2} | {ms('rt', 'accumulate'):8.2f} {ms('rt', 'restart'):8.2f} "
-          f"{ms('rt', 'restart+denoise'):8.2f} | {ms('compute', 'accumulate'):8.2f} "
-          f"{ms('compute', 'restart'):8.2f} {ms('compute', 'restart+denoise'):8.2f} | {ratio:6.2f} | "
-          f"{mb('rt'):6.2f} {mb('compute'):6.2f}")
+          f"{ms('rt', 'restart+denoise'):8.2f} {ms('rt', 'restart+denoise+r2'):8.2f} | "
+          f"{ms('compute', 'accumulate'):8.2f} {ms('compute', 'restart'):8.2f} "
+          f"{ms('compute', 'restart+denoise'):8.2f} {ms('compute', 'restart+denoise+r2'):8.2f} | "
+          f"{ratio:6.2f} | {mb('rt'):6.2f} {mb('compute'):6.2f}")
 try:
     print("\nstart-up, seconds of a one-frame run (every cache empty; empty with --preview; only our"
           " pipeline cache warm)")

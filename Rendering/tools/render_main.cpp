@@ -6,13 +6,16 @@
 //     [--lod block|leaf|voxel|auto (default auto)] [--azimuth 30] [--elevation 20] [--zoom 1]
 //     [--view-angle 30] [--hide 0,5,7] [--frames 1] [--spp 1] [--bounces 4] [--seed 0]
 //     [--no-nee] [--denoise|--no-denoise] [--environment MAP.exr] [--sun AZ,EL]
-//     [--backend auto|rt|compute] [--restart] [--preview]
+//     [--backend auto|rt|compute] [--restart] [--preview] [--trace-reduction R]
 //
 // Unset options take svdag::render::RenderSettings' defaults (LOD auto, bounces 4, seed 0, NEE
 // on, denoiser on, backend auto). --backend picks how rays find the blocks (RenderSettings.h; auto: per device). --restart makes
 // every frame start a new accumulation (what a frame costs while the camera moves). --preview
 // previews while the pipeline compiles (Renderer::setPreviewWhileCompiling: the first frame of
 // a process is the small preview pipeline's, the full one compiles in the background).
+// --trace-reduction R (1..8, default 1) traces the paths on 1/R of the pixels per axis and
+// upsamples them guided by every pixel's own label and depth (Renderer::setTraceReduction: what
+// the VTK mapper's interactive frames do); frame times include the guides' trace.
 // The JSON's pipeline_compile_seconds is the compile time of the last frame's pipeline and
 // previewed whether that frame was a preview.
 // Every frame adds --spp path-traced samples per pixel to the accumulated image. --sun places a
@@ -62,6 +65,7 @@ struct Options
   svdag::render::Backend backend = defaults.backend;
   bool restart = false;
   bool preview = false;
+  uint32_t traceReduction = 1;
 };
 
 struct UsageError : std::invalid_argument
@@ -136,6 +140,9 @@ Options parse(int argc, char** argv)
       o.height = count(arg, value, 1, 16384);
     else if (arg == "--lod")
       o.lod = svdag::render::parseLod(value);
+    else if (arg == "--trace-reduction")
+      o.traceReduction =
+        count(arg, value, 1, svdag::render::Renderer::MaximumTraceReduction);
     else if (arg == "--backend")
       o.backend = svdag::render::parseBackend(value);
     else if (arg == "--azimuth")
@@ -219,7 +226,8 @@ int main(int argc, char** argv)
               << "[--azimuth DEG] [--elevation DEG] [--zoom F] [--view-angle DEG] "
               << "[--hide I,J,...] [--frames N] [--spp N] [--bounces N] [--seed N] [--no-nee] "
               << "[--denoise|--no-denoise] [--environment MAP.exr] [--sun AZ,EL] [--backend "
-              << svdag::render::backendNames("|") << "] [--restart] [--preview]\n";
+              << svdag::render::backendNames("|") << "] [--restart] [--preview] "
+              << "[--trace-reduction R]\n";
     return 1;
   }
   try
@@ -231,6 +239,7 @@ int main(int argc, char** argv)
     if (!o.hidden.empty())
       renderer.setHiddenLabels(o.hidden);
     renderer.setImageSize(o.width, o.height);
+    renderer.setTraceReduction(o.traceReduction);
     renderer.setLod(o.lod);
     renderer.setCamera(
       svdag::render::frameVolume(volume->geometry, o.azimuth, o.elevation, o.zoom, o.viewAngle));
@@ -279,6 +288,7 @@ int main(int argc, char** argv)
     auto u = [](uint64_t v) { return (unsigned long long)v; };
     std::printf("{\"device\": %s, \"backend\": \"%s\", \"width\": %u, \"height\": %u, "
                 "\"lod\": \"%s\", \"spp\": %u, \"bounces\": %u, \"nee\": %s, \"denoise\": %s, \"restart\": %s, "
+                "\"trace_reduction\": %u, "
                 "\"setup_seconds\": %.6f, \"render_seconds\": %.6f, \"ms_per_frame\": %.3f, "
                 "\"ms_median\": %.3f, \"bytes_blas\": %llu, \"bytes_tlas\": %llu, "
                 "\"pipeline_compile_seconds\": %.6f, \"previewed\": %s, "
@@ -287,7 +297,8 @@ int main(int argc, char** argv)
                 "\"images\": %llu, \"other\": %llu, \"total\": %llu}}\n",
       jsonString(renderer.deviceName()).c_str(), svdag::render::backendName(renderer.backend()),
       o.width, o.height, svdag::render::lodName(o.lod), renderer.accumulatedSamples(), o.bounces,
-      o.nee ? "true" : "false", o.denoise ? "true" : "false", o.restart ? "true" : "false", renderer.setupSeconds(),
+      o.nee ? "true" : "false", o.denoise ? "true" : "false", o.restart ? "true" : "false",
+      renderer.traceReduction(), renderer.setupSeconds(),
       renderer.renderSeconds(), msPerFrame, msMedian, u(renderer.blasBytes()),
       u(renderer.tlasBytes()), renderer.pipelineCompileSeconds(),
       renderer.previewed() ? "true" : "false", u(renderer.visibleBlocks()), u(bytes.encoding),

@@ -1,6 +1,7 @@
 """Smoke test of the prepared GPU benchmark: `bench/gpu.sh` runs the C++ tool for both backends,
 both LODs and both bounce counts, accumulating and restarting, and prints one table row per
 file, LOD and bounce count (here on lavapipe, at a tiny size). Asserts structure, not timings."""
+import json
 import pathlib
 import subprocess
 
@@ -36,9 +37,10 @@ def test_gpu_script_prints_one_table(tmp_path):
     assert sorted((r[0], r[1], r[2]) for r in rows) == sorted(
         (f, lod, b) for f in "ab" for lod in ("voxel", "block") for b in ("1", "4"))
     for r in rows:
-        # Per backend: accumulating, restarting, restarting denoised; the ratio; the bytes.
+        # Per backend: accumulating, restarting, restarting denoised, the same traced at half
+        # resolution and upsampled; the ratio; the bytes.
         numbers = [float(v) for v in r[3:] if v != "|"]
-        assert len(numbers) == 9 and all(n > 0 for n in numbers), r
+        assert len(numbers) == 11 and all(n > 0 for n in numbers), r
     # The start-up of each backend: every cache empty (with the full pipeline, and with the
     # preview's first frame), and with our pipeline cache warm; each with its compile seconds.
     startup = [line.replace(",", "").split() for line in lines[end + 2:]]
@@ -55,3 +57,30 @@ def test_gpu_script_prints_one_table(tmp_path):
     bad = subprocess.run(["bash", str(REPO / "bench" / "gpu.sh"), str(tmp_path / "empty")],
                          capture_output=True, text=True, timeout=60)
     assert bad.returncode != 0 and "no .svdag files" in bad.stderr
+
+
+def test_render_tool_traces_reduced_and_upsamples(tmp_path):
+    """--trace-reduction R: the image keeps its size, differs from the full-resolution trace (the
+    paths were traced on fewer pixels) but stays close to it, and R is range-checked."""
+    from PIL import Image
+
+    labels = np.zeros((40, 40, 40), dtype=np.uint8)
+    labels[5:35, 5:35, 5:20] = 1
+    labels[10:30, 10:30, 20:35] = 2
+    path = tmp_path / "boxes.svdag"
+    vtksvdag.from_numpy(labels).save(path)
+    tool = tool_folder() / "vtksvdag-render"
+    images = {}
+    for r in (1, 4):
+        run = subprocess.run([str(tool), str(path), str(tmp_path / f"r{r}.png"), "--width", "64",
+                              "--height", "48", "--frames", "8", "--no-denoise",
+                              "--trace-reduction", str(r)], capture_output=True, text=True, timeout=300)
+        assert run.returncode == 0, run.stderr
+        assert json.loads(run.stdout.strip().splitlines()[-1])["trace_reduction"] == r
+        images[r] = np.asarray(Image.open(tmp_path / f"r{r}.png").convert("RGB"), dtype=float)
+    assert images[4].shape == images[1].shape == (48, 64, 3)
+    difference = np.abs(images[4] - images[1]).mean()
+    assert 0 < difference < 12, difference
+    bad = subprocess.run([str(tool), str(path), str(tmp_path / "x.png"), "--trace-reduction", "9"],
+                         capture_output=True, text=True, timeout=60)
+    assert bad.returncode == 1 and "--trace-reduction needs an integer in [1, 8]" in bad.stderr
