@@ -15,7 +15,7 @@ ROOT=$PWD
 BUILD=${SANITIZE_BUILD_DIR:-$ROOT/build-asan}
 JOBS=${SANITIZE_JOBS:-2}
 PY=${SANITIZE_PYTHON:-$ROOT/.venv/bin/python}
-PYTESTS=${SANITIZE_PYTESTS:-"Testing/Python/test_reader_formats.py Testing/Python/test_reader_pieces.py Testing/Python/test_svdag_file.py Testing/Python/test_fuzz.py"}
+PYTESTS=${SANITIZE_PYTESTS:-"Testing/Python/test_reader_formats.py Testing/Python/test_reader_pieces.py Testing/Python/test_svdag_file.py Testing/Python/test_svdag_format1.py Testing/Python/test_fuzz.py"}
 
 [ -x "$PY" ] || { echo "sanitize.sh: $PY missing: run scripts/setup.sh first"; exit 1; }
 t0=$(date +%s)

@@ -1,6 +1,7 @@
 #include "svdag/Builder.h"
 
 #include "BuildPools.h"
+#include "svdag/LeafSymmetry.h"
 
 #include <algorithm>
 #include <cmath>
@@ -39,9 +40,18 @@ public:
           place(id, mix64(masks[id]));
       });
   }
+  // The reference (Layout.h: index, symmetry, complement) to a mixed mask, its class interned.
+  uint32_t reference(uint64_t mask)
+  {
+    const CanonicalLeaf c = canonicalLeaf(mask);
+    return layout::leafRef(intern(c.stored), c.symmetry, c.complement);
+  }
   size_t size() const { return masks.size(); }
-  // Width of a reference (id << 1 | complement) to any leaf so far.
-  uint32_t refBits() const { return bitWidth(masks.empty() ? 0 : masks.size() - 1) + 1; }
+  // Width of a reference to any leaf so far.
+  uint32_t refBits() const
+  {
+    return bitWidth(masks.empty() ? 0 : masks.size() - 1) + 1 + layout::LEAF_SYMMETRY_BITS;
+  }
   void releaseTable() { table.clear(); }
   std::vector<uint64_t> take() { return masks.takeVector(); }
 
@@ -268,11 +278,8 @@ struct Builder::Impl
           continue;
         }
         voxels += uint64_t(__builtin_popcountll(m));
-        const uint32_t complement = uint32_t(m & 1u);
-        if (complement)
-          m = ~m;
         mixed |= 1u << c;
-        refs[n++] = (leaves.intern(m) << 1) | complement;
+        refs[n++] = leaves.reference(m);
       }
       if (!mixed && !full)
         continue;
@@ -370,9 +377,9 @@ void Builder::addVolume(const Volume& part)
   remapStream(
     part.mids, part.midCount, part.widths.leafRefBits,
     [&](uint32_t ref) {
-      if ((ref >> 1) >= leafIds.size())
+      if (layout::leafRefIndex(ref) >= leafIds.size())
         throw std::runtime_error("the appended volume has a leaf reference out of range");
-      return (leafIds[ref >> 1] << 1) | (ref & 1u);
+      return layout::leafRef(leafIds[layout::leafRefIndex(ref)], layout::leafRefSymmetry(ref), ref & 1u);
     },
     [&](uint32_t header, const uint32_t* refs) {
       m.mids.widenTo(m.leaves.refBits());

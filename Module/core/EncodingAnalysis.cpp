@@ -1,5 +1,7 @@
 #include "svdag/EncodingAnalysis.h"
 
+#include "svdag/LeafSymmetry.h"
+
 #include <algorithm>
 #include <cmath>
 #include <functional>
@@ -46,61 +48,28 @@ uint64_t mix(uint64_t x)
   return x;
 }
 
-// Transform t maps a node N to N' with N'(y) = N(A(y)), A(y)_j = y_{p(j)}, mirrored when bit j
-// of t % 8 is set (p = the (t / 8)-th permutation). The same (p, mirrors) act on the octants of
-// a node and inside each child, so N' has at octant o the transform of N's child at A(o).
+// Transform t maps a node N to N' with N'(y) = N(A(y)) (Layout.h, leafSymmetryBit: A permutes
+// and mirrors the axes). The same A acts on the octants of a node and inside each child, so N'
+// has at octant o the transform of N's child at A(o); leaves go through leafUnderSymmetry.
 struct Symmetries
 {
   uint8_t octant[SymmetryCount][8];
-  // Leaf masks through a byte table: bit x of the source lands on bit leafBit[t][x].
-  uint64_t leafTable[SymmetryCount][8][256];
 
   Symmetries()
   {
-    static const int perms[6][3] = { { 0, 1, 2 }, { 0, 2, 1 }, { 1, 0, 2 }, { 1, 2, 0 },
-      { 2, 0, 1 }, { 2, 1, 0 } };
     for (uint32_t t = 0; t < SymmetryCount; ++t)
-    {
-      const int* p = perms[t / 8];
-      const uint32_t mirrors = t % 8;
-      auto apply = [&](const uint32_t y[3], uint32_t n, uint32_t a[3]) {
-        for (int j = 0; j < 3; ++j)
-          a[j] = (mirrors >> j) & 1u ? n - 1 - y[p[j]] : y[p[j]];
-      };
       for (uint32_t o = 0; o < 8; ++o)
       {
-        const uint32_t y[3] = { o & 1u, (o >> 1) & 1u, (o >> 2) & 1u };
+        // Octant o's corner voxel in a 4^3 leaf: A keeps or mirrors each half.
+        const uint32_t x = 2 * (o & 1u), y = 2 * ((o >> 1) & 1u), z = 2 * (o >> 2);
         uint32_t a[3];
-        apply(y, 2, a);
+        for (uint32_t j = 0; j < 3; ++j)
+          a[j] = layout::leafSymmetryCoordinate(t, j, x, y, z) >> 1;
         octant[t][o] = uint8_t(a[0] + 2 * a[1] + 4 * a[2]);
       }
-      uint32_t destination[64];
-      for (uint32_t b = 0; b < 64; ++b)
-      {
-        const uint32_t y[3] = { b % 4, (b / 4) % 4, b / 16 };
-        uint32_t a[3];
-        apply(y, 4, a);
-        destination[layout::leafBit(a[0], a[1], a[2])] = b;
-      }
-      for (uint32_t byte = 0; byte < 8; ++byte)
-        for (uint32_t v = 0; v < 256; ++v)
-        {
-          uint64_t out = 0;
-          for (uint32_t k = 0; k < 8; ++k)
-            if ((v >> k) & 1u)
-              out |= uint64_t(1) << destination[8 * byte + k];
-          leafTable[t][byte][v] = out;
-        }
-    }
   }
 
-  uint64_t leaf(uint32_t t, uint64_t mask) const
-  {
-    uint64_t out = 0;
-    for (uint32_t byte = 0; byte < 8; ++byte)
-      out |= leafTable[t][byte][(mask >> (8 * byte)) & 0xFFu];
-    return out;
-  }
+  uint64_t leaf(uint32_t t, uint64_t mask) const { return leafUnderSymmetry(t, mask); }
 };
 
 // A node's children: mixed and full masks, and per mixed child its target index and complement.
@@ -113,12 +82,14 @@ struct Node
 struct Level
 {
   std::vector<Node> nodes;
-  std::vector<uint32_t> childTarget;
+  std::vector<uint32_t> childTarget;    // index of the child node
   std::vector<uint8_t> childComplement;
+  std::vector<uint64_t> childLeaf;      // mids only: the child's occupancy (leafMask of its ref)
   std::vector<uint64_t> offsets; // bit offsets in the stream, ascending
   uint64_t bits = 0;
 };
 
+// childIndex turns a child reference into the child's index (throws if there is none).
 Level readLevel(const std::vector<uint32_t>& stream, uint64_t count, uint32_t refBits,
   const std::function<uint32_t(uint32_t)>& childIndex)
 {
@@ -137,7 +108,7 @@ Level readLevel(const std::vector<uint32_t>& stream, uint64_t count, uint32_t re
     for (uint32_t r = 0; r < k; ++r)
     {
       const uint32_t ref = Volume::nodeChildRef(stream, at, r, refBits);
-      level.childTarget.push_back(childIndex(layout::refTarget(ref)));
+      level.childTarget.push_back(childIndex(ref));
       level.childComplement.push_back(layout::refComplement(ref) ? 1 : 0);
     }
     level.offsets[i] = at;
@@ -156,7 +127,7 @@ uint32_t indexOfOffset(const std::vector<uint64_t>& offsets, uint64_t offset)
 }
 
 // Hash of the canonical form of transform t of a node whose children's transformed hashes come
-// from childKey(target, t) (flag in bit 0: the transformed child was complemented to make it
+// from childKey(child slot, t) (flag in bit 0: the transformed child was complemented to make it
 // canonical). Returns the hash with bit 0 = whether this node was complemented.
 template <class ChildKey>
 uint64_t transformedNode(const Symmetries& s, uint32_t t, const Level& level, const Node& n,
@@ -177,7 +148,7 @@ uint64_t transformedNode(const Symmetries& s, uint32_t t, const Level& level, co
     if ((n.mixed >> src) & 1u)
     {
       const uint32_t c = n.firstChild + rankOf[src];
-      const uint64_t key = childKey(level.childTarget[c], t);
+      const uint64_t key = childKey(c, t);
       mixed |= 1u << o;
       keys[o] = key & ~uint64_t(1);
       complements[o] = uint8_t(level.childComplement[c] ^ (key & 1u));
@@ -200,7 +171,7 @@ uint64_t transformedNode(const Symmetries& s, uint32_t t, const Level& level, co
   return (h & ~uint64_t(1)) | (flip ? 1u : 0u);
 }
 
-uint64_t canonicalLeaf(uint64_t mask, uint64_t& flip)
+uint64_t complementCanonical(uint64_t mask, uint64_t& flip)
 {
   flip = mask & 1u;
   return flip ? ~mask : mask;
@@ -272,13 +243,24 @@ EncodingAnalysis analyzeEncoding(const Volume& v, const ParallelFor& parallel)
   const Symmetries& sym = *tables;
 
   const uint64_t leafCount = v.leaves.size();
-  Level mids = readLevel(v.mids, v.midCount, v.widths.leafRefBits, [&](uint32_t target) {
-    if (target >= leafCount)
+  Level mids = readLevel(v.mids, v.midCount, v.widths.leafRefBits, [&](uint32_t ref) {
+    if (layout::leafRefIndex(ref) >= leafCount ||
+      layout::leafRefSymmetry(ref) >= layout::LEAF_SYMMETRY_COUNT)
       throw std::runtime_error("analyzeEncoding: a leaf reference is out of range");
-    return target;
+    return layout::leafRefIndex(ref);
   });
+  {
+    // The occupancy each mid child reads: its stored leaf under the reference's symmetry.
+    uint64_t at = 0;
+    for (const Node& n : mids.nodes)
+    {
+      for (uint32_t r = 0; r < layout::bitCount(n.mixed); ++r)
+        mids.childLeaf.push_back(v.leafMask(Volume::nodeChildRef(v.mids, at, r, v.widths.leafRefBits)));
+      at += layout::NODE_HEADER_BITS + uint64_t(layout::bitCount(n.mixed)) * v.widths.leafRefBits;
+    }
+  }
   Level roots = readLevel(v.roots, v.rootCount, v.widths.midRefBits,
-    [&](uint32_t target) { return indexOfOffset(mids.offsets, target); });
+    [&](uint32_t ref) { return indexOfOffset(mids.offsets, layout::refTarget(ref)); });
   std::vector<uint32_t> blockRoot(size_t(v.blockCount));
   std::vector<uint8_t> blockComplement(size_t(v.blockCount));
   for (uint64_t i = 0; i < v.blockCount; ++i)
@@ -329,18 +311,22 @@ EncodingAnalysis analyzeEncoding(const Volume& v, const ParallelFor& parallel)
   incomingStatistics(countTargets(mids, size_t(leafCount)), L);
 
   // Symmetry classes, bottom up. Leaves: exact canonical masks.
-  auto leafKey = [&](uint32_t leaf, uint32_t t) {
+  auto maskKey = [&](uint64_t mask, uint32_t t) {
     uint64_t flip;
-    const uint64_t m = canonicalLeaf(sym.leaf(t, v.leaves[leaf]), flip);
+    const uint64_t m = complementCanonical(sym.leaf(t, mask), flip);
     return (mix(m) & ~uint64_t(1)) | flip;
   };
+  auto leafKey = [&](uint32_t leaf, uint32_t t) { return maskKey(v.leaves[leaf], t); };
+  auto midChildKey = [&](uint32_t slot, uint32_t t) { return maskKey(mids.childLeaf[slot], t); };
   std::vector<uint64_t> midKeys(mids.nodes.size() * SymmetryCount);
   parallel(0, mids.nodes.size(), 1024, [&](uint64_t begin, uint64_t end) {
     for (uint64_t i = begin; i < end; ++i)
       for (uint32_t t = 0; t < SymmetryCount; ++t)
-        midKeys[i * SymmetryCount + t] = transformedNode(sym, t, mids, mids.nodes[i], leafKey);
+        midKeys[i * SymmetryCount + t] = transformedNode(sym, t, mids, mids.nodes[i], midChildKey);
   });
-  auto midKey = [&](uint32_t mid, uint32_t t) { return midKeys[size_t(mid) * SymmetryCount + t]; };
+  auto rootChildKey = [&](uint32_t slot, uint32_t t) {
+    return midKeys[size_t(roots.childTarget[slot]) * SymmetryCount + t];
+  };
 
   const uint32_t transformCounts[2] = { MirrorCount, SymmetryCount };
   const uint32_t transformBits[2] = { MirrorRefBits, SymmetryRefBits };
@@ -352,7 +338,8 @@ EncodingAnalysis analyzeEncoding(const Volume& v, const ParallelFor& parallel)
       [](uint64_t) { return uint64_t(64); });
     const uint32_t leafWidth = sharedRefWidth(leafClasses.first, transformBits[g]);
     auto midClasses = classes(
-      mids.nodes.size(), n, [&](uint64_t i, uint32_t t) { return midKey(uint32_t(i), t) & ~uint64_t(1); },
+      mids.nodes.size(), n,
+      [&](uint64_t i, uint32_t t) { return midKeys[size_t(i) * SymmetryCount + t] & ~uint64_t(1); },
       [&](uint64_t i) {
         return layout::NODE_HEADER_BITS + uint64_t(layout::bitCount(mids.nodes[i].mixed)) * leafWidth;
       });
@@ -360,7 +347,7 @@ EncodingAnalysis analyzeEncoding(const Volume& v, const ParallelFor& parallel)
     auto rootClasses = classes(
       roots.nodes.size(), n,
       [&](uint64_t i, uint32_t t) {
-        return transformedNode(sym, t, roots, roots.nodes[i], midKey) & ~uint64_t(1);
+        return transformedNode(sym, t, roots, roots.nodes[i], rootChildKey) & ~uint64_t(1);
       },
       [&](uint64_t i) {
         return layout::NODE_HEADER_BITS + uint64_t(layout::bitCount(roots.nodes[i].mixed)) * midWidth;

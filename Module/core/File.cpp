@@ -1,6 +1,8 @@
 // The .svdag file format (the layout is documented in svdag/File.h and IO/README.md).
 #include "svdag/File.h"
 
+#include "FileVersion1.h"
+
 #include <zlib.h>
 #include <zstd.h>
 
@@ -567,10 +569,10 @@ Volume deserialize(const uint8_t* data, size_t size)
   ByteReader h(data, size, "header");
   h.skip(FileMagicSize);
   const uint16_t major = h.u16(), minor = h.u16();
-  if (major != FileMajorVersion)
+  if (major != FileMajorVersion && major != 1)
     throw FileError("unsupported .svdag format version " + std::to_string(major) + "." +
-      std::to_string(minor) + " (this reader reads version " + std::to_string(FileMajorVersion) +
-      ".x)");
+      std::to_string(minor) + " (this reader reads versions 1.x and " +
+      std::to_string(FileMajorVersion) + ".x)");
 
   Volume v;
   Geometry& g = v.geometry;
@@ -718,6 +720,8 @@ Volume deserialize(const uint8_t* data, size_t size)
 
   try
   {
+    if (major == 1)
+      file::upgradeVersion1(v);
     v.validate(); // every reference, offset and bound of the structure
   }
   catch (const std::exception& e)

@@ -270,7 +270,7 @@ void occupancyInBox(const Volume& v, uint64_t blockIndex, const std::array<uint3
       }
       const uint32_t leafRef =
         Volume::nodeChildRef(v.mids, midOff, layout::childRank(midMixed, c), v.widths.leafRefBits);
-      uint64_t mask = v.leaves[layout::refTarget(leafRef)];
+      uint64_t mask = v.leafMask(leafRef);
       if (midInv != layout::refComplement(leafRef))
         mask = ~mask;
       const uint32_t xa = std::max(x1, lo[0]), xb = std::min(x1 + 3, hi[0]);

@@ -1,4 +1,5 @@
 #include "svdag/Volume.h"
+#include "svdag/LeafSymmetry.h"
 
 #include <algorithm>
 #include <cmath>
@@ -224,8 +225,13 @@ bool Volume::occupied(uint64_t blockIndex, uint32_t x, uint32_t y, uint32_t z) c
     ref = nodeChildRef(*streams[level], offset, layout::childRank(mixed, o), refBits[level]);
   }
   inverted ^= layout::refComplement(ref);
-  const uint64_t mask = leaves[layout::refTarget(ref)];
-  return ((mask >> layout::leafBit(x, y, z)) & 1u) != inverted;
+  const uint64_t stored = leaves[layout::leafRefIndex(ref)];
+  return ((stored >> layout::leafSymmetryBit(layout::leafRefSymmetry(ref), x, y, z)) & 1u) != inverted;
+}
+
+uint64_t Volume::leafMask(uint32_t leafRef) const
+{
+  return leafUnderSymmetry(layout::leafRefSymmetry(leafRef), leaves[layout::leafRefIndex(leafRef)]);
 }
 
 void Volume::occupancy(uint64_t blockIndex, uint8_t* out) const
@@ -269,7 +275,7 @@ void Volume::occupancy(uint64_t blockIndex, uint8_t* out) const
       }
       const uint32_t leafRef =
         nodeChildRef(mids, midOff, layout::childRank(midMixed, c), widths.leafRefBits);
-      uint64_t mask = leaves[layout::refTarget(leafRef)];
+      uint64_t mask = leafMask(leafRef);
       if (midInv != layout::refComplement(leafRef))
         mask = ~mask;
       for (uint32_t b = 0; b < 64; ++b)
@@ -524,20 +530,22 @@ struct NodePool
 {
   NodeIndex index;
   std::unique_ptr<uint64_t[]> summaries;
+  // Which nodes a reference reached: every stored node must be used, so that no node can hide
+  // in a stream's padding bits (a zero header is a well-formed empty node).
+  std::vector<uint8_t> used;
+  void checkAllUsed(const char* what) const
+  {
+    for (size_t n = 0; n < used.size(); ++n)
+      if (!used[n])
+        fail(std::string(what) + " node " + str(n) + " is not referenced");
+  }
 };
 
-// Per leaf and polarity: projection lanes (x bits 0-3, y 8-11, z 16-19) and voxel count (24-30).
-std::vector<uint32_t> leafSummaries(const std::vector<uint64_t>& leaves)
+// A leaf child's summary in one polarity: projection lanes (x bits 0-3, y 8-11, z 16-19) and
+// voxel count (24-30).
+uint32_t leafSummary(uint64_t mask)
 {
-  std::vector<uint32_t> info(leaves.size() * 2);
-  for (size_t l = 0; l < leaves.size(); ++l)
-  {
-    const uint64_t m = leaves[l];
-    const uint32_t count = popcount64(m);
-    info[2 * l] = leafLanes(m) | (count << 24);
-    info[2 * l + 1] = leafLanes(~m) | ((64 - count) << 24);
-  }
-  return info;
+  return leafLanes(mask) | (popcount64(mask) << 24);
 }
 
 // Walks one node stream in order (nodes are contiguous): every node well formed and every child
@@ -595,22 +603,23 @@ NodePool walkNodeStream(const std::vector<uint32_t>& stream, uint64_t count, uin
   if (total - offset >= 32)
     fail(std::string(what) + " stream longer than its nodes");
   pool.index.finish();
+  pool.used.assign(size_t(count), 0);
   return pool;
 }
 
 // The mid pool: references to existing leaves. Summary: lanes x bits 0-7, y 8-15, z 16-23;
 // voxels from bit 32.
-NodePool checkMidPool(const Volume& v, const std::vector<uint32_t>& leafInfo)
+NodePool checkMidPool(const Volume& v)
 {
   return walkNodeStream(v.mids, v.midCount, v.widths.leafRefBits, "mid",
     uint64_t(0x0F0F0Fu | (64u << 24)),
     [&](uint32_t ref, uint64_t& a0, uint64_t& a1) {
-      const uint64_t leaf = layout::refTarget(ref);
-      if (leaf >= v.leaves.size())
+      if (layout::leafRefIndex(ref) >= v.leaves.size() ||
+        layout::leafRefSymmetry(ref) >= layout::LEAF_SYMMETRY_COUNT)
         return false;
-      const size_t at = 2 * size_t(leaf) + (ref & 1u);
-      a0 = leafInfo[at];
-      a1 = leafInfo[at ^ 1u];
+      const uint64_t mask = layout::refComplement(ref) ? ~v.leafMask(ref) : v.leafMask(ref);
+      a0 = leafSummary(mask);
+      a1 = leafSummary(~mask);
       return true;
     },
     [](const uint64_t* a) {
@@ -626,7 +635,7 @@ NodePool checkMidPool(const Volume& v, const std::vector<uint32_t>& leafInfo)
 
 // The root pool: references at mid node starts. Summary: lanes x bits 0-15, y 16-31, z 32-47;
 // voxels from bit 48.
-NodePool checkRootPool(const Volume& v, const NodePool& mids)
+NodePool checkRootPool(const Volume& v, NodePool& mids)
 {
   return walkNodeStream(v.roots, v.rootCount, v.widths.midRefBits, "root",
     uint64_t(0xFFFFFFu) | (uint64_t(512) << 32),
@@ -634,6 +643,7 @@ NodePool checkRootPool(const Volume& v, const NodePool& mids)
       const int64_t mid = mids.index.find(layout::refTarget(ref));
       if (mid < 0)
         return false;
+      mids.used[size_t(mid)] = 1;
       const size_t at = 2 * size_t(mid) + (ref & 1u);
       a0 = mids.summaries[at];
       a1 = mids.summaries[at ^ 1u];
@@ -813,7 +823,7 @@ private:
         if (midShared & (1u << c))
         {
           const uint32_t leafRef = fieldAt(midWords, refAt, refBits);
-          uint64_t m = this->V.leaves[layout::refTarget(leafRef)];
+          uint64_t m = this->V.leafMask(leafRef);
           if (me.inverted != layout::refComplement(leafRef))
             m = ~m;
           if (acc[c] & m)
@@ -843,7 +853,7 @@ struct LabelTotals
 // its bounds (decoders write only inside the bounds, the traversal reads the whole cell: both
 // must agree), the blocks of a cell disjoint (CellBlocks); returns each label's voxel count and
 // bounds as the blocks hold them.
-LabelTotals checkBlocks(const Volume& v, const NodePool& roots)
+LabelTotals checkBlocks(const Volume& v, NodePool& roots)
 {
   const FieldWidths& w = v.widths;
   const auto& d = v.geometry.dims;
@@ -882,6 +892,7 @@ LabelTotals checkBlocks(const Volume& v, const NodePool& roots)
     const int64_t root = roots.index.find(layout::refTarget(rootRef));
     if (root < 0)
       fail(name() + ": root reference does not point at a root node");
+    roots.used[size_t(root)] = 1;
     const uint64_t summary = roots.summaries[2 * size_t(root) + (rootRef & 1u)];
     const uint32_t voxels = uint32_t(summary >> 48);
     if (voxels == 0)
@@ -936,9 +947,11 @@ void Volume::validate() const
 {
   checkHeader(*this);
   checkLabelTable(*this);
-  const NodePool mids = checkMidPool(*this, leafSummaries(this->leaves));
-  const NodePool roots = checkRootPool(*this, mids);
+  NodePool mids = checkMidPool(*this);
+  NodePool roots = checkRootPool(*this, mids);
+  mids.checkAllUsed("mid");
   checkLabelTotals(*this, checkBlocks(*this, roots));
+  roots.checkAllUsed("root");
 }
 
 bool Volume::operator==(const Volume& o) const

@@ -706,8 +706,9 @@ class SegmentationVolume:
             ``reference_width``). Symmetry-aware sharing: ``mirror_classes`` and
             ``symmetry_classes`` (distinct nodes if nodes equal up to one of the 8 mirrors, or
             one of the 48 symmetries of the cube, were stored once; complements are shared as
-            today), and ``mirror_bytes`` and ``symmetry_bytes``, the level's bytes in such a DAG
-            (3 or 6 more bits per reference name the transform).
+            today; leaves already are stored once per symmetry class), and ``mirror_bytes``
+            and ``symmetry_bytes``, the level's bytes in such a DAG (3 or 6 more bits per
+            reference name the transform).
 
         Examples
         --------
@@ -716,7 +717,9 @@ class SegmentationVolume:
         >>> labels[:, :, :3] = 1      # a slab on the x = 0 side ...
         >>> labels[:, :, -3:] = 2     # ... and its mirror image
         >>> table = vtksvdag.from_numpy(labels).encoding_statistics()
-        >>> int(table.loc["leaves", "nodes"]), int(table.loc["leaves", "mirror_classes"])
+        >>> int(table.loc["leaves", "nodes"])  # leaves are stored once per symmetry class
+        1
+        >>> int(table.loc["mids", "nodes"]), int(table.loc["mids", "mirror_classes"])
         (2, 1)
         """
         import pandas as pd

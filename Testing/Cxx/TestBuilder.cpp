@@ -3,6 +3,7 @@
 #include "ThreadedFor.h"
 #include "svdag/Builder.h"
 #include "svdag/Decoder.h"
+#include "svdag/LeafSymmetry.h"
 
 #include <gtest/gtest.h>
 
@@ -242,7 +243,16 @@ TEST(Builder, NodesAreUniqueAndCanonical)
     EXPECT_NE(m, 0u) << "empty leaf stored";
     EXPECT_TRUE(leaves.insert(m).second) << "duplicate leaf";
     EXPECT_EQ(leaves.count(~m), 0u) << "leaf stored with its complement";
+    // One leaf per class: the smallest of its images under the 48 symmetries and complement.
+    for (uint32_t s = 0; s < svdag::layout::LEAF_SYMMETRY_COUNT; ++s)
+    {
+      const uint64_t image = svdag::leafUnderSymmetry(s, m);
+      EXPECT_LE(m, (image & 1u) ? ~image : image) << "leaf not its class's smallest mask";
+    }
   }
+  std::set<uint64_t> classes;
+  for (uint64_t m : v.leaves)
+    EXPECT_TRUE(classes.insert(svdag::canonicalLeaf(m).stored).second) << "two leaves of one class";
   auto nodes = [](const std::vector<uint32_t>& stream, uint64_t count, uint32_t refBits) {
     std::set<std::vector<uint32_t>> seen;
     uint64_t offset = 0;
@@ -339,7 +349,8 @@ TEST(Builder, PoolsWidenAcrossSlabs)
   ASSERT_GT(v.rootCount, 1024u);
   ASSERT_GT(v.labels.size(), 512u);
   EXPECT_NO_THROW(v.validate());
-  EXPECT_EQ(v.widths.leafRefBits, 1 + (32 - uint32_t(__builtin_clz(uint32_t(v.leaves.size() - 1)))));
+  EXPECT_EQ(v.widths.leafRefBits, 1 + svdag::layout::LEAF_SYMMETRY_BITS +
+      (32 - uint32_t(__builtin_clz(uint32_t(v.leaves.size() - 1)))));
   std::vector<uint32_t> decoded(data.size());
   svdag::decode(v, decoded.data());
   EXPECT_TRUE(decoded == data);

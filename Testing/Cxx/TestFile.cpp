@@ -12,6 +12,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <iterator>
 #include <new>
 #include <random>
 #include <unistd.h>
@@ -362,15 +363,15 @@ TEST(File, RejectsWrongMagicAndUnknownMajorVersion)
   bad[6] = '\n'; // CR LF conversion
   EXPECT_THROW(svdag::deserialize(bad), FileError);
   bad = good;
-  putLE(bad, 8, 2, 2);
+  putLE(bad, 8, 3, 2);
   try
   {
     svdag::deserialize(bad);
-    ADD_FAILURE() << "version 2 accepted";
+    ADD_FAILURE() << "version 3 accepted";
   }
   catch (const FileError& e)
   {
-    EXPECT_NE(std::string(e.what()).find("version 2.0"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("version 3.0"), std::string::npos) << e.what();
   }
   bad = good;
   putLE(bad, 10, 7, 2); // a newer minor version is readable (checksum re-sealed)
@@ -876,4 +877,47 @@ TEST(FileContent, FormatBytes)
   EXPECT_EQ(svdag::formatBytes(1), "1 byte");
   EXPECT_EQ(svdag::formatBytes(1536), "1.5 KiB");
   EXPECT_EQ(svdag::formatBytes(uint64_t(256) << 30), "256 GiB");
+}
+
+// Format 1.0 files (Testing/Data/format1, written by the last 1.0 build) load into today's
+// layout: every voxel as the file's own 1.0 decode gave it is checked in
+// Testing/Python/test_svdag_format1.py; here, the upgraded volume validates, writes as 2.0 and
+// reads back equal, and corruption of a 1.0 file (bit flips anywhere; header fields changed
+// behind a resealed checksum) fails cleanly or loads a valid volume, never anything else.
+TEST(File, Format1FilesLoadAndTheirCorruptionFailsCleanly)
+{
+  for (const char* name : { "cells_uint16", "noise_uint8_uncompressed", "wide_int64", "empty_uint8" })
+  {
+    const std::string path = std::string(SVDAG_FORMAT1_DIR) + "/" + name + ".svdag";
+    std::ifstream in(path, std::ios::binary);
+    ASSERT_TRUE(in) << path;
+    const Bytes bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    ASSERT_EQ(bytes[8], 1u) << "not a 1.0 file: " << path;
+    const svdag::Volume v = svdag::deserialize(bytes);
+    EXPECT_EQ(v.widths.leafRefBits >= 1 + svdag::layout::LEAF_SYMMETRY_BITS, true) << name;
+    const Bytes again = svdag::serialize(v);
+    EXPECT_EQ(again[8], svdag::FileMajorVersion);
+    EXPECT_TRUE(svdag::deserialize(again) == v) << name;
+
+    std::mt19937_64 rng(5);
+    size_t failed = 0, loaded = 0;
+    for (int i = 0; i < 600; ++i)
+    {
+      Bytes bad = bytes;
+      if (i % 2 == 0)
+      {
+        bad[rng() % bad.size()] ^= uint8_t(1u << (rng() % 8));
+      }
+      else
+      {
+        const size_t at = WidthsAt + rng() % (headerCrcAt(bad) - WidthsAt);
+        if (at >= SectionCountAt && at < TableAt)
+          continue; // a new section count would move the checksum itself
+        bad[at] ^= uint8_t(1u << (rng() % 8));
+        resealHeader(bad);
+      }
+      expectFailsOrValid(bad, failed, loaded);
+    }
+    EXPECT_GT(failed, 250u) << name;
+  }
 }

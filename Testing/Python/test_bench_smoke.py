@@ -29,6 +29,7 @@ EXPECTED_COLUMNS = [
     "peak_rss_mb", "baseline_rss_mb", "peak_extra_mb", "model_mb",
     "cseg_dtype", "cseg_bytes", "cseg_s", "ours_over_cseg",
     "stream_dtype", "zstd19_bytes", "zstd19_s", "gzip9_bytes", "gzip9_s", "ours_over_zstd19",
+    "svdag_file_bytes", "load_s", "load_over_build",
 ]
 
 
@@ -78,6 +79,10 @@ def test_csv_values_are_consistent(quick_run):
         assert int(r["zstd19_bytes"]) > 0 and int(r["gzip9_bytes"]) > 0
         assert float(r["peak_rss_mb"]) >= float(r["baseline_rss_mb"]) > 0
         assert r["file_via"] in ("reader", "pynrrd+filter")
+        # The file holds the sections zstd-compressed, or stored where that does not pay.
+        assert 0 < int(r["svdag_file_bytes"]) <= total + 4096
+        assert float(r["load_over_build"]) == pytest.approx(
+            float(r["load_s"]) / float(r["build_s"]), rel=1e-3)
     by_name = {r["volume"]: r for r in rows}
     # Known facts about the inputs (shared/data/README.md and the generators' definitions).
     assert by_name["fib25_64"]["labels"] == "52" and by_name["fib25_64"]["dtype"] == "uint64"
@@ -93,6 +98,7 @@ def test_report_and_plot(quick_run):
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert "machine:" in stdout
     assert "REPORTED, NOT MEASURED HERE" in stdout
+    assert "The .svdag file (measured" in stdout
     for name in EXPECTED_ROWS:
         assert f"{name}: " in stdout and "round trips ok" in stdout
 

@@ -2,9 +2,10 @@
 
 The reference never looks at the compressed form: it cuts every (16^3 cell, label) pair into
 its occupancy, the 8^3 and 4^3 sub-blocks below it, and builds each DAG level as the set of
-distinct canonical shapes (complemented so that voxel [0, 0, 0] is empty, the encoding's rule),
-the symmetry classes with numpy's flips and transposes, and the reference counts by counting
-children of distinct parents.
+distinct canonical shapes (complemented so that voxel [0, 0, 0] is empty, the encoding's rule;
+leaves up to the 48 symmetries of the cube too, as the encoding stores them), the symmetry
+classes with numpy's flips and transposes, and the reference counts by counting children of
+distinct parents.
 """
 import itertools
 import math
@@ -69,7 +70,7 @@ def brute_force(labels, background=0):
     for name in ("roots", "mids", "leaves"):
         nodes, incoming = {}, {}
         for _, node in parents:
-            k = key(node)
+            k = class_key(node, PERMUTATIONS) if name == "leaves" else key(node)
             nodes.setdefault(k, node)
             incoming[k] = incoming.get(k, 0) + 1
         levels[name] = {"nodes": nodes, "incoming": incoming}

@@ -87,7 +87,7 @@ def test_writer_on_a_real_volume_follows_the_documented_format(shared_data, tmp_
     assert not (tmp_path / "fib19.svdag.partial").exists()
 
     header, sections = parse(data)
-    assert header["version"] == (1, 0)
+    assert header["version"] == (2, 0)
     assert header["dims"] == (64, 64, 64)
     assert header["spacing"] == (0.5, 0.75, 2.0)
     assert header["origin"] == (-4.0, 3.5, 10.0)

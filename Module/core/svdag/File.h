@@ -1,14 +1,15 @@
 // The .svdag file format: a Volume on disk, checked on load so that a truncated or corrupt file
 // gives a FileError, never a crash, an out-of-bounds read or a huge allocation.
 //
-// Format version 1.0. Every integer is little-endian, every real an IEEE-754 binary64 stored as
-// its 64-bit pattern, little-endian; fields are written one by one, never as memory images.
+// Format version 2.0 (1.0 files are read too, see FileMajorVersion). Every integer is
+// little-endian, every real an IEEE-754 binary64 stored as its 64-bit pattern, little-endian;
+// fields are written one by one, never as memory images.
 //
 //   offset size  field
 //   0      8     magic  89 53 56 44 41 47 0D 0A  ("\x89SVDAG\r\n": the high byte catches 7-bit
 //                       transfers, CR LF catches line-ending conversion, a short file fails here)
-//   8      2     major version (1): a reader rejects any other major version
-//   10     2     minor version (0): additions a 1.0 reader can ignore (more sections)
+//   8      2     major version (2): a reader rejects a major version it does not know
+//   10     2     minor version (0): additions a 2.0 reader can ignore (more sections)
 //   12     12    dims: 3 x int32, each >= 1
 //   24     24    spacing[3] (float64), finite and > 0
 //   48     24    origin[3] (float64), finite
@@ -73,7 +74,9 @@ struct FileWriteError : FileError
   using FileError::FileError;
 };
 
-constexpr uint16_t FileMajorVersion = 1;
+// 2.0: leaf references carry a symmetry (Layout.h). 1.0 files (leaf references without one) are
+// read and re-laid out on load (FileVersion1.h).
+constexpr uint16_t FileMajorVersion = 2;
 constexpr uint16_t FileMinorVersion = 0;
 constexpr size_t FileMagicSize = 8;
 extern const uint8_t FileMagic[FileMagicSize];

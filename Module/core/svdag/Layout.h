@@ -20,7 +20,12 @@
  * References carry a complement bit (bit 0): ref = (target << 1) | complement. A complemented
  * reference means the child's occupancy is the inverse of the stored node. Every stored node and
  * leaf is canonical: its voxel (0,0,0) is empty, so a shape and its inverse are stored once.
- * For roots and mids, target = bit offset of the node in its stream; for leaves, the index.
+ * For roots and mids, target = bit offset of the node in its stream.
+ *
+ * Leaf references also name one of the 48 symmetries of the cube (axis permutations with
+ * mirrors): ref = (index << 7) | (symmetry << 1) | complement. Leaves equal up to a symmetry and
+ * complement are stored once (the builder keeps the smallest mask of the class), and the child's
+ * voxel (x, y, z) is the stored leaf's voxel at leafSymmetryBit(symmetry, x, y, z).
  *
  * Blocks are fixed-width bit-packed records, sorted by cell index (and, as the builder writes
  * them, by label within a cell; readers accept any order within a cell):
@@ -87,6 +92,34 @@ SVDAG_FN uint childRank(uint mixedMask, uint o) { return uint(bitCount(mixedMask
 
 SVDAG_FN uint refTarget(uint ref) { return ref >> 1u; }
 SVDAG_FN bool refComplement(uint ref) { return (ref & 1u) != 0u; }
+
+SVDAG_CONST LEAF_SYMMETRY_BITS = 6u;
+SVDAG_CONST LEAF_SYMMETRY_COUNT = 48u;
+SVDAG_FN uint leafRefIndex(uint ref) { return ref >> (LEAF_SYMMETRY_BITS + 1u); }
+SVDAG_FN uint leafRefSymmetry(uint ref) { return (ref >> 1u) & 63u; }
+SVDAG_FN uint leafRef(uint index, uint symmetry, uint complement)
+{
+  return (index << (LEAF_SYMMETRY_BITS + 1u)) | (symmetry << 1u) | complement;
+}
+/* Coordinate j (0..2) of symmetry s applied to a voxel of a 4^3 leaf: the (s / 8)-th of the
+ * permutations 012, 021, 102, 120, 201, 210 picks the axis, bit j of s mirrors it. */
+SVDAG_FN uint leafSymmetryCoordinate(uint s, uint j, uint x, uint y, uint z)
+{
+  uint p = s >> 3u;
+  uint first = p >> 1u;
+  uint low = first == 0u ? 1u : 0u;
+  uint high = first == 2u ? 1u : 2u;
+  bool odd = (p & 1u) != 0u;
+  uint axis = j == 0u ? first : (j == 1u ? (odd ? high : low) : (odd ? low : high));
+  uint v = axis == 0u ? x : (axis == 1u ? y : z);
+  return ((s >> j) & 1u) != 0u ? LEAF_SIZE - 1u - v : v;
+}
+/* Bit of the stored leaf mask that holds voxel (x, y, z) of a child reached under symmetry s. */
+SVDAG_FN uint leafSymmetryBit(uint s, uint x, uint y, uint z)
+{
+  return leafBit(leafSymmetryCoordinate(s, 0u, x, y, z), leafSymmetryCoordinate(s, 1u, x, y, z),
+    leafSymmetryCoordinate(s, 2u, x, y, z));
+}
 
 SVDAG_FN uint lowMask(uint width) { return width >= 32u ? 0xFFFFFFFFu : ((1u << width) - 1u); }
 

@@ -57,11 +57,14 @@ SVDAG_CONST SVDAG_NO_BLOCK = 0xFFFFFFFFu;
 #define SVDAG_SMOOTH_MAX_LIFT 2.0f
 #define SVDAG_SMOOTH_MAX_STEP 1.5f
 
-/* The 4^3 leaf mask at cell-local leaf corner `leaf` (multiples of 4 in 0..12) of the block with
- * root reference rootRef: empty and full regions expand to all-zero and all-one masks. */
+/* The 4^3 leaf at cell-local leaf corner `leaf` (multiples of 4 in 0..12) of the block with
+ * root reference rootRef: the stored mask (complement applied) and in `symmetry` the symmetry
+ * under which the child reads it (voxel (x, y, z) at bit leafSymmetryBit(symmetry, x, y, z));
+ * empty and full regions expand to all-zero and all-one masks, symmetry 0. */
 SVDAG_FN uvec2 svdagLeafMaskAt(SVDAG_STREAMS_PARAM uint rootRef, uint midRefBits,
-  uint leafRefBits, uvec3 leaf)
+  uint leafRefBits, uvec3 leaf, SVDAG_INOUT(uint) symmetry)
 {
+  symmetry = 0u;
   bool inverted = refComplement(rootRef);
   SVDAG_OFFSET_T offset = SVDAG_OFFSET_T(refTarget(rootRef));
   uint header;
@@ -89,7 +92,8 @@ SVDAG_FN uvec2 svdagLeafMaskAt(SVDAG_STREAMS_PARAM uint rootRef, uint midRefBits
     offset + SVDAG_OFFSET_T(NODE_HEADER_BITS) +
       SVDAG_OFFSET_T(childRank(mixed, o4)) * SVDAG_OFFSET_T(leafRefBits),
     leafRefBits);
-  uvec2 mask = SVDAG_LEAF(refTarget(ref));
+  uvec2 mask = SVDAG_LEAF(leafRefIndex(ref));
+  symmetry = leafRefSymmetry(ref);
   return (inverted != refComplement(ref)) ? ~mask : mask;
 }
 
@@ -142,15 +146,18 @@ SVDAG_FN vec4 svdagOccupancyGradient(SVDAG_STREAMS_PARAM SVDAG_NEIGHBOURS_PARAM 
   }
   // The 2 x 2 x 2 leaves around the window, each from the label's block of its cell.
   uvec2 masks[8];
+  uint symmetries[8];
   for (int l = 0; l < 8; ++l)
   {
     ivec3 corner = leaf0 + 4 * ivec3(l & 1, (l >> 1) & 1, (l >> 2) & 1);
     ivec3 cellOffset = ivec3(SVDAG_FLOOR(vec3(corner) / 16.0f));
     uint root = SVDAG_NEIGHBOUR_ROOT(uint(
       (cellOffset.x + 1) + 3 * (cellOffset.y + 1) + 9 * (cellOffset.z + 1)));
-    masks[l] = root == SVDAG_NO_BLOCK ? uvec2(0u)
-                                      : svdagLeafMaskAt(SVDAG_STREAMS_ARG root, midRefBits,
-                                          leafRefBits, uvec3(corner - 16 * cellOffset));
+    symmetries[l] = 0u;
+    masks[l] = root == SVDAG_NO_BLOCK
+      ? uvec2(0u)
+      : svdagLeafMaskAt(SVDAG_STREAMS_ARG root, midRefBits, leafRefBits,
+          uvec3(corner - 16 * cellOffset), symmetries[l]);
   }
   // Separable sums: per row (y, z) the x-sums of w and w', then weighted by the y and z kernels.
   // Occupied voxels behind q make grad w(c - q) point from them towards q: out of the label.
@@ -168,7 +175,8 @@ SVDAG_FN vec4 svdagOccupancyGradient(SVDAG_STREAMS_PARAM SVDAG_NEIGHBOURS_PARAM 
       {
         int lx = first.x + i - leaf0.x;
         uint m = uint((lx >> 2) + 2 * (ly >> 2) + 4 * (lz >> 2));
-        if (svdagLeafBit(masks[m], leafBit(uint(lx & 3), uint(ly & 3), uint(lz & 3))))
+        if (svdagLeafBit(masks[m],
+              leafSymmetryBit(symmetries[m], uint(lx & 3), uint(ly & 3), uint(lz & 3))))
         {
           s += wx[i];
           sd += dx[i];

@@ -289,6 +289,7 @@ SVDAG_FN SvdagBlockHit svdagIntersectBlock(SVDAG_STREAMS_PARAM uvec3 lo, uvec3 h
   bool midInverted = false;
   uint cachedLeaf = 64u;
   uvec2 leafMask = uvec2(0u);
+  uint leafSymmetry = 0u; // of the cached leaf (Layout.h)
 
   for (uint iteration = 0u; iteration < SVDAG_MAX_STEPS; ++iteration)
   {
@@ -335,7 +336,8 @@ SVDAG_FN SvdagBlockHit svdagIntersectBlock(SVDAG_STREAMS_PARAM uvec3 lo, uvec3 h
             midOffset + SVDAG_OFFSET_T(NODE_HEADER_BITS) +
               SVDAG_OFFSET_T(childRank(midMixed, octant4)) * SVDAG_OFFSET_T(leafRefBits),
             leafRefBits);
-          leafMask = SVDAG_LEAF(refTarget(leafRef));
+          leafMask = SVDAG_LEAF(leafRefIndex(leafRef));
+          leafSymmetry = leafRefSymmetry(leafRef);
           if (midInverted != refComplement(leafRef))
             leafMask = ~leafMask;
           cachedLeaf = leafKey;
@@ -348,7 +350,7 @@ SVDAG_FN SvdagBlockHit svdagIntersectBlock(SVDAG_STREAMS_PARAM uvec3 lo, uvec3 h
         {
           uvec3 inLeaf = local % uvec3(LEAF_SIZE);
           size = 1;
-          solid = svdagLeafBit(leafMask, leafBit(inLeaf.x, inLeaf.y, inLeaf.z));
+          solid = svdagLeafBit(leafMask, leafSymmetryBit(leafSymmetry, inLeaf.x, inLeaf.y, inLeaf.z));
         }
       }
     }

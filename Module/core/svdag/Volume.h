@@ -119,13 +119,16 @@ public:
   std::vector<uint32_t> roots;  // node stream, padded by one word
   uint64_t midCount = 0;
   std::vector<uint32_t> mids;   // node stream, padded by one word
-  std::vector<uint64_t> leaves; // canonical 4^3 masks (bit 0 clear)
+  std::vector<uint64_t> leaves; // canonical 4^3 masks (bit 0 clear), one per symmetry class
 
   Block block(uint64_t i) const;
   // Header (mixed | full << 8) and child reference of the node at a bit offset in a stream.
   static uint32_t nodeHeader(const std::vector<uint32_t>& stream, uint64_t offset);
   static uint32_t nodeChildRef(const std::vector<uint32_t>& stream, uint64_t offset,
     uint32_t childRank, uint32_t refBits);
+  // The occupancy a leaf reference names (Layout.h): its stored leaf under its symmetry, the
+  // complement bit not applied. The reference must name an existing leaf.
+  uint64_t leafMask(uint32_t leafRef) const;
   // Bit length of the node at `offset` in a stream whose child references are refBits wide.
   static uint64_t nodeBits(const std::vector<uint32_t>& stream, uint64_t offset, uint32_t refBits);
 
