@@ -390,7 +390,7 @@ LEVEL_COLUMNS = [
     "top1_percent_share", "top10_percent_share", "reference_entropy_bits",
     "mirror_classes", "mirror_bytes", "symmetry_classes", "symmetry_bytes",
 ]
-SYMMETRY_REF_BITS = 6  # bits naming one of the 48 symmetries (as the C++ analysis counts)
+LEAF_SYMMETRY_BITS = 6  # bits naming one of the 48 symmetries in a leaf reference (Layout.h)
 
 
 def remedy_bytes(levels) -> dict:
@@ -402,25 +402,27 @@ def remedy_bytes(levels) -> dict:
     its level's target distribution (a bound for a static code: no random access, a file form);
     "inline leaves" stores each leaf referenced once inside its mid node instead of a reference
     (the unused mixed-and-full child state would mark it), so the leaf pool keeps only shared
-    leaves and the references into it narrow.
+    leaves and the references into it narrow. Leaf references carry their 6 symmetry bits
+    throughout (today's layout).
     """
     today = int(levels["bytes"].sum())
     mids, leaves = levels.loc["mids"], levels.loc["leaves"]
-    leaf_width = max(int(leaves["symmetry_classes"]) - 1, 0).bit_length() + 1 + SYMMETRY_REF_BITS
+    leaf_width = max(int(leaves["symmetry_classes"]) - 1, 0).bit_length() + 1 + LEAF_SYMMETRY_BITS
     leaf_symmetry = (
         levels.loc["blocks", "bytes"] + levels.loc["roots", "bytes"] + leaves["symmetry_bytes"]
         + (mids["header_bits"] + mids["references"] * leaf_width + 7) // 8
     )
-    # References into the next level at that level's entropy.
+    # References into the next level at that level's entropy (the leaves' symmetry field kept).
     entropy_bits = sum(
         levels.loc[parent, "header_bits"] + levels.loc[parent, "references"]
         * levels.loc[child, "reference_entropy_bits"]
         for parent, child in (("blocks", "roots"), ("roots", "mids"), ("mids", "leaves"))
-    ) + leaves["header_bits"]
+    ) + leaves["header_bits"] + mids["references"] * LEAF_SYMMETRY_BITS
     width = lambda units: max(int(units) - 1, 0).bit_length() + 1  # noqa: E731
     once = int(leaves["referenced_once"])
     shared_leaves = int(leaves["nodes"]) - once
-    mid_bits = mids["header_bits"] + (mids["references"] - once) * width(shared_leaves) + once * 64
+    leaf_ref = width(shared_leaves) + LEAF_SYMMETRY_BITS
+    mid_bits = mids["header_bits"] + (mids["references"] - once) * leaf_ref + once * 64
     root_bits = levels.loc["roots", "header_bits"] + levels.loc["roots", "references"] * width(mid_bits)
     block_bits = levels.loc["blocks", "header_bits"] + levels.loc["blocks", "references"] * width(root_bits)
     inline_bits = block_bits + root_bits + mid_bits + 64 * shared_leaves

@@ -40,11 +40,13 @@ public:
           place(id, mix64(masks[id]));
       });
   }
-  // The reference (Layout.h: index, symmetry, complement) to a mixed mask, its class interned.
-  uint32_t reference(uint64_t mask)
+  // The reference (Layout.h: index, symmetry, complement) to a mixed mask whose class's stored
+  // mask is read under code = symmetry << 1 | complement (canonicalLeaf), the class interned.
+  uint32_t reference(uint64_t mask, uint32_t code)
   {
-    const CanonicalLeaf c = canonicalLeaf(mask);
-    return layout::leafRef(intern(c.stored), c.symmetry, c.complement);
+    const uint64_t stored =
+      leafUnderSymmetry(inverseLeafSymmetry(code >> 1), (code & 1u) ? ~mask : mask);
+    return layout::leafRef(intern(stored), code >> 1, code & 1u);
   }
   size_t size() const { return masks.size(); }
   // Width of a reference to any leaf so far.
@@ -80,12 +82,28 @@ bool canonicalize(uint32_t& mixed, uint32_t& full, uint32_t* refs)
   return true;
 }
 
-// One label's voxels inside one cell, as 64 leaf masks (leaf index lx + 4 ly + 16 lz).
+// One label's voxels inside one cell, as 64 leaf masks (leaf index lx + 4 ly + 16 lz), and for
+// each mixed one the (symmetry << 1 | complement) its class's stored mask is read under:
+// canonicalLeaf's search runs in the parallel scan, so that the ordered merge only undoes one
+// symmetry and interns.
 struct CellLabel
 {
   uint64_t value;
   uint64_t masks[LeavesPerCell];
+  uint8_t code[LeavesPerCell];
 };
+
+void canonicalizeLeaves(CellLabel& cl)
+{
+  for (uint32_t i = 0; i < LeavesPerCell; ++i)
+  {
+    const uint64_t m = cl.masks[i];
+    if (m == 0 || m == ~uint64_t(0))
+      continue;
+    const CanonicalLeaf c = canonicalLeaf(m);
+    cl.code[i] = uint8_t((c.symmetry << 1) | c.complement);
+  }
+}
 
 struct CellResult
 {
@@ -279,7 +297,8 @@ struct Builder::Impl
         }
         voxels += uint64_t(__builtin_popcountll(m));
         mixed |= 1u << c;
-        refs[n++] = leaves.reference(m);
+        const uint32_t leaf = lx + 4 * ly + 16 * lz;
+        refs[n++] = leaves.reference(m, cl.code[leaf]);
       }
       if (!mixed && !full)
         continue;
@@ -524,6 +543,8 @@ void Builder::addSlab(int32_t z0, int32_t nz, const void* data)
           SVDAG_SCAN(UInt64, uint64_t)
 #undef SVDAG_SCAN
         }
+        for (CellLabel& cl : results[cx].labels)
+          canonicalizeLeaves(cl);
       }
     });
     for (uint32_t cx = 0; cx < ncx; ++cx)

@@ -59,7 +59,48 @@ const Tables& tables()
   static const Tables t; // 786 KiB, built on first use
   return t;
 }
+
+// Mirrors of a whole mask along one axis (bit x + 4 y + 16 z), by swapping bit groups.
+uint64_t swapGroups(uint64_t m, uint64_t low, uint32_t shift)
+{
+  return ((m >> shift) & low) | ((m & low) << shift);
+}
+uint64_t mirrorX(uint64_t m)
+{
+  return swapGroups(swapGroups(m, 0x5555555555555555ull, 1), 0x3333333333333333ull, 2);
+}
+uint64_t mirrorY(uint64_t m)
+{
+  return swapGroups(swapGroups(m, 0x0F0F0F0F0F0F0F0Full, 4), 0x00FF00FF00FF00FFull, 8);
+}
+uint64_t mirrorZ(uint64_t m)
+{
+  return swapGroups(swapGroups(m, 0x0000FFFF0000FFFFull, 16), 0x00000000FFFFFFFFull, 32);
+}
 } // namespace
+
+void leafImages(uint64_t mask, uint64_t images[layout::LEAF_SYMMETRY_COUNT])
+{
+  // Symmetry 8 p + m: stored coordinate j is child coordinate p_j (permutation p), mirrored when
+  // bit j of m is set. So its image is the permuted mask (the table's row for m = 0) mirrored
+  // along child axis p_j for every set bit j: a few shifts instead of a table walk each.
+  const Tables& t = tables();
+  for (uint32_t p = 0; p < layout::LEAF_SYMMETRY_COUNT / 8; ++p)
+  {
+    const uint64_t permuted = t.apply(8 * p, mask);
+    uint32_t childAxis[3];
+    for (uint32_t j = 0; j < 3; ++j)
+      childAxis[j] = layout::leafSymmetryCoordinate(8 * p, j, 0, 1, 2);
+    for (uint32_t m = 0; m < 8; ++m)
+    {
+      uint64_t image = permuted;
+      for (uint32_t j = 0; j < 3; ++j)
+        if ((m >> j) & 1u)
+          image = childAxis[j] == 0 ? mirrorX(image) : childAxis[j] == 1 ? mirrorY(image) : mirrorZ(image);
+      images[8 * p + m] = image;
+    }
+  }
+}
 
 uint64_t leafUnderSymmetry(uint32_t s, uint64_t stored)
 {
@@ -73,13 +114,14 @@ uint32_t inverseLeafSymmetry(uint32_t s)
 
 CanonicalLeaf canonicalLeaf(uint64_t mask)
 {
-  const Tables& t = tables();
+  uint64_t images[layout::LEAF_SYMMETRY_COUNT];
+  leafImages(mask, images);
   CanonicalLeaf best;
   best.stored = ~uint64_t(0);
   uint32_t bestImage = 0;
   for (uint32_t u = 0; u < layout::LEAF_SYMMETRY_COUNT; ++u)
   {
-    uint64_t image = t.apply(u, mask);
+    uint64_t image = images[u];
     const uint32_t complement = uint32_t(image & 1u);
     if (complement)
       image = ~image;
@@ -90,7 +132,7 @@ CanonicalLeaf canonicalLeaf(uint64_t mask)
       bestImage = u;
     }
   }
-  best.symmetry = t.inverse[bestImage];
+  best.symmetry = tables().inverse[bestImage];
   return best;
 }
 

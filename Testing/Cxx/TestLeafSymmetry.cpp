@@ -65,6 +65,9 @@ TEST(LeafSymmetry, WholeMasksAgreeWithTheBitDefinitionAndFormAGroup)
     {
       const uint64_t image = svdag::leafUnderSymmetry(s, m);
       ASSERT_EQ(image, slowly(s, m)) << "symmetry " << s;
+      uint64_t all[Count];
+      svdag::leafImages(m, all);
+      ASSERT_EQ(all[s], image) << "leafImages, symmetry " << s;
       EXPECT_EQ(__builtin_popcountll(image), __builtin_popcountll(m));
       EXPECT_EQ(svdag::leafUnderSymmetry(svdag::inverseLeafSymmetry(s), image), m);
       images.push_back(image);
