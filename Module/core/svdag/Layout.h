@@ -18,8 +18,10 @@
  *   increasing child order, each CHILD_REF_BITS wide (per level, chosen from the pool size).
  *
  * References carry a complement bit (bit 0): ref = (target << 1) | complement. A complemented
- * reference means the child's occupancy is the inverse of the stored node. Every stored node and
- * leaf is canonical: its voxel (0,0,0) is empty, so a shape and its inverse are stored once.
+ * reference means the child's occupancy is the inverse of the stored node. Every stored leaf is
+ * canonical (its voxel (0,0,0) empty) and so is every stored node (its first child empty, or
+ * mixed through a reference without the complement bit), so a shape and its inverse are stored
+ * once.
  * For roots and mids, target = bit offset of the node in its stream.
  *
  * Leaf references also name one of the 48 symmetries of the cube (axis permutations with
