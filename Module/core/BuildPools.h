@@ -10,6 +10,7 @@
 //   PackedRecords does the same for the pending block records.
 #pragma once
 
+#include "Bits.h"
 #include "svdag/Layout.h"
 
 #include <cstdint>
@@ -27,20 +28,8 @@ namespace svdag
 namespace build
 {
 
-inline uint32_t bitWidth(uint64_t v)
-{
-  return v ? uint32_t(64 - __builtin_clzll(v)) : 0u;
-}
-
-inline uint64_t mix64(uint64_t x)
-{
-  x ^= x >> 30;
-  x *= 0xbf58476d1ce4e5b9ULL;
-  x ^= x >> 27;
-  x *= 0x94d049bb133111ebULL;
-  x ^= x >> 31;
-  return x;
-}
+using bits::bitWidth;
+using bits::mix64;
 
 // A growable array of trivially copyable values with 1/16 growth slack at most.
 template <class T>

@@ -17,6 +17,7 @@ namespace
 constexpr uint32_t S = layout::CELL_SIZE; // 16
 constexpr uint32_t LeavesPerCell = 64;    // 4^3 leaves of 4^3 voxels
 
+using bits::writeBits;
 using build::bitWidth;
 using build::mix64;
 using build::GrowArray;
@@ -217,17 +218,6 @@ enum PendingField : uint32_t
   PendingFieldCount
 };
 using PendingBlocks = build::PackedRecords<PendingFieldCount>;
-
-void writeBits(std::vector<uint32_t>& stream, uint64_t offset, uint32_t width, uint32_t value)
-{
-  if (width == 0)
-    return;
-  const uint64_t word = offset >> 5;
-  const uint32_t shift = uint32_t(offset & 31);
-  stream[word] |= value << shift;
-  if (shift + width > 32)
-    stream[word + 1] |= value >> (32 - shift);
-}
 
 } // namespace
 

@@ -1,5 +1,6 @@
 #include "svdag/EncodingAnalysis.h"
 
+#include "Bits.h"
 #include "svdag/LeafSymmetry.h"
 
 #include <algorithm>
@@ -36,17 +37,8 @@ constexpr uint32_t MirrorCount = 8;    // transforms 0..7: the identity permutat
 constexpr uint32_t MirrorRefBits = 3;
 constexpr uint32_t SymmetryRefBits = 6;
 
-uint32_t widthOf(uint64_t v) { return v ? uint32_t(64 - __builtin_clzll(v)) : 0u; }
-
-uint64_t mix(uint64_t x)
-{
-  x ^= x >> 30;
-  x *= 0xbf58476d1ce4e5b9ULL;
-  x ^= x >> 27;
-  x *= 0x94d049bb133111ebULL;
-  x ^= x >> 31;
-  return x;
-}
+using bits::bitWidth;
+using bits::mix64;
 
 // Transform t maps a node N to N' with N'(y) = N(A(y)) (Layout.h, leafSymmetryBit: A permutes
 // and mirrors the axes). The same A acts on the octants of a node and inside each child, so N'
@@ -164,10 +156,10 @@ uint64_t transformedNode(const Symmetries& s, uint32_t t, const Level& level, co
     for (uint32_t o = 0; o < 8; ++o)
       complements[o] ^= 1u;
   }
-  uint64_t h = mix(uint64_t(mixed) | uint64_t(full) << 8 | uint64_t(0x5a) << 16);
+  uint64_t h = mix64(uint64_t(mixed) | uint64_t(full) << 8 | uint64_t(0x5a) << 16);
   for (uint32_t o = 0; o < 8; ++o)
     if ((mixed >> o) & 1u)
-      h = mix(h ^ (keys[o] + complements[o] + o));
+      h = mix64(h ^ (keys[o] + complements[o] + o));
   return (h & ~uint64_t(1)) | (flip ? 1u : 0u);
 }
 
@@ -231,7 +223,7 @@ std::pair<uint64_t, uint64_t> classes(uint64_t count, uint32_t transforms, const
 uint32_t sharedRefWidth(uint64_t targetUnits, uint32_t transformBits)
 {
   // A reference names a target (index or bit offset), its complement and the transform.
-  return widthOf(targetUnits ? targetUnits - 1 : 0) + 1 + transformBits;
+  return bitWidth(targetUnits ? targetUnits - 1 : 0) + 1 + transformBits;
 }
 } // namespace
 
@@ -314,7 +306,7 @@ EncodingAnalysis analyzeEncoding(const Volume& v, const ParallelFor& parallel)
   auto maskKey = [&](uint64_t mask, uint32_t t) {
     uint64_t flip;
     const uint64_t m = complementCanonical(sym.leaf(t, mask), flip);
-    return (mix(m) & ~uint64_t(1)) | flip;
+    return (mix64(m) & ~uint64_t(1)) | flip;
   };
   auto leafKey = [&](uint32_t leaf, uint32_t t) { return maskKey(v.leaves[leaf], t); };
   auto midChildKey = [&](uint32_t slot, uint32_t t) { return maskKey(mids.childLeaf[slot], t); };

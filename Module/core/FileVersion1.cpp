@@ -1,5 +1,7 @@
 #include "FileVersion1.h"
 
+#include "Bits.h"
+
 #include <algorithm>
 #include <stdexcept>
 #include <string>
@@ -11,25 +13,9 @@ namespace file
 {
 namespace
 {
-uint32_t widthOf(uint64_t v)
-{
-  return v ? uint32_t(64 - __builtin_clzll(v)) : 0u;
-}
-
-uint32_t getBits(const std::vector<uint32_t>& stream, uint64_t offset, uint32_t width)
-{
-  uint32_t value = 0;
-  for (uint32_t b = 0; b < width; ++b, ++offset)
-    value |= ((stream[size_t(offset >> 5)] >> (offset & 31u)) & 1u) << b;
-  return value;
-}
-
-void putBits(std::vector<uint32_t>& stream, uint64_t offset, uint32_t width, uint32_t value)
-{
-  for (uint32_t b = 0; b < width; ++b, ++offset)
-    if ((value >> b) & 1u)
-      stream[size_t(offset >> 5)] |= 1u << (offset & 31u);
-}
+using bits::bitWidth;
+using bits::readBits;
+using bits::writeBits;
 
 [[noreturn]] void fail(const std::string& what)
 {
@@ -68,10 +54,10 @@ Rewritten rewrite(const std::vector<uint32_t>& stream, uint64_t count, uint32_t 
   for (uint64_t n = 0; n < count; ++n)
   {
     const uint32_t header = Volume::nodeHeader(stream, r.oldOffsets[n]);
-    putBits(r.stream, r.offsets[n], layout::NODE_HEADER_BITS, header);
+    writeBits(r.stream, r.offsets[n], layout::NODE_HEADER_BITS, header);
     const uint32_t k = layout::bitCount(layout::nodeMixedMask(header));
     for (uint32_t c = 0; c < k; ++c)
-      putBits(r.stream, r.offsets[n] + layout::NODE_HEADER_BITS + uint64_t(c) * newBits, newBits,
+      writeBits(r.stream, r.offsets[n] + layout::NODE_HEADER_BITS + uint64_t(c) * newBits, newBits,
         mapRef(Volume::nodeChildRef(stream, r.oldOffsets[n], c, oldBits)));
   }
   return r;
@@ -88,7 +74,7 @@ uint32_t moved(const Rewritten& pool, uint32_t ref, const char* what)
 
 uint32_t referenceWidth(const Rewritten& pool, const char* what)
 {
-  const uint32_t bits = widthOf(pool.offsets.empty() ? 0 : pool.offsets.back()) + 1;
+  const uint32_t bits = bitWidth(pool.offsets.empty() ? 0 : pool.offsets.back()) + 1;
   if (bits > 32)
     fail(std::string(what) + " references need more than 32 bits in today's layout");
   return bits;
@@ -125,10 +111,10 @@ void upgradeVersion1(Volume& v)
     for (uint32_t b = 0; b < fieldsBits; b += 32)
     {
       const uint32_t width = std::min(32u, fieldsBits - b);
-      putBits(blocks, i * record + b, width, getBits(v.blocks, i * oldRecord + b, width));
+      writeBits(blocks, i * record + b, width, readBits(v.blocks, i * oldRecord + b, width));
     }
-    const uint32_t root = getBits(v.blocks, i * oldRecord + fieldsBits, w.rootRefBits);
-    putBits(blocks, i * record + fieldsBits, rootBits, moved(roots, root, "root"));
+    const uint32_t root = readBits(v.blocks, i * oldRecord + fieldsBits, w.rootRefBits);
+    writeBits(blocks, i * record + fieldsBits, rootBits, moved(roots, root, "root"));
   }
   v.mids = std::move(mids.stream);
   v.roots = std::move(roots.stream);

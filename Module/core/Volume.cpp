@@ -1,6 +1,8 @@
 #include "svdag/Volume.h"
 #include "svdag/LeafSymmetry.h"
 
+#include "Bits.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -13,14 +15,7 @@ namespace svdag
 {
 namespace
 {
-#define SVDAG_WORD(stream, i) (stream)[(i)]
-
-uint32_t readBits(const std::vector<uint32_t>& stream, uint64_t offset, uint32_t width)
-{
-  uint32_t result;
-  SVDAG_READ_BITS(result, stream, offset, width);
-  return result;
-}
+using bits::readBits;
 
 uint64_t signExtend(uint64_t v, int bytes)
 {

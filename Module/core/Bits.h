@@ -1,0 +1,55 @@
+// Bit helpers of the core's implementation files (private; not installed): field widths, the
+// hash mixer of the pools, and reading and writing bit-packed fields of a word stream.
+#pragma once
+
+#include "svdag/Layout.h"
+
+#include <cstdint>
+#include <vector>
+
+#ifndef SVDAG_WORD
+#define SVDAG_WORD(stream, i) (stream)[(i)]
+#endif
+
+namespace svdag
+{
+namespace bits
+{
+// Bits needed to write v (0 for 0).
+inline uint32_t bitWidth(uint64_t v)
+{
+  return v ? uint32_t(64 - __builtin_clzll(v)) : 0u;
+}
+
+inline uint64_t mix64(uint64_t x)
+{
+  x ^= x >> 30;
+  x *= 0xbf58476d1ce4e5b9ULL;
+  x ^= x >> 27;
+  x *= 0x94d049bb133111ebULL;
+  x ^= x >> 31;
+  return x;
+}
+
+// The `width` (0..32) bits at `offset` of a stream padded by one zero word (Layout.h).
+inline uint32_t readBits(const std::vector<uint32_t>& stream, uint64_t offset, uint32_t width)
+{
+  uint32_t result;
+  SVDAG_READ_BITS(result, stream, offset, width);
+  return result;
+}
+
+// ORs `value` (at most `width` bits, 0..32) into a zero-filled field of a stream that has a word
+// past the field's last one.
+inline void writeBits(std::vector<uint32_t>& stream, uint64_t offset, uint32_t width, uint32_t value)
+{
+  if (width == 0)
+    return;
+  const uint64_t word = offset >> 5;
+  const uint32_t shift = uint32_t(offset & 31);
+  stream[size_t(word)] |= value << shift;
+  if (shift + width > 32)
+    stream[size_t(word + 1)] |= value >> (32 - shift);
+}
+} // namespace bits
+} // namespace svdag
