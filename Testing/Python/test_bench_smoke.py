@@ -29,6 +29,7 @@ EXPECTED_COLUMNS = [
     "peak_rss_mb", "baseline_rss_mb", "peak_extra_mb", "model_mb",
     "cseg_dtype", "cseg_bytes", "cseg_s", "ours_over_cseg",
     "stream_dtype", "zstd19_bytes", "zstd19_s", "gzip9_bytes", "gzip9_s", "ours_over_zstd19",
+    "crackle_bytes", "crackle_s", "ours_over_crackle",
     "svdag_file_bytes", "load_s", "load_over_build",
 ]
 
@@ -77,6 +78,7 @@ def test_csv_values_are_consistent(quick_run):
         assert float(r["ours_over_cseg"]) == pytest.approx(total / int(r["cseg_bytes"]), rel=1e-4)
         assert r["cseg_dtype"] in ("uint32", "uint64")
         assert int(r["zstd19_bytes"]) > 0 and int(r["gzip9_bytes"]) > 0
+        assert float(r["ours_over_crackle"]) == pytest.approx(total / int(r["crackle_bytes"]), rel=1e-4)
         assert float(r["peak_rss_mb"]) >= float(r["baseline_rss_mb"]) > 0
         assert r["file_via"] in ("reader", "pynrrd+filter")
         # The file holds the sections zstd-compressed, or stored where that does not pay.
