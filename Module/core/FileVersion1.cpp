@@ -48,6 +48,8 @@ Rewritten rewrite(const std::vector<uint32_t>& stream, uint64_t count, uint32_t 
     at += layout::NODE_HEADER_BITS + uint64_t(k) * oldBits;
     out += layout::NODE_HEADER_BITS + uint64_t(k) * newBits;
   }
+  if (total - at >= 32)
+    fail(std::string(what) + " stream longer than its nodes");
   if (out > 0xFFFFFFFFull)
     fail(std::string(what) + " stream exceeds 2^32 bits in today's layout");
   r.stream.assign(size_t((out + 31) / 32 + 1), 0u);
