@@ -412,9 +412,8 @@ LEAF_SYMMETRY_BITS = 6  # bits naming one of the 48 symmetries in a leaf referen
 def remedy_bytes(levels) -> dict:
     """Bytes of blocks + DAG under each remedy, estimated from the per-level counts.
 
-    "mirror" and "symmetry" share nodes equal up to a mirror (a cube symmetry) on every level;
-    "leaf symmetry" only the leaves (the mids' leaf references gain the transform's bits, the
-    upper levels stay); "entropy refs" keeps the nodes but spends on each reference the entropy of
+    "mirror" and "symmetry" share nodes equal up to a mirror (a cube symmetry) on every level
+    (leaves already are, up to the 48 symmetries); "entropy refs" keeps the nodes but spends on each reference the entropy of
     its level's target distribution (a bound for a static code: no random access, a file form);
     "inline leaves" stores each leaf referenced once inside its mid node instead of a reference
     (the unused mixed-and-full child state would mark it), so the leaf pool keeps only shared
@@ -423,11 +422,6 @@ def remedy_bytes(levels) -> dict:
     """
     today = int(levels["bytes"].sum())
     mids, leaves = levels.loc["mids"], levels.loc["leaves"]
-    leaf_width = max(int(leaves["symmetry_classes"]) - 1, 0).bit_length() + 1 + LEAF_SYMMETRY_BITS
-    leaf_symmetry = (
-        levels.loc["blocks", "bytes"] + levels.loc["roots", "bytes"] + leaves["symmetry_bytes"]
-        + (mids["header_bits"] + mids["references"] * leaf_width + 7) // 8
-    )
     # References into the next level at that level's entropy (the leaves' symmetry field kept).
     entropy_bits = sum(
         levels.loc[parent, "header_bits"] + levels.loc[parent, "references"]
@@ -446,7 +440,6 @@ def remedy_bytes(levels) -> dict:
         "today": today,
         "mirror": int(levels["mirror_bytes"].sum()),
         "symmetry": int(levels["symmetry_bytes"].sum()),
-        "leaf symmetry": int(leaf_symmetry),
         "entropy refs": int(np.ceil(entropy_bits / 8)),
         "inline leaves": int(np.ceil(inline_bits / 8)),
     }
@@ -681,7 +674,8 @@ def run(args) -> int:
     print_report(rows, anchors)
     print_files(rows, anchors)
     levels_path = out / "compression_levels.csv"
-    if all("levels" in r for r in rows):
+    with_levels = all("levels" in r for r in rows)
+    if with_levels:
         print_levels(rows)
         write_levels_csv(rows, levels_path)
     csv_path, png_path = out / "compression.csv", out / "compression.png"
@@ -691,7 +685,7 @@ def run(args) -> int:
         for r in rows:
             writer.writerow({k: (f"{v:.6g}" if isinstance(v, float) else v) for k, v in r.items()})
     write_plot(rows, png_path)
-    written = [csv_path] + ([levels_path] if levels_path.is_file() else []) + [png_path]
+    written = [csv_path] + ([levels_path] if with_levels else []) + [png_path]
     print("\nwrote " + ", ".join(str(p) for p in written))
     return 0
 

@@ -6,7 +6,6 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
-#include <memory>
 #include <stdexcept>
 #include <unordered_set>
 #include <vector>
@@ -32,10 +31,10 @@ const char* encodingLevelName(EncodingLevel level)
 
 namespace
 {
-constexpr uint32_t SymmetryCount = 48; // 6 axis permutations x 8 mirrors
-constexpr uint32_t MirrorCount = 8;    // transforms 0..7: the identity permutation, every mirror
+constexpr uint32_t SymmetryCount = layout::LEAF_SYMMETRY_COUNT; // 6 permutations x 8 mirrors
+constexpr uint32_t MirrorCount = 8; // transforms 0..7: the identity permutation, every mirror
 constexpr uint32_t MirrorRefBits = 3;
-constexpr uint32_t SymmetryRefBits = 6;
+constexpr uint32_t SymmetryRefBits = layout::LEAF_SYMMETRY_BITS;
 
 using bits::bitWidth;
 using bits::mix64;
@@ -60,8 +59,6 @@ struct Symmetries
         octant[t][o] = uint8_t(a[0] + 2 * a[1] + 4 * a[2]);
       }
   }
-
-  uint64_t leaf(uint32_t t, uint64_t mask) const { return leafUnderSymmetry(t, mask); }
 };
 
 // A node's children: mixed and full masks, and per mixed child its target index and complement.
@@ -231,36 +228,24 @@ EncodingAnalysis analyzeEncoding(const Volume& v, const ParallelFor& parallel)
 {
   EncodingAnalysis a;
   a.labelTableBytes = v.memory().labels;
-  const auto tables = std::make_unique<const Symmetries>(); // 786 KiB: on the heap
-  const Symmetries& sym = *tables;
+  const Symmetries sym;
 
   const uint64_t leafCount = v.leaves.size();
+  // Each mid child's occupancy (its stored leaf under the reference's symmetry), in child order.
+  std::vector<uint64_t> childLeaf;
   Level mids = readLevel(v.mids, v.midCount, v.widths.leafRefBits, [&](uint32_t ref) {
     if (layout::leafRefIndex(ref) >= leafCount ||
       layout::leafRefSymmetry(ref) >= layout::LEAF_SYMMETRY_COUNT)
       throw std::runtime_error("analyzeEncoding: a leaf reference is out of range");
+    childLeaf.push_back(v.leafMask(ref));
     return layout::leafRefIndex(ref);
   });
-  {
-    // The occupancy each mid child reads: its stored leaf under the reference's symmetry.
-    uint64_t at = 0;
-    for (const Node& n : mids.nodes)
-    {
-      for (uint32_t r = 0; r < layout::bitCount(n.mixed); ++r)
-        mids.childLeaf.push_back(v.leafMask(Volume::nodeChildRef(v.mids, at, r, v.widths.leafRefBits)));
-      at += layout::NODE_HEADER_BITS + uint64_t(layout::bitCount(n.mixed)) * v.widths.leafRefBits;
-    }
-  }
+  mids.childLeaf = std::move(childLeaf);
   Level roots = readLevel(v.roots, v.rootCount, v.widths.midRefBits,
     [&](uint32_t ref) { return indexOfOffset(mids.offsets, layout::refTarget(ref)); });
   std::vector<uint32_t> blockRoot(size_t(v.blockCount));
-  std::vector<uint8_t> blockComplement(size_t(v.blockCount));
   for (uint64_t i = 0; i < v.blockCount; ++i)
-  {
-    const Block b = v.block(i);
-    blockRoot[i] = indexOfOffset(roots.offsets, layout::refTarget(b.root));
-    blockComplement[i] = layout::refComplement(b.root) ? 1 : 0;
-  }
+    blockRoot[i] = indexOfOffset(roots.offsets, layout::refTarget(v.block(i).root));
 
   // What is stored today.
   LevelAnalysis& B = a[EncodingLevel::Blocks];
@@ -305,7 +290,7 @@ EncodingAnalysis analyzeEncoding(const Volume& v, const ParallelFor& parallel)
   // Symmetry classes, bottom up. Leaves: exact canonical masks.
   auto maskKey = [&](uint64_t mask, uint32_t t) {
     uint64_t flip;
-    const uint64_t m = complementCanonical(sym.leaf(t, mask), flip);
+    const uint64_t m = complementCanonical(leafUnderSymmetry(t, mask), flip);
     return (mix64(m) & ~uint64_t(1)) | flip;
   };
   auto leafKey = [&](uint32_t leaf, uint32_t t) { return maskKey(v.leaves[leaf], t); };

@@ -612,7 +612,8 @@ NodePool checkMidPool(const Volume& v)
       if (layout::leafRefIndex(ref) >= v.leaves.size() ||
         layout::leafRefSymmetry(ref) >= layout::LEAF_SYMMETRY_COUNT)
         return false;
-      const uint64_t mask = layout::refComplement(ref) ? ~v.leafMask(ref) : v.leafMask(ref);
+      const uint64_t leaf = v.leafMask(ref);
+      const uint64_t mask = layout::refComplement(ref) ? ~leaf : leaf;
       a0 = leafSummary(mask);
       a1 = leafSummary(~mask);
       return true;

@@ -65,7 +65,7 @@ struct Options
   svdag::render::Backend backend = defaults.backend;
   bool restart = false;
   bool preview = false;
-  uint32_t traceReduction = 1;
+  uint32_t traceReduction = svdag::render::Renderer::DefaultTraceReduction;
 };
 
 struct UsageError : std::invalid_argument

@@ -43,14 +43,15 @@ def plain(value):
     return value if isinstance(value, str) else float(value)
 
 
+PICKERS = {}  # display's global id -> its picker
+
+
 def picker_for(display):
     """The documented pick: a misc/SegmentationPicker on the display (one per display)."""
-    if not hasattr(picker_for, "made"):
-        picker_for.made = {}
     key = display.GetGlobalIDAsString()
-    if key not in picker_for.made:
-        picker_for.made[key] = servermanager.misc.SegmentationPicker(Representation=display)
-    return picker_for.made[key]
+    if key not in PICKERS:
+        PICKERS[key] = servermanager.misc.SegmentationPicker(Representation=display)
+    return PICKERS[key]
 
 
 def pick(display, x, y):

@@ -212,6 +212,7 @@ public:
   // pixel, the color and variance are upsampled. lastFrameMilliseconds includes the guides'
   // trace. The reduced image accumulates like a full one. Default 1; std::invalid_argument
   // outside 1 .. MaximumTraceReduction.
+  static constexpr uint32_t DefaultTraceReduction = 1;
   static constexpr uint32_t MaximumTraceReduction = 8;
   void setTraceReduction(uint32_t reduction);
   uint32_t traceReduction() const { return this->TraceReduction; }
@@ -391,7 +392,7 @@ private:
   DepthRayLimits DepthLimits;
   uint32_t Width = 256;
   uint32_t Height = 256;
-  uint32_t TraceReduction = 1;
+  uint32_t TraceReduction = DefaultTraceReduction;
   bool PreviewWhileCompiling = false;
   bool Previewed = false;
   Image Output;
