@@ -14,7 +14,12 @@
 
 vtkStandardNewMacro(vtkSegmentationSVDAGWriter);
 
-vtkSegmentationSVDAGWriter::vtkSegmentationSVDAGWriter() = default;
+// The defaults are the core's (svdag::WriteOptions).
+vtkSegmentationSVDAGWriter::vtkSegmentationSVDAGWriter()
+  : CompressionLevel(svdag::WriteOptions().zstdLevel)
+  , FormatVersion(svdag::WriteOptions().formatVersion)
+{
+}
 
 vtkSegmentationSVDAGWriter::~vtkSegmentationSVDAGWriter()
 {
@@ -53,6 +58,7 @@ void vtkSegmentationSVDAGWriter::WriteData()
   this->UpdateProgress(0.0);
   svdag::WriteOptions options;
   options.zstdLevel = this->CompressionLevel;
+  options.formatVersion = this->FormatVersion;
   // The core throws; VTK code reports. Each failure kind maps to the matching VTK error code.
   try
   {
@@ -93,6 +99,7 @@ void vtkSegmentationSVDAGWriter::PrintSelf(ostream& os, vtkIndent indent)
   this->Superclass::PrintSelf(os, indent);
   os << indent << "FileName: " << (this->FileName ? this->FileName : "(none)") << "\n";
   os << indent << "CompressionLevel: " << this->CompressionLevel << "\n";
+  os << indent << "FormatVersion: " << this->FormatVersion << "\n";
   os << indent << "WriteToOutputString: " << (this->WriteToOutputString ? "On" : "Off") << "\n";
   os << indent << "OutputBytes: " << this->OutputBytes->GetNumberOfValues() << " bytes\n";
 }

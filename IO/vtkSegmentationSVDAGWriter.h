@@ -2,10 +2,14 @@
  * @class   vtkSegmentationSVDAGWriter
  * @brief   writes a vtkSegmentationSVDAG to a .svdag file
  *
- * The .svdag format (documented in IO/README.md and svdag/File.h) stores the compressed volume
- * as it is in memory: blocks, the shared DAG and the label table, each section compressed with
- * zstd (or stored, with CompressionLevel 0) and protected by a crc32. Reading it back
- * (vtkSegmentationVolumeReader) gives a bit-identical volume without recompressing.
+ * The .svdag format (documented in IO/README.md and svdag/File.h) comes in two versions, both
+ * protected by crc32s (FormatVersion):
+ * - 3 (the default): the volume's labels and occupancy arithmetic-coded, the smallest file.
+ *   Reading it back (vtkSegmentationVolumeReader) rebuilds the blocks and the shared DAG from the
+ *   occupancy, without a voxel scan: the volume a build from the same labels gives.
+ * - 2: the compressed volume as it is in memory, blocks, the shared DAG and the label table, each
+ *   section compressed with zstd (or stored, with CompressionLevel 0). Reading it back gives a
+ *   bit-identical volume at once, and readers older than format 3 read it.
  *
  * The file is written under a temporary name next to FileName and renamed when complete, so a
  * failed write never leaves a partial file under FileName. Errors are reported with
@@ -37,11 +41,21 @@ public:
 
   ///@{
   /**
-   * zstd level of the sections, 1 (fastest) to 22 (smallest); 0 stores them uncompressed.
-   * Default 3. Sections that do not shrink are stored uncompressed whatever the level.
+   * Format version 2 only: zstd level of the sections, 1 (fastest) to 22 (smallest); 0 stores
+   * them uncompressed. Default 3. Sections that do not shrink are stored uncompressed whatever
+   * the level.
    */
   vtkSetClampMacro(CompressionLevel, int, 0, 22);
   vtkGetMacro(CompressionLevel, int);
+  ///@}
+
+  ///@{
+  /**
+   * The .svdag format version written: 3 (default, the smallest file) or 2 (loads fastest, and
+   * readers older than format 3 read it).
+   */
+  vtkSetClampMacro(FormatVersion, int, 2, 3);
+  vtkGetMacro(FormatVersion, int);
   ///@}
 
   ///@{
@@ -69,7 +83,8 @@ protected:
   void WriteData() override;
 
   char* FileName = nullptr;
-  int CompressionLevel = 3;
+  int CompressionLevel;
+  int FormatVersion;
   bool WriteToOutputString = false;
   vtkNew<vtkUnsignedCharArray> OutputBytes;
 

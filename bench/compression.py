@@ -96,7 +96,9 @@ COLUMNS = [
     "cseg_dtype", "cseg_bytes", "cseg_s", "ours_over_cseg",
     "stream_dtype", "zstd19_bytes", "zstd19_s", "gzip9_bytes", "gzip9_s", "ours_over_zstd19",
     "crackle_bytes", "crackle_s", "ours_over_crackle",
-    "svdag_file_bytes", "load_s", "load_over_build",
+    "file2_bytes", "load2_s", "load2_over_build",
+    "file3_bytes", "write3_s", "load3_s", "load3_over_build",
+    "file3_over_cseg", "file3_over_crackle", "file3_over_zstd19",
 ]
 
 
@@ -375,28 +377,42 @@ def measure_volume(name, source, labels, file_path, repeats, baseline_kb) -> dic
                          "values, numpy finds another number")
     row["ours_over_zstd19"] = total / row["zstd19_bytes"]
     row["ours_over_crackle"] = total / row["crackle_bytes"]
-    row.update(measure_svdag_file(name, svdag, labels, runs))
-    row["load_over_build"] = row["load_s"] / build_s
+    for version in (2, 3):
+        row.update(measure_svdag_file(name, svdag, labels, runs, version))
+        row[f"load{version}_over_build"] = row[f"load{version}_s"] / build_s
+    for other in ("cseg", "crackle", "zstd19"):
+        row[f"file3_over_{other}"] = row["file3_bytes"] / row[f"{other}_bytes"]
     # Builds from before encoding_statistics (a baseline build on PYTHONPATH) have no levels.
     if hasattr(SegmentationVolume, "encoding_statistics"):
         row["levels"] = SegmentationVolume(svdag).encoding_statistics()
     return row
 
 
-def measure_svdag_file(name, svdag, labels, runs) -> dict:
-    """Bytes of the .svdag file (zstd level 3, the default) and seconds to load it (median)."""
+def measure_svdag_file(name, svdag, labels, runs, version) -> dict:
+    """Bytes of the .svdag file in a format version (2: zstd level 3, its default) and the
+    seconds to load it (median of `runs`); for version 3 also the seconds to write it (which
+    decodes the coded volume once more to check it)."""
     import vtksvdag
 
     with tempfile.TemporaryDirectory(prefix="svdag-bench-file-") as folder:
         path = pathlib.Path(folder) / f"{name}.svdag"
-        SegmentationVolume(svdag).save(str(path))
+        start = time.perf_counter()
+        SegmentationVolume(svdag).save(str(path), format_version=version)
+        written = time.perf_counter() - start
+        if path.read_bytes()[8] != version:
+            raise BenchError(f"{name}: the file written is not format version {version}")
         times = []
         for _ in range(runs):
             start = time.perf_counter()
             loaded = vtksvdag.read(str(path))
             times.append(time.perf_counter() - start)
-        check_round_trip(f"{name} (.svdag file)", labels, loaded.dataobject)
-        return {"svdag_file_bytes": path.stat().st_size, "load_s": statistics.median(times)}
+        check_round_trip(f"{name} (.svdag {version}.0 file)", labels, loaded.dataobject)
+        if loaded.dataobject.GetCompressedSize() != svdag.GetCompressedSize():
+            raise BenchError(f"{name}: the .svdag {version}.0 file loads to another byte count")
+        row = {f"file{version}_bytes": path.stat().st_size, f"load{version}_s": statistics.median(times)}
+        if version == 3:
+            row["write3_s"] = written
+        return row
 
 
 # ------------------------------------------------------------------ where the bytes go
@@ -449,15 +465,17 @@ def print_files(rows, anchors):
     table = []
     for r in rows:
         csgv = anchor_value(anchors.get(r["volume"], {}), "CSGV file MB")
-        table.append([r["volume"], r["svdag_file_bytes"] / MB, csgv,
-                      r["svdag_file_bytes"] / MB / csgv if csgv else None,
-                      r["svdag_file_bytes"] / r["bytes_total"], r["build_s"], r["load_s"],
-                      r["load_over_build"]])
+        table.append([r["volume"], r["file3_bytes"] / MB, r["file2_bytes"] / MB, csgv,
+                      r["file3_bytes"] / MB / csgv if csgv else None,
+                      r["file3_over_crackle"], r["file3_over_zstd19"], r["file3_over_cseg"],
+                      r["file3_bytes"] / r["file2_bytes"], r["build_s"], r["write3_s"],
+                      r["load3_over_build"], r["load2_over_build"]])
     print_table(
-        "The .svdag file (measured: zstd level 3; CSGV file MB reported in anchors.md, not measured "
-        "here; load = vtksvdag.read of the file, median of `runs`)",
-        ["volume", "file MB", "CSGV file MB", "file/CSGV", "file/memory", "build s", "load s",
-         "load/build"],
+        "The .svdag file, format 3.0 (coded) and 2.0 (zstd level 3), measured; CSGV file MB "
+        "reported in anchors.md, not measured here; crackle, zstd -19 and cseg measured in this "
+        "run; load = vtksvdag.read of the file, median of `runs`",
+        ["volume", "3.0 MB", "2.0 MB", "CSGV file MB", "3.0/CSGV", "3.0/crackle", "3.0/zstd19",
+         "3.0/cseg", "3.0/2.0", "build s", "write 3.0 s", "load 3.0/build", "load 2.0/build"],
         table,
     )
 

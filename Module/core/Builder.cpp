@@ -83,16 +83,9 @@ bool canonicalize(uint32_t& mixed, uint32_t& full, uint32_t* refs)
   return true;
 }
 
-// One label's voxels inside one cell, as 64 leaf masks (leaf index lx + 4 ly + 16 lz), and for
-// each mixed one the (symmetry << 1 | complement) its class's stored mask is read under:
 // canonicalLeaf's search runs in the parallel scan, so that the ordered merge only undoes one
 // symmetry and interns.
-struct CellLabel
-{
-  uint64_t value;
-  uint64_t masks[LeavesPerCell];
-  uint8_t code[LeavesPerCell];
-};
+using CellLabel = CellOccupancy;
 
 void canonicalizeLeaves(CellLabel& cl)
 {
@@ -102,13 +95,13 @@ void canonicalizeLeaves(CellLabel& cl)
     if (m == 0 || m == ~uint64_t(0))
       continue;
     const CanonicalLeaf c = canonicalLeaf(m);
-    cl.code[i] = uint8_t((c.symmetry << 1) | c.complement);
+    cl.codes[i] = uint8_t((c.symmetry << 1) | c.complement);
   }
 }
 
 struct CellResult
 {
-  std::vector<CellLabel> labels; // first-seen order within the cell scan
+  std::vector<CellLabel> labels; // by label value once the scan is done
 };
 
 template <class T>
@@ -229,6 +222,10 @@ struct Builder::Impl
   ParallelFor parallel;
   std::array<int32_t, 3> cells;
   int32_t nextZ = 0;
+  // addBlock's mode: blocks given as occupancy, the last one's cell and label value.
+  bool blockMode = false;
+  uint32_t lastBlockCell = 0;
+  uint64_t lastBlockValue = 0;
 
   // Scan results of one row of cells: a whole slab's would be a large share of the state.
   std::vector<CellResult> rowResults;
@@ -288,7 +285,7 @@ struct Builder::Impl
         voxels += uint64_t(__builtin_popcountll(m));
         mixed |= 1u << c;
         const uint32_t leaf = lx + 4 * ly + 16 * lz;
-        refs[n++] = leaves.reference(m, cl.code[leaf]);
+        refs[n++] = leaves.reference(m, cl.codes[leaf]);
       }
       if (!mixed && !full)
         continue;
@@ -322,6 +319,8 @@ struct Builder::Impl
 void Builder::addVolume(const Volume& part)
 {
   Impl& m = *impl;
+  if (m.blockMode)
+    throw std::logic_error("cannot append a volume to a builder given blocks");
   const auto& d = m.geometry.dims;
   const auto& pd = part.geometry.dims;
   if (m.nextZ % int32_t(S) != 0)
@@ -496,6 +495,8 @@ int32_t Builder::nextSlab() const
 void Builder::addSlab(int32_t z0, int32_t nz, const void* data)
 {
   Impl& m = *impl;
+  if (m.blockMode)
+    throw std::logic_error("cannot add slabs to a builder given blocks");
   const auto& d = m.geometry.dims;
   if (z0 != m.nextZ || nz != std::min<int32_t>(SlabDepth, d[2] - z0) || nz <= 0)
     throw std::logic_error("slab out of order: expected z0 = " + std::to_string(m.nextZ));
@@ -533,8 +534,14 @@ void Builder::addSlab(int32_t z0, int32_t nz, const void* data)
           SVDAG_SCAN(UInt64, uint64_t)
 #undef SVDAG_SCAN
         }
-        for (CellLabel& cl : results[cx].labels)
+        auto& labels = results[cx].labels;
+        for (CellLabel& cl : labels)
           canonicalizeLeaves(cl);
+        // Blocks are interned in the order finish() writes them (by cell, then label value), so
+        // the pools are in first-use order over the blocks: what a .svdag 3.0 file rebuilds.
+        std::sort(labels.begin(), labels.end(), [type](const CellLabel& a, const CellLabel& b) {
+          return scalarLess(type, a.value, b.value);
+        });
       }
     });
     for (uint32_t cx = 0; cx < ncx; ++cx)
@@ -548,10 +555,37 @@ void Builder::addSlab(int32_t z0, int32_t nz, const void* data)
   m.nextZ = z0 + nz;
 }
 
+void Builder::startBlocks()
+{
+  Impl& m = *impl;
+  if (!m.blockMode && m.nextZ != 0)
+    throw std::logic_error("cannot add blocks to a builder given slabs or volumes");
+  m.blockMode = true;
+}
+
+void Builder::addBlock(uint32_t cell, const CellOccupancy& block)
+{
+  Impl& m = *impl;
+  startBlocks();
+  const bool first = m.blocks.size() == 0;
+  if (uint64_t(cell) >= m.geometry.cellCount())
+    throw std::logic_error("block in cell " + std::to_string(cell) + " outside the volume");
+  if (!first &&
+    (cell < m.lastBlockCell ||
+      (cell == m.lastBlockCell && !scalarLess(m.type, m.lastBlockValue, block.value))))
+    throw std::logic_error("blocks out of order: by cell, then by label value");
+  m.lastBlockCell = cell;
+  m.lastBlockValue = block.value;
+  const uint32_t ncx = uint32_t(m.cells[0]), ncy = uint32_t(m.cells[1]);
+  const std::array<int32_t, 3> origin{ { int32_t((cell % ncx) * S),
+    int32_t((cell / ncx % ncy) * S), int32_t((cell / ncx / ncy) * S) } };
+  m.addBlock(cell, origin, block);
+}
+
 Volume Builder::finish()
 {
   Impl& m = *impl;
-  if (m.nextZ != m.geometry.dims[2])
+  if (!m.blockMode && m.nextZ != m.geometry.dims[2])
     throw std::logic_error("missing slabs: next expected z0 = " + std::to_string(m.nextZ));
   // Lookups are over: free every table before the packed output is assembled.
   std::vector<CellResult>().swap(m.rowResults);

@@ -1,7 +1,9 @@
 // The .svdag file format (the layout is documented in svdag/File.h and IO/README.md).
 #include "svdag/File.h"
 
+#include "CodedVolume.h"
 #include "FileVersion1.h"
+#include "RangeCoder.h"
 
 #include <zlib.h>
 #include <zstd.h>
@@ -29,13 +31,19 @@ enum SectionId : uint32_t
   BlocksSection = 2,
   RootsSection = 3,
   MidsSection = 4,
-  LeavesSection = 5
+  LeavesSection = 5,
+  CodedSection = 6 // format 3: the whole volume, coded (CodedVolume.h)
 };
-constexpr uint32_t FirstSection = LabelsSection, LastSection = LeavesSection;
+constexpr uint32_t FirstSection = LabelsSection, LastSection = CodedSection;
 const char* sectionName(uint32_t id)
 {
-  static const char* names[] = { "labels", "blocks", "roots", "mids", "leaves" };
+  static const char* names[] = { "labels", "blocks", "roots", "mids", "leaves", "coded volume" };
   return names[id - FirstSection];
+}
+// The sections a file of a major version must hold: 1-5 up to 2.x, 6 from 3.0 on.
+bool requiredSection(uint16_t major, uint32_t id)
+{
+  return major >= 3 ? id == CodedSection : id <= LeavesSection;
 }
 
 enum Codec : uint32_t
@@ -335,23 +343,66 @@ void storedChunks(const Volume& v, const StoredSection& s, const ChunkSink& sink
     rawSectionChunks(v, s.entry.id, sink);
 }
 
-EncodedFile encode(const Volume& v, const WriteOptions& options)
+// Format 3's one section: the coded volume, checked by decoding it again. A volume read from an
+// older file may have its pools in another order than a build's first-use order, which loading
+// rebuilds, so the header describes the rebuilt volume.
+StoredSection storeCoded(const Volume& v, Volume& rebuilt)
 {
+  std::vector<uint8_t> bytes = coded::encode(v);
+  std::string difference;
+  try
+  {
+    rebuilt = coded::decode(bytes.data(), bytes.size(), coded::frameOf(v));
+    difference = coded::compareOccupancy(v, rebuilt);
+  }
+  catch (const std::exception& e)
+  {
+    difference = e.what();
+  }
+  if (!difference.empty())
+    throw FileError("internal error: the coded volume does not decode to the volume written (" +
+      difference + ")");
+  StoredSection s;
+  s.entry.id = CodedSection;
+  s.entry.codec = CodecNone;
+  s.entry.raw = s.entry.stored = bytes.size();
+  s.entry.crc = crc32Of(bytes.data(), bytes.size());
+  s.packed.reset(new uint8_t[bytes.size()]);
+  std::copy(bytes.begin(), bytes.end(), s.packed.get());
+  return s;
+}
+
+EncodedFile encode(const Volume& volume, const WriteOptions& options)
+{
+  if (options.formatVersion != 2 && options.formatVersion != 3)
+    throw FileError("format version must be 2 or 3 (got " + std::to_string(options.formatVersion) + ")");
   if (options.zstdLevel < 0 || options.zstdLevel > MaxZstdLevel)
     throw FileError("zstd level must be in 0..22 (got " + std::to_string(options.zstdLevel) + ")");
   try
   {
-    v.validate();
+    volume.validate();
   }
   catch (const std::exception& e)
   {
     throw FileError(std::string("cannot write an inconsistent volume: ") + e.what());
   }
 
+  // Sections are prepared first, so that the table can be written before them.
+  EncodedFile file;
+  Volume rebuilt;
+  const Volume& v = options.formatVersion == 3 ? rebuilt : volume;
+  if (options.formatVersion == 3)
+    file.sections.push_back(storeCoded(volume, rebuilt));
+  else
+  {
+    for (uint32_t id = LabelsSection; id <= LeavesSection; ++id)
+      file.sections.push_back(storeSection(v, id, options.zstdLevel));
+  }
+
   ByteWriter w;
   w.bytes.insert(w.bytes.end(), FileMagic, FileMagic + FileMagicSize);
-  w.u16(FileMajorVersion);
-  w.u16(FileMinorVersion);
+  w.u16(uint16_t(options.formatVersion));
+  w.u16(0);
   const Geometry& g = v.geometry;
   for (int32_t d : g.dims)
     w.i32(d);
@@ -369,21 +420,14 @@ EncodedFile encode(const Volume& v, const WriteOptions& options)
   for (uint64_t count : { uint64_t(v.labels.size()), v.blockCount, v.rootCount, v.midCount,
          uint64_t(v.leaves.size()) })
     w.u64(count);
-  const uint32_t sectionCount = LastSection - FirstSection + 1;
+  const uint32_t sectionCount = uint32_t(file.sections.size());
   w.u32(sectionCount);
-
-  // Sections are compressed first, so that the table can be written before them.
-  EncodedFile file;
   uint64_t offset = FixedHeaderSize + SectionEntrySize * sectionCount + 4;
-  for (uint32_t id = FirstSection; id <= LastSection; ++id)
+  for (StoredSection& s : file.sections)
   {
-    file.sections.push_back(storeSection(v, id, options.zstdLevel));
-    file.sections.back().entry.offset = offset;
-    offset += file.sections.back().entry.stored;
-  }
-  for (const StoredSection& s : file.sections)
-  {
-    const SectionEntry& e = s.entry;
+    SectionEntry& e = s.entry;
+    e.offset = offset;
+    offset += e.stored;
     w.u32(e.id);
     w.u32(e.codec);
     w.u64(e.offset);
@@ -543,6 +587,38 @@ void readLabels(const std::vector<uint8_t>& bytes, uint64_t count, Volume& v)
       fail("label voxel count inconsistent with its bounds");
   }
 }
+// A format 3 file's volume, rebuilt from its coded section; `header` holds what the file's header
+// says (geometry, type, background, widths and counts), which the rebuilt volume must match.
+Volume readCoded(
+  const SectionEntry& e, const uint8_t* data, uint64_t labelCount, uint64_t leafCount, const Volume& header)
+{
+  const uint8_t* stored = data + e.offset;
+  if (crc32Of(stored, size_t(e.stored)) != e.crc)
+    fail("coded volume section checksum mismatch (the data is corrupt)");
+  coded::Frame frame;
+  frame.geometry = header.geometry;
+  frame.scalarType = header.scalarType;
+  frame.background = header.background;
+  frame.labelCount = labelCount;
+  frame.blockCount = header.blockCount;
+  Volume v;
+  try
+  {
+    v = coded::decode(stored, size_t(e.stored), frame);
+  }
+  catch (const std::bad_alloc&)
+  {
+    throw;
+  }
+  catch (const std::exception& error) // a corrupt stream, or pools beyond the layout's widths
+  {
+    fail(std::string("coded volume section: ") + error.what());
+  }
+  if (!(v.widths == header.widths) || v.rootCount != header.rootCount ||
+    v.midCount != header.midCount || v.leaves.size() != leafCount)
+    fail("the header's field widths or node counts do not match the coded volume");
+  return v;
+}
 } // namespace
 
 std::vector<uint8_t> serialize(const Volume& v, const WriteOptions& options)
@@ -569,9 +645,9 @@ Volume deserialize(const uint8_t* data, size_t size)
   ByteReader h(data, size, "header");
   h.skip(FileMagicSize);
   const uint16_t major = h.u16(), minor = h.u16();
-  if (major != FileMajorVersion && major != 1)
+  if (major < 1 || major > FileMajorVersion)
     throw FileError("unsupported .svdag format version " + std::to_string(major) + "." +
-      std::to_string(minor) + " (this reader reads versions 1.x and " +
+      std::to_string(minor) + " (this reader reads versions 1.x to " +
       std::to_string(FileMajorVersion) + ".x)");
 
   Volume v;
@@ -631,6 +707,8 @@ Volume deserialize(const uint8_t* data, size_t size)
   }
   if (labelCount > g.voxelCount())
     fail("header: more labels than voxels");
+  if (v.blockCount > g.voxelCount())
+    fail("header: more blocks than voxels");
 
   // Raw sizes the counts imply (node streams: between 16 and 16 + 8 * refBits bits per node).
   uint64_t expected[LastSection + 1] = {};
@@ -654,7 +732,7 @@ Volume deserialize(const uint8_t* data, size_t size)
   std::vector<const SectionEntry*> byOffset;
   for (const SectionEntry& e : table)
   {
-    const bool isKnown = e.id >= FirstSection && e.id <= LastSection;
+    const bool isKnown = e.id >= FirstSection && e.id <= LastSection && requiredSection(major, e.id);
     const std::string name =
       isKnown ? std::string(sectionName(e.id)) + " section" : "section " + std::to_string(e.id);
     if (e.offset < headerEnd || e.offset > size || e.stored > size - e.offset)
@@ -681,9 +759,17 @@ Volume deserialize(const uint8_t* data, size_t size)
   }
   for (uint32_t id = FirstSection; id <= LastSection; ++id)
   {
+    if (!requiredSection(major, id))
+      continue;
     if (!known[id])
       fail(std::string(sectionName(id)) + " section missing");
     const uint64_t raw = known[id]->raw;
+    if (id == CodedSection)
+    {
+      if (known[id]->codec != CodecNone)
+        fail("coded volume section: compressed, but it is coded already");
+      continue;
+    }
     if (id == RootsSection)
       checkNodeStream(raw, v.rootCount, fw.midRefBits, "roots");
     else if (id == MidsSection)
@@ -699,9 +785,12 @@ Volume deserialize(const uint8_t* data, size_t size)
       fail("sections overlap");
   }
 
+  if (major >= 3)
+    return readCoded(*known[CodedSection], data, labelCount, leafCount, v);
+
   // Sections, one pass: decompress, checksum, decode (the padding words re-added). The sizes
   // were checked against the counts above, so each is a whole number of its elements.
-  for (uint32_t id = FirstSection; id <= LastSection; ++id)
+  for (uint32_t id = LabelsSection; id <= LeavesSection; ++id)
   {
     const SectionEntry& e = *known[id];
     const std::string name = std::string(sectionName(id)) + " section";

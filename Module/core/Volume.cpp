@@ -229,57 +229,63 @@ uint64_t Volume::leafMask(uint32_t leafRef) const
   return leafUnderSymmetry(layout::leafRefSymmetry(leafRef), leaves[layout::leafRefIndex(leafRef)]);
 }
 
-void Volume::occupancy(uint64_t blockIndex, uint8_t* out) const
+void Volume::leafMasks(uint64_t blockIndex, uint64_t* out) const
 {
-  // Expands level by level; a solid or empty child fills its whole octant at once.
-  std::memset(out, 0, layout::CELL_SIZE * layout::CELL_SIZE * layout::CELL_SIZE);
-  auto fill = [out](uint32_t x0, uint32_t y0, uint32_t z0, uint32_t size) {
-    for (uint32_t z = z0; z < z0 + size; ++z)
-      for (uint32_t y = y0; y < y0 + size; ++y)
-        std::memset(out + x0 + 16 * (y + 16 * z), 1, size);
-  };
+  // Level by level; a solid or empty child sets its whole octant at once.
   const uint32_t rootRef = block(blockIndex).root;
   const bool rootInv = layout::refComplement(rootRef);
   const uint64_t rootOff = layout::refTarget(rootRef);
   const uint32_t rootHeader = nodeHeader(roots, rootOff);
+  const uint32_t rootMixed = layout::nodeMixedMask(rootHeader);
   for (uint32_t o = 0; o < 8; ++o)
   {
-    const uint32_t x0 = (o & 1) * 8, y0 = ((o >> 1) & 1) * 8, z0 = ((o >> 2) & 1) * 8;
-    const uint32_t mixed = layout::nodeMixedMask(rootHeader);
-    if (!(mixed & (1u << o)))
+    const uint32_t lx0 = (o & 1) * 2, ly0 = ((o >> 1) & 1) * 2, lz0 = ((o >> 2) & 1) * 2;
+    uint32_t midHeader = 0, midMixed = 0;
+    uint64_t midOff = 0;
+    bool midInv = false;
+    if (rootMixed & (1u << o))
     {
-      if (((layout::nodeFullMask(rootHeader) >> o) & 1u) != rootInv)
-        fill(x0, y0, z0, 8);
-      continue;
+      const uint32_t midRef =
+        nodeChildRef(roots, rootOff, layout::childRank(rootMixed, o), widths.midRefBits);
+      midInv = rootInv != layout::refComplement(midRef);
+      midOff = layout::refTarget(midRef);
+      midHeader = nodeHeader(mids, midOff);
+      midMixed = layout::nodeMixedMask(midHeader);
     }
-    const uint32_t midRef =
-      nodeChildRef(roots, rootOff, layout::childRank(mixed, o), widths.midRefBits);
-    const bool midInv = rootInv != layout::refComplement(midRef);
-    const uint64_t midOff = layout::refTarget(midRef);
-    const uint32_t midHeader = nodeHeader(mids, midOff);
-    const uint32_t midMixed = layout::nodeMixedMask(midHeader);
+    else // the octant is one solid or empty child: every leaf of it alike
+    {
+      midInv = rootInv;
+      midHeader = ((layout::nodeFullMask(rootHeader) >> o) & 1u) ? 0xFF00u : 0u;
+    }
     for (uint32_t c = 0; c < 8; ++c)
     {
-      const uint32_t x1 = x0 + (c & 1) * 4, y1 = y0 + ((c >> 1) & 1) * 4,
-                     z1 = z0 + ((c >> 2) & 1) * 4;
-      if (!(midMixed & (1u << c)))
+      const uint32_t leaf =
+        (lx0 + (c & 1)) + 4 * (ly0 + ((c >> 1) & 1)) + 16 * (lz0 + ((c >> 2) & 1));
+      uint64_t mask;
+      if (midMixed & (1u << c))
       {
-        if (((layout::nodeFullMask(midHeader) >> c) & 1u) != midInv)
-          fill(x1, y1, z1, 4);
-        continue;
+        const uint32_t leafRef =
+          nodeChildRef(mids, midOff, layout::childRank(midMixed, c), widths.leafRefBits);
+        mask = leafMask(leafRef);
+        if (layout::refComplement(leafRef))
+          mask = ~mask;
       }
-      const uint32_t leafRef =
-        nodeChildRef(mids, midOff, layout::childRank(midMixed, c), widths.leafRefBits);
-      uint64_t mask = leafMask(leafRef);
-      if (midInv != layout::refComplement(leafRef))
-        mask = ~mask;
-      for (uint32_t b = 0; b < 64; ++b)
-      {
-        out[(x1 + (b & 3)) + 16 * ((y1 + ((b >> 2) & 3)) + 16 * (z1 + (b >> 4)))] =
-          uint8_t((mask >> b) & 1u);
-      }
+      else
+        mask = ((layout::nodeFullMask(midHeader) >> c) & 1u) ? ~uint64_t(0) : 0;
+      out[leaf] = midInv ? ~mask : mask;
     }
   }
+}
+
+void Volume::occupancy(uint64_t blockIndex, uint8_t* out) const
+{
+  uint64_t masks[64];
+  leafMasks(blockIndex, masks);
+  for (uint32_t z = 0; z < layout::CELL_SIZE; ++z)
+    for (uint32_t y = 0; y < layout::CELL_SIZE; ++y)
+      for (uint32_t x = 0; x < layout::CELL_SIZE; ++x)
+        out[x + 16 * (y + 16 * z)] = uint8_t(
+          (masks[(x >> 2) + 4 * (y >> 2) + 16 * (z >> 2)] >> layout::leafBit(x & 3, y & 3, z & 3)) & 1u);
 }
 
 std::pair<uint64_t, uint64_t> Volume::cellBlocks(uint32_t cell) const

@@ -16,6 +16,11 @@ from ._vtkrun import run_algorithm
 #: zstd levels the writer takes (vtkSegmentationSVDAGWriter would clamp others silently).
 COMPRESSION_LEVELS = range(0, 23)
 
+#: .svdag format versions the writer writes: 3, the coded volume (the smallest file, the
+#: default), or 2, the in-memory sections under zstd (loads fastest, read by older readers too).
+FORMAT_VERSIONS = (2, 3)
+DEFAULT_FORMAT_VERSION = 3
+
 
 def check_compression_level(level):
     """Return ``level`` as an int, or raise TypeError / ValueError naming the range 0..22."""
@@ -28,6 +33,19 @@ def check_compression_level(level):
             f"(0 stores the sections uncompressed, 1..22 are zstd levels), not {level}"
         )
     return level
+
+
+def check_format_version(version):
+    """Return ``version`` as an int, or raise TypeError / ValueError naming the versions written."""
+    if not isinstance(version, (numbers.Integral, np.integer)) or isinstance(version, (bool, np.bool_)):
+        raise TypeError(f"format_version must be an integer, not {version!r}")
+    version = int(version)
+    if version not in FORMAT_VERSIONS:
+        raise ValueError(
+            f"format_version must be 3 (the coded volume, the smallest file) or 2 (the in-memory "
+            f"sections, the fastest to load), not {version}"
+        )
+    return version
 
 
 def svdag_output_path(path):
@@ -47,7 +65,8 @@ def svdag_output_path(path):
     return path
 
 
-def write_svdag(volume, path, compression_level=3, progress=None):
+def write_svdag(volume, path, compression_level=3, progress=None,
+                format_version=DEFAULT_FORMAT_VERSION):
     """Write ``volume`` (a SegmentationVolume) to the ``.svdag`` file ``path``.
 
     See :meth:`SegmentationVolume.save`.
@@ -56,10 +75,12 @@ def write_svdag(volume, path, compression_level=3, progress=None):
 
     path = svdag_output_path(path)
     level = check_compression_level(compression_level)
+    version = check_format_version(format_version)
     writer = vtkSegmentationSVDAGWriter()
     writer.SetInputData(volume.dataobject)
     writer.SetFileName(path)
     writer.SetCompressionLevel(level)
+    writer.SetFormatVersion(version)
     existed = os.path.lexists(path)
     try:
         run_algorithm(writer, action="Write", progress=progress, error=OSError, what=path)
@@ -76,7 +97,7 @@ def write_svdag(volume, path, compression_level=3, progress=None):
 _BACKGROUND_OFFSET = 148
 
 
-def svdag_bytes(volume, compression_level=3):
+def svdag_bytes(volume, compression_level=3, format_version=DEFAULT_FORMAT_VERSION):
     """The ``.svdag`` file of ``volume`` (a SegmentationVolume) as bytes.
 
     See :meth:`SegmentationVolume.to_bytes`.
@@ -86,10 +107,12 @@ def svdag_bytes(volume, compression_level=3):
     from .vtkSVDAGIO import vtkSegmentationSVDAGWriter
 
     level = check_compression_level(compression_level)
+    version = check_format_version(format_version)
     writer = vtkSegmentationSVDAGWriter()
     writer.SetInputData(volume.dataobject)
     writer.WriteToOutputStringOn()
     writer.SetCompressionLevel(level)
+    writer.SetFormatVersion(version)
     run_algorithm(writer, action="Write", error=ValueError, what="to_bytes")
     return vtk_to_numpy(writer.GetOutputBytes()).tobytes()
 

@@ -8,7 +8,7 @@ from vtkmodules.vtkCommonDataModel import vtkImageData
 from vtkmodules.vtkCommonCore import vtkDoubleArray, vtkIdTypeArray
 
 from ._labels import label_pattern, numpy_dtype_of_vtk_type
-from ._svdagfile import dataobject_from_bytes, svdag_bytes, write_svdag
+from ._svdagfile import DEFAULT_FORMAT_VERSION, dataobject_from_bytes, svdag_bytes, write_svdag
 from ._vtkrun import run_algorithm, vtk_errors_raised
 from .vtkSVDAGCore import (
     vtkSegmentationSVDAG,
@@ -824,7 +824,7 @@ class SegmentationVolume:
         }
 
     # -- files ------------------------------------------------------------------------------
-    def save(self, path, compression_level=3, progress=None):
+    def save(self, path, compression_level=3, progress=None, format_version=DEFAULT_FORMAT_VERSION):
         """Write the compressed volume to a ``.svdag`` file.
 
         Parameters
@@ -832,18 +832,24 @@ class SegmentationVolume:
         path : str, bytes or os.PathLike
             Output file name; it must end in ``.svdag``.
         compression_level : int, default: 3
-            zstd compression level of the file's sections, 1 (fastest) to 22 (smallest); 0
-            stores them uncompressed.
+            Format version 2 only: zstd compression level of the file's sections, 1 (fastest)
+            to 22 (smallest); 0 stores them uncompressed.
         progress : callable, optional
             Called with the writing progress in [0, 1]; an exception it raises is raised from
             here (and a file this call created is removed).
+        format_version : {3, 2}, default: 3
+            3 writes the labels and occupancy arithmetic-coded, the smallest file; reading it
+            rebuilds the DAG (the volume a build from the same labels gives). 2 writes the
+            volume as it is in memory under zstd: a larger file that loads several times
+            faster, read by vtksvdag versions before format 3 too.
 
         Raises
         ------
         TypeError
-            ``compression_level`` is not an integer.
+            ``compression_level`` or ``format_version`` is not an integer.
         ValueError
-            ``path`` does not end in ``.svdag``, or ``compression_level`` is not in 0..22.
+            ``path`` does not end in ``.svdag``, ``compression_level`` is not in 0..22, or
+            ``format_version`` is neither 2 nor 3.
         OSError
             The file cannot be written.
 
@@ -853,20 +859,24 @@ class SegmentationVolume:
         >>> volume = vtksvdag.from_numpy(np.eye(8, dtype=np.uint8)[:, :, None])
         >>> volume.save("eye.svdag")  # doctest: +SKIP
         """
-        write_svdag(self, path, compression_level=compression_level, progress=progress)
+        write_svdag(self, path, compression_level=compression_level, progress=progress,
+                    format_version=format_version)
 
-    def to_bytes(self, compression_level=3):
+    def to_bytes(self, compression_level=3, format_version=DEFAULT_FORMAT_VERSION):
         """The compressed volume as the bytes of a ``.svdag`` file.
 
         For sending a volume to another process or storing it in a database; load it back with
         :func:`vtksvdag.from_bytes`. Pickling a volume (``pickle``, ``multiprocessing``, Dask)
-        goes through these bytes too, at compression level 1.
+        goes through these bytes too, in format version 2 at compression level 1 (the fastest
+        both ways, and bit-identical whatever the volume's layout).
 
         Parameters
         ----------
         compression_level : int, default: 3
-            zstd level of the sections, 1 (fastest) to 22 (smallest); 0 stores them
-            uncompressed.
+            Format version 2 only: zstd level of the sections, 1 (fastest) to 22 (smallest); 0
+            stores them uncompressed.
+        format_version : {3, 2}, default: 3
+            As for :meth:`save`: 3 the smallest bytes, 2 the fastest to load.
 
         Returns
         -------
@@ -875,9 +885,9 @@ class SegmentationVolume:
         Raises
         ------
         TypeError
-            ``compression_level`` is not an integer.
+            ``compression_level`` or ``format_version`` is not an integer.
         ValueError
-            ``compression_level`` is not in 0..22.
+            ``compression_level`` is not in 0..22, or ``format_version`` is neither 2 nor 3.
 
         Examples
         --------
@@ -886,12 +896,12 @@ class SegmentationVolume:
         >>> vtksvdag.from_bytes(volume.to_bytes()).labels
         array([1], dtype=uint8)
         """
-        return svdag_bytes(self, compression_level)
+        return svdag_bytes(self, compression_level, format_version)
 
     def __reduce__(self):
         # The timings and the label metadata are part of the object, not of the volume: they
         # travel as well.
-        return (_unpickle, (svdag_bytes(self, 1), self.build_seconds, self.load_seconds,
+        return (_unpickle, (svdag_bytes(self, 1, format_version=2), self.build_seconds, self.load_seconds,
                             self.label_metadata))
 
     def __repr__(self):

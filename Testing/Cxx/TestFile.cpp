@@ -1,9 +1,11 @@
 // The .svdag file format: exact round trips, and hostile input (every truncation, thousands of
 // random corruptions, absurd header values) that must give FileError, never a crash, an
 // out-of-bounds read or a huge allocation.
+#include "CodedVolume.h"
 #include "svdag/Builder.h"
 #include "svdag/Decoder.h"
 #include "svdag/File.h"
+#include "svdag/LeafSymmetry.h"
 
 #include <gtest/gtest.h>
 #include <zlib.h>
@@ -207,10 +209,10 @@ TEST(File, RoundTripIsExactAndDeterministic)
     for (int level : { 0, 1, 3, 19 })
     {
       SCOPED_TRACE("zstd level " + std::to_string(level));
-      const Bytes bytes = svdag::serialize(n.volume, { level });
+      const Bytes bytes = svdag::serialize(n.volume, { level, 2 });
       const svdag::Volume back = svdag::deserialize(bytes);
       EXPECT_TRUE(back == n.volume);
-      EXPECT_EQ(svdag::serialize(back, { level }), bytes); // same volume, same bytes
+      EXPECT_EQ(svdag::serialize(back, { level, 2 }), bytes); // same volume, same bytes
     }
   }
 }
@@ -218,8 +220,8 @@ TEST(File, RoundTripIsExactAndDeterministic)
 TEST(File, CompressionShrinksAndUncompressedIsExactlyTheData)
 {
   const svdag::Volume v = spheres(ScalarType::UInt32, 70);
-  const Bytes plain = svdag::serialize(v, { 0 });
-  const Bytes packed = svdag::serialize(v, { 3 });
+  const Bytes plain = svdag::serialize(v, { 0, 2 });
+  const Bytes packed = svdag::serialize(v, { 3, 2 });
   EXPECT_LT(packed.size(), plain.size());
   const svdag::MemoryUsage m = v.memory();
   // Uncompressed: header + table + crc, then the data words (no padding words) and labels at
@@ -245,7 +247,7 @@ TEST(File, WritesAndReadsFiles)
     std::fclose(partial);
 
   // Overwriting keeps working; a text file and a missing file are not .svdag files.
-  svdag::writeFile(v, path, { 0 });
+  svdag::writeFile(v, path, { 0, 2 });
   EXPECT_TRUE(svdag::readFile(path) == v);
   const std::string text = dir + "/svdag_file_test_text_" + std::to_string(::getpid()) + ".txt";
   std::ofstream(text) << "SVDAG but not really\n";
@@ -255,8 +257,8 @@ TEST(File, WritesAndReadsFiles)
   EXPECT_THROW(svdag::readFile(dir + "/does-not-exist.svdag"), FileError);
   EXPECT_THROW(svdag::readFile(dir), FileError); // a directory
   EXPECT_THROW(svdag::writeFile(v, dir + "/no-such-dir/x.svdag"), svdag::FileOpenError);
-  EXPECT_THROW(svdag::writeFile(v, path, { 23 }), FileError);
-  EXPECT_THROW(svdag::writeFile(v, path, { -1 }), FileError);
+  EXPECT_THROW(svdag::writeFile(v, path, { 23, 2 }), FileError);
+  EXPECT_THROW(svdag::writeFile(v, path, { -1, 2 }), FileError);
   std::remove(path.c_str());
   std::remove(text.c_str());
 }
@@ -273,7 +275,7 @@ TEST(File, EveryTruncationFails)
   const svdag::Volume v = spheres(ScalarType::UInt16, 20);
   for (int level : { 0, 3 })
   {
-    const Bytes bytes = svdag::serialize(v, { level });
+    const Bytes bytes = svdag::serialize(v, { level, 2 });
     for (size_t n = 0; n < bytes.size(); ++n)
     {
       EXPECT_THROW(svdag::deserialize(bytes.data(), n), FileError) << "prefix of " << n << " bytes";
@@ -308,7 +310,7 @@ TEST(File, RandomCorruptionFailsCleanly)
   std::mt19937_64 rng(2024);
   for (int level : { 0, 3 })
   {
-    const Bytes bytes = svdag::serialize(v, { level });
+    const Bytes bytes = svdag::serialize(v, { level, 2 });
     size_t failed = 0, loaded = 0;
     for (int i = 0; i < 3000; ++i)
     {
@@ -335,7 +337,7 @@ TEST(File, RandomCorruptionFailsCleanly)
 TEST(File, ResealedCorruptionOfWidthsCountsAndTableFails)
 {
   const svdag::Volume v = spheres(ScalarType::Int8, 24);
-  const Bytes bytes = svdag::serialize(v, { 3 });
+  const Bytes bytes = svdag::serialize(v, { 3, 2 });
   std::mt19937_64 rng(99);
   size_t failed = 0, loaded = 0;
   for (int i = 0; i < 3000; ++i)
@@ -363,15 +365,15 @@ TEST(File, RejectsWrongMagicAndUnknownMajorVersion)
   bad[6] = '\n'; // CR LF conversion
   EXPECT_THROW(svdag::deserialize(bad), FileError);
   bad = good;
-  putLE(bad, 8, 3, 2);
+  putLE(bad, 8, 4, 2);
   try
   {
     svdag::deserialize(bad);
-    ADD_FAILURE() << "version 3 accepted";
+    ADD_FAILURE() << "version 4 accepted";
   }
   catch (const FileError& e)
   {
-    EXPECT_NE(std::string(e.what()).find("version 3.0"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("version 4.0"), std::string::npos) << e.what();
   }
   bad = good;
   putLE(bad, 10, 7, 2); // a newer minor version is readable (checksum re-sealed)
@@ -384,7 +386,7 @@ TEST(File, RejectsWrongMagicAndUnknownMajorVersion)
 TEST(File, UnknownSectionsAreSkippedButChecked)
 {
   const svdag::Volume v = spheres(ScalarType::UInt16, 20);
-  const Bytes good = svdag::serialize(v);
+  const Bytes good = svdag::serialize(v, { 3, 2 });
   const size_t oldEnd = headerCrcAt(good) + 4;
   const Bytes extra = { 'n', 'e', 'w' };
   auto withExtraSection = [&](uint64_t extraOffset) {
@@ -420,7 +422,7 @@ TEST(File, UnknownSectionsAreSkippedButChecked)
 // allocate more than a few megabytes.
 TEST(File, AbsurdHeaderValuesFailWithoutHugeAllocations)
 {
-  const Bytes good = svdag::serialize(spheres(ScalarType::UInt32, 30), { 3 });
+  const Bytes good = svdag::serialize(spheres(ScalarType::UInt32, 30), { 3, 2 });
   struct Edit
   {
     const char* name;
@@ -484,7 +486,7 @@ TEST(File, AbsurdHeaderValuesFailWithoutHugeAllocations)
 // Each failure says what is wrong, so a user can tell a damaged file from a wrong one.
 TEST(File, ErrorMessagesNameTheProblem)
 {
-  const Bytes good = svdag::serialize(spheres(ScalarType::UInt32, 20), { 0 });
+  const Bytes good = svdag::serialize(spheres(ScalarType::UInt32, 20), { 0, 2 });
   auto message = [](const Bytes& b) -> std::string {
     try
     {
@@ -634,7 +636,7 @@ uint64_t cellWith(const svdag::Volume& v, uint64_t count)
 TEST(FileContent, RewritingUnchangedSectionsLoads)
 {
   const svdag::Volume v = threeLabels();
-  const Bytes good = svdag::serialize(v, { 0 });
+  const Bytes good = svdag::serialize(v, { 0, 2 });
   EXPECT_EQ(rewriteSections(good, v), good);
   EXPECT_TRUE(svdag::deserialize(rewriteSections(good, v)) == v);
 }
@@ -642,7 +644,7 @@ TEST(FileContent, RewritingUnchangedSectionsLoads)
 TEST(FileContent, ImpossibleBlocksAreRefusedNamingTheRule)
 {
   const svdag::Volume v = threeLabels();
-  const Bytes good = svdag::serialize(v, { 0 });
+  const Bytes good = svdag::serialize(v, { 0, 2 });
   ASSERT_GE(v.blockCount, 4u);
   auto expectRefused = [&](const svdag::Volume& bad, const std::string& rule) {
     const std::string message = loadError(rewriteSections(good, bad));
@@ -743,7 +745,7 @@ TEST(FileContent, EmptyBlockOccupancyIsRefused)
   // A 20^3 volume of one label: cell 0 is solid, its root is the empty node complemented.
   const svdag::Volume v =
     build(ScalarType::Int64, geometry(20, 20, 20), [](int, int, int) { return uint64_t(3); });
-  const Bytes good = svdag::serialize(v, { 0 });
+  const Bytes good = svdag::serialize(v, { 0, 2 });
   ASSERT_EQ(v.block(0).cell, 0u);
   ASSERT_TRUE(svdag::layout::refComplement(v.block(0).root));
   svdag::Volume bad = v;
@@ -755,7 +757,7 @@ TEST(FileContent, EmptyBlockOccupancyIsRefused)
 TEST(FileContent, ImpossibleNodeReferencesAreRefused)
 {
   const svdag::Volume v = threeLabels();
-  const Bytes good = svdag::serialize(v, { 0 });
+  const Bytes good = svdag::serialize(v, { 0, 2 });
   // The first mixed child reference of the first root and of the first mid node with one.
   auto firstRef = [](const std::vector<uint32_t>& stream, uint64_t count, uint32_t refBits) {
     uint64_t offset = 0;
@@ -793,7 +795,7 @@ TEST(FileContent, LabelTableMustMatchTheBlocks)
 {
   const svdag::Volume v = threeLabels();
   ASSERT_EQ(v.labels.size(), 3u);
-  const Bytes good = svdag::serialize(v, { 0 });
+  const Bytes good = svdag::serialize(v, { 0, 2 });
   auto expectRefused = [&](const svdag::Volume& bad, const std::string& rule) {
     const std::string message = loadError(rewriteSections(good, bad));
     EXPECT_NE(message.find(rule), std::string::npos) << "expected '" << rule << "', got: " << message;
@@ -837,7 +839,7 @@ TEST(FileContent, HugeEmptyVolumeLoadsButRefusesADenseDecode)
 {
   const svdag::Volume small =
     build(ScalarType::UInt32, geometry(17, 17, 17), [](int, int, int) { return uint64_t(0); });
-  Bytes b = svdag::serialize(small, { 0 });
+  Bytes b = svdag::serialize(small, { 0, 2 });
   for (int a = 0; a < 3; ++a)
     putLE(b, DimsAt + 4 * size_t(a), 4096, 4);
   putLE(b, WidthsAt, 24, 4); // 256^3 cells
@@ -895,9 +897,13 @@ TEST(File, Format1FilesLoadAndTheirCorruptionFailsCleanly)
     ASSERT_EQ(bytes[8], 1u) << "not a 1.0 file: " << path;
     const svdag::Volume v = svdag::deserialize(bytes);
     EXPECT_EQ(v.widths.leafRefBits >= 1 + svdag::layout::LEAF_SYMMETRY_BITS, true) << name;
-    const Bytes again = svdag::serialize(v);
-    EXPECT_EQ(again[8], svdag::FileMajorVersion);
+    const Bytes again = svdag::serialize(v, { 3, 2 });
+    EXPECT_EQ(again[8], 2u);
     EXPECT_TRUE(svdag::deserialize(again) == v) << name;
+    // Format 3 rebuilds the DAG in a build's order: the same blocks and voxels.
+    const Bytes coded = svdag::serialize(v);
+    EXPECT_EQ(coded[8], svdag::FileMajorVersion);
+    EXPECT_EQ(svdag::coded::compareOccupancy(svdag::deserialize(coded), v), "") << name;
 
     std::mt19937_64 rng(5);
     size_t failed = 0, loaded = 0;
@@ -919,5 +925,249 @@ TEST(File, Format1FilesLoadAndTheirCorruptionFailsCleanly)
       expectFailsOrValid(bad, failed, loaded);
     }
     EXPECT_GT(failed, 250u) << name;
+  }
+}
+
+// ---- format 3: the coded volume ----
+
+namespace
+{
+// Volumes that reach every path of the coded form beyond volumes(): a cell of 4096 labels,
+// labels that skip cells, labels at the type's extremes in cells of their own, excluded labels.
+std::vector<Named> codedVolumes()
+{
+  std::vector<Named> out = volumes();
+  uint64_t next = 0;
+  out.push_back({ "4096 labels in one cell", build(ScalarType::Int32, geometry(16, 16, 16),
+                                               [&](int, int, int) { return next++; }, ~uint64_t(0)) });
+  out.push_back({ "sparse labels, empty cells 70x9x50",
+    build(ScalarType::UInt64, geometry(70, 9, 50), [](int x, int y, int z) -> uint64_t {
+      if ((x / 16 + z / 16) % 3 != 0)
+        return 0;
+      return (x * 7 + y * 3 + z) % 11 == 0 ? (uint64_t(1) << 63) + uint64_t(z) : uint64_t(x / 5) + 1;
+    }) });
+  out.push_back({ "checkerboard 19x21x18", build(ScalarType::Int8, geometry(19, 21, 18),
+                                             [](int x, int y, int z) -> uint64_t {
+                                               return (x + y + z) % 2 ? uint64_t(-128) : 127;
+                                             }) });
+  std::vector<uint8_t> labels(31 * 17 * 40);
+  std::mt19937 rng(8);
+  for (uint8_t& l : labels)
+    l = uint8_t(rng() % 6);
+  svdag::BuildOptions options;
+  options.background = 2;
+  options.excluded = { 4 };
+  out.push_back({ "noise with background 2 and label 4 excluded",
+    svdag::Builder::build(geometry(31, 17, 40), ScalarType::UInt8, labels.data(), options) });
+  return out;
+}
+
+// Replaces the coded section's bytes (a same-size edit) and reseals its crc and the header.
+void resealCoded(Bytes& b)
+{
+  const size_t e = entryOf(b, 6);
+  const size_t at = size_t(getLE(b, e + Offset, 8)), n = size_t(getLE(b, e + Stored, 8));
+  putLE(b, e + Crc, crc32(0, b.data() + at, uInt(n)), 4);
+  resealHeader(b);
+}
+} // namespace
+
+TEST(CodedFile, RoundTripIsExactDeterministicAndSmaller)
+{
+  for (const Named& n : codedVolumes())
+  {
+    SCOPED_TRACE(n.name);
+    ASSERT_NO_THROW(n.volume.validate());
+    const Bytes bytes = svdag::serialize(n.volume);
+    EXPECT_EQ(getLE(bytes, 8, 2), 3u);
+    ASSERT_EQ(sectionCount(bytes), 1u);
+    const svdag::Volume back = svdag::deserialize(bytes);
+    // A built volume's DAG is in first-use order, so the rebuild is bit-identical.
+    EXPECT_TRUE(back == n.volume);
+    EXPECT_EQ(svdag::serialize(back), bytes);
+    EXPECT_LE(bytes.size(), svdag::serialize(n.volume, { 19, 2 }).size() + 64);
+  }
+}
+
+// A volume whose DAG is laid out otherwise (a 1.0 file's, a hand-made one) is written as the
+// build of its voxels: the same blocks and voxels, and a file that then round-trips exactly.
+TEST(CodedFile, AVolumeInAnotherLayoutIsWrittenAsItsBuild)
+{
+  svdag::Volume v = spheres(ScalarType::UInt16, 40);
+  // Swap the first two leaves and fix every reference to them.
+  ASSERT_GE(v.leaves.size(), 2u);
+  std::swap(v.leaves[0], v.leaves[1]);
+  for (uint64_t offset = 0, m = 0; m < v.midCount; ++m)
+  {
+    const uint32_t mixed = svdag::layout::nodeMixedMask(svdag::Volume::nodeHeader(v.mids, offset));
+    for (uint32_t r = 0; r < uint32_t(__builtin_popcount(mixed)); ++r)
+    {
+      const uint64_t at = offset + svdag::layout::NODE_HEADER_BITS + uint64_t(r) * v.widths.leafRefBits;
+      uint32_t ref = svdag::Volume::nodeChildRef(v.mids, offset, r, v.widths.leafRefBits);
+      const uint32_t index = svdag::layout::leafRefIndex(ref);
+      if (index < 2)
+      {
+        ref = svdag::layout::leafRef(1 - index, svdag::layout::leafRefSymmetry(ref), ref & 1u);
+        const uint64_t word = at >> 5;
+        const uint32_t shift = uint32_t(at & 31);
+        uint64_t pair = v.mids[word] | (uint64_t(v.mids[word + 1]) << 32);
+        const uint64_t fieldMask = ((uint64_t(1) << v.widths.leafRefBits) - 1) << shift;
+        pair = (pair & ~fieldMask) | (uint64_t(ref) << shift);
+        v.mids[word] = uint32_t(pair);
+        v.mids[word + 1] = uint32_t(pair >> 32);
+      }
+    }
+    offset += svdag::Volume::nodeBits(v.mids, offset, v.widths.leafRefBits);
+  }
+  ASSERT_NO_THROW(v.validate());
+  const svdag::Volume built = spheres(ScalarType::UInt16, 40);
+  ASSERT_FALSE(v == built);
+  const Bytes bytes = svdag::serialize(v);
+  const svdag::Volume back = svdag::deserialize(bytes);
+  EXPECT_EQ(svdag::coded::compareOccupancy(back, v), "");
+  EXPECT_TRUE(back == built);
+  EXPECT_EQ(bytes, svdag::serialize(built));
+}
+
+TEST(CodedFile, EveryTruncationFails)
+{
+  const Bytes bytes = svdag::serialize(spheres(ScalarType::UInt16, 20));
+  for (size_t n = 0; n < bytes.size(); ++n)
+    EXPECT_THROW(svdag::deserialize(bytes.data(), n), FileError) << "prefix of " << n << " bytes";
+}
+
+// Corruption anywhere fails on a checksum; corruption of the coded bytes behind resealed
+// checksums (a buggy or hostile writer) fails cleanly or loads a valid volume, never a crash, a
+// hang or a huge allocation.
+TEST(CodedFile, CorruptionFailsCleanly)
+{
+  std::mt19937_64 rng(21);
+  for (const Named& n : { Named{ "spheres", spheres(ScalarType::UInt32, 30) },
+         Named{ "4096 labels", codedVolumes()[codedVolumes().size() - 4].volume } })
+  {
+    SCOPED_TRACE(n.name);
+    const Bytes good = svdag::serialize(n.volume);
+    const size_t e = entryOf(good, 6);
+    const size_t at = size_t(getLE(good, e + Offset, 8)), size = size_t(getLE(good, e + Stored, 8));
+    size_t failed = 0, loaded = 0;
+    for (int i = 0; i < 300; ++i)
+    {
+      Bytes bad = good;
+      bad[at + rng() % size] ^= uint8_t(1u << (rng() % 8));
+      EXPECT_THROW(svdag::deserialize(bad), FileError);
+      if (i % 3 == 0)
+        bad[at + rng() % size] = uint8_t(rng()); // and a second change
+      resealCoded(bad);
+      largestAllocation = 0;
+      expectFailsOrValid(bad, failed, loaded);
+      EXPECT_LT(largestAllocation.load(), size_t(64) << 20);
+    }
+    EXPECT_GT(failed, 250u);
+  }
+}
+
+TEST(CodedFile, HeaderValuesThatDisagreeWithTheCodedVolumeFail)
+{
+  const Bytes good = svdag::serialize(spheres(ScalarType::UInt32, 30));
+  const svdag::Volume v = svdag::deserialize(good);
+  struct Edit
+  {
+    const char* name;
+    size_t at;
+    uint64_t value;
+    int bytes;
+  };
+  const std::vector<Edit> edits = {
+    { "label count + 1", CountsAt + 8 * Labels, v.labels.size() + 1, 8 },
+    { "label count - 1", CountsAt + 8 * Labels, v.labels.size() - 1, 8 },
+    { "block count + 1", CountsAt + 8 * Blocks, v.blockCount + 1, 8 },
+    { "block count - 1", CountsAt + 8 * Blocks, v.blockCount - 1, 8 },
+    { "block count 2^40", CountsAt + 8 * Blocks, uint64_t(1) << 40, 8 },
+    { "root count", CountsAt + 8 * Roots, v.rootCount + 1, 8 },
+    { "mid count", CountsAt + 8 * Mids, v.midCount - 1, 8 },
+    { "leaf count", CountsAt + 8 * Leaves, v.leaves.size() + 3, 8 },
+    { "leaf width", WidthsAt + 16, v.widths.leafRefBits + 1, 4 },
+    { "dims x", DimsAt, 200, 4 },
+    { "dims z", DimsAt + 8, 5, 4 },
+    { "scalar type int8", TypeAt, 0, 4 },
+    { "background", TypeAt + 4, 7, 8 },
+    { "coded section compressed", entryOf(good, 6) + Codec, 1, 4 },
+  };
+  for (const Edit& e : edits)
+  {
+    SCOPED_TRACE(e.name);
+    Bytes bad = good;
+    putLE(bad, e.at, e.value, e.bytes);
+    resealHeader(bad);
+    largestAllocation = 0;
+    EXPECT_THROW(svdag::deserialize(bad), FileError);
+    EXPECT_LT(largestAllocation.load(), size_t(16) << 20);
+  }
+  // A 3.0 file needs its coded section; format 2's sections do not stand in for it.
+  Bytes noCoded = good;
+  putLE(noCoded, entryOf(good, 6) + Id, 2, 4);
+  resealHeader(noCoded);
+  EXPECT_THROW(svdag::deserialize(noCoded), FileError);
+  EXPECT_THROW(svdag::serialize(v, { 3, 4 }), FileError);
+  EXPECT_THROW(svdag::serialize(v, { 3, 1 }), FileError);
+}
+
+TEST(CodedFile, HugeSparseVolumeStaysSmallAndFast)
+{
+  // 2^40 voxels, two small labelled boxes far apart: the empty cells between them cost a
+  // number, not a bit each.
+  svdag::Geometry g = geometry(1 << 14, 1 << 13, 1 << 13);
+  svdag::Builder builder(g, ScalarType::UInt8);
+  svdag::CellOccupancy a;
+  a.value = 9;
+  for (uint32_t l = 0; l < 64; ++l)
+  {
+    a.masks[l] = l == 0 ? 0x1ull : 0;
+    a.codes[l] = 0;
+  }
+  a.codes[0] = uint8_t((svdag::canonicalLeaf(1).symmetry << 1) | svdag::canonicalLeaf(1).complement);
+  builder.addBlock(5, a);
+  svdag::CellOccupancy b = a;
+  b.value = 200;
+  builder.addBlock(uint32_t(g.cellCount() - 1), b);
+  const svdag::Volume v = builder.finish();
+  ASSERT_NO_THROW(v.validate());
+  const Bytes bytes = svdag::serialize(v);
+  EXPECT_LT(bytes.size(), 400u);
+  const svdag::Volume back = svdag::deserialize(bytes);
+  EXPECT_TRUE(back == v);
+  EXPECT_EQ(back.labelAt(0, 0, 0), 0u);
+  EXPECT_EQ(back.labelAt(80, 0, 0), 9u);
+  EXPECT_EQ(back.labelAt(g.dims[0] - 16, g.dims[1] - 16, g.dims[2] - 16), 200u);
+}
+
+TEST(CodedFile, BuilderTakesBlocksOnlyInOrderAndAlone)
+{
+  const svdag::Geometry g = geometry(40, 20, 20);
+  svdag::CellOccupancy block;
+  block.value = 3;
+  for (uint32_t l = 0; l < 64; ++l)
+  {
+    block.masks[l] = ~uint64_t(0);
+    block.codes[l] = 0;
+  }
+  {
+    svdag::Builder b(g, ScalarType::UInt16);
+    b.addBlock(1, block);
+    EXPECT_THROW(b.addBlock(0, block), std::logic_error);
+    EXPECT_THROW(b.addBlock(1, block), std::logic_error); // the same label again
+    block.value = 2;
+    EXPECT_THROW(b.addBlock(1, block), std::logic_error); // a smaller label in the same cell
+    block.value = 3;
+    EXPECT_THROW(b.addBlock(uint32_t(g.cellCount()), block), std::logic_error);
+    std::vector<uint16_t> slab(40 * 20 * 16, 0);
+    EXPECT_THROW(b.addSlab(0, 16, slab.data()), std::logic_error);
+    EXPECT_NO_THROW(b.finish().validate());
+  }
+  {
+    svdag::Builder b(g, ScalarType::UInt16);
+    std::vector<uint16_t> slab(40 * 20 * 16, 0);
+    b.addSlab(0, 16, slab.data());
+    EXPECT_THROW(b.addBlock(0, block), std::logic_error);
   }
 }

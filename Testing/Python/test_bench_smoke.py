@@ -30,7 +30,9 @@ EXPECTED_COLUMNS = [
     "cseg_dtype", "cseg_bytes", "cseg_s", "ours_over_cseg",
     "stream_dtype", "zstd19_bytes", "zstd19_s", "gzip9_bytes", "gzip9_s", "ours_over_zstd19",
     "crackle_bytes", "crackle_s", "ours_over_crackle",
-    "svdag_file_bytes", "load_s", "load_over_build",
+    "file2_bytes", "load2_s", "load2_over_build",
+    "file3_bytes", "write3_s", "load3_s", "load3_over_build",
+    "file3_over_cseg", "file3_over_crackle", "file3_over_zstd19",
 ]
 
 
@@ -81,10 +83,19 @@ def test_csv_values_are_consistent(quick_run):
         assert float(r["ours_over_crackle"]) == pytest.approx(total / int(r["crackle_bytes"]), rel=1e-4)
         assert float(r["peak_rss_mb"]) >= float(r["baseline_rss_mb"]) > 0
         assert r["file_via"] in ("reader", "pynrrd+filter")
-        # The file holds the sections zstd-compressed, or stored where that does not pay.
-        assert 0 < int(r["svdag_file_bytes"]) <= total + 4096
-        assert float(r["load_over_build"]) == pytest.approx(
-            float(r["load_s"]) / float(r["build_s"]), rel=1e-3)
+        # Format 2 holds the sections zstd-compressed, or stored where that does not pay; format
+        # 3 codes the occupancy: far smaller on real volumes, and at worst the checkerboards'
+        # few hundred bytes (a DAG of one node each way, against 4096 voxels a cell to code).
+        assert 0 < int(r["file2_bytes"]) <= total + 4096
+        assert 260 < int(r["file3_bytes"]) <= 1.5 * int(r["file2_bytes"]) + 64
+        if r["source"] == "file":
+            assert int(r["file3_bytes"]) < 0.6 * int(r["file2_bytes"])
+        for version in (2, 3):
+            assert float(r[f"load{version}_over_build"]) == pytest.approx(
+                float(r[f"load{version}_s"]) / float(r["build_s"]), rel=1e-3)
+        for other in ("cseg", "crackle", "zstd19"):
+            assert float(r[f"file3_over_{other}"]) == pytest.approx(
+                int(r["file3_bytes"]) / int(r[f"{other}_bytes"]), rel=1e-4)
     by_name = {r["volume"]: r for r in rows}
     # Known facts about the inputs (shared/data/README.md and the generators' definitions).
     assert by_name["fib25_64"]["labels"] == "52" and by_name["fib25_64"]["dtype"] == "uint64"

@@ -1,6 +1,7 @@
 """The .svdag writer and reader from Python: a real volume through the VTK pipeline into a file and
-back (bit-identical), the file checked against the format as IO/README.md documents it (parsed
-here independently with struct, zlib and zstandard), and the error codes of both on bad input."""
+back (bit-identical), in both format versions, the file checked against the format as
+IO/README.md documents it (parsed here independently with struct, zlib and zstandard), and the
+error codes of both on bad input."""
 import struct
 import zlib
 
@@ -21,7 +22,7 @@ from vtksvdag.vtkSVDAGCore import (
 from vtksvdag.vtkSVDAGIO import vtkSegmentationSVDAGWriter, vtkSegmentationVolumeReader
 
 MAGIC = b"\x89SVDAG\r\n"
-SECTIONS = {1: "labels", 2: "blocks", 3: "roots", 4: "mids", 5: "leaves"}
+SECTIONS = {1: "labels", 2: "blocks", 3: "roots", 4: "mids", 5: "leaves", 6: "coded volume"}
 
 
 def compress_real_volume(path, spacing=(0.5, 0.75, 2.0), origin=(-4.0, 3.5, 10.0)):
@@ -81,6 +82,7 @@ def test_writer_on_a_real_volume_follows_the_documented_format(shared_data, tmp_
     writer.SetInputConnection(build.GetOutputPort())
     writer.SetFileName(str(path))
     writer.SetCompressionLevel(level)
+    writer.SetFormatVersion(2)
     assert writer.Write() == 1
     assert writer.GetErrorCode() == vtkErrorCode.NoError
     data = path.read_bytes()
@@ -130,11 +132,44 @@ def test_writer_on_a_real_volume_follows_the_documented_format(shared_data, tmp_
         assert len(data) < 220 + 36 * 5 + 4 + sum(len(p) for _, p in sections.values())
 
 
-def write(svdag, path, level=3):
+def test_format_3_holds_one_coded_section_and_the_rebuilt_counts(shared_data, tmp_path):
+    labels, build = compress_real_volume(shared_data / "dvid_fib19_64.nrrd")
+    svdag = build.GetOutput()
+    writer = vtkSegmentationSVDAGWriter()
+    assert writer.GetFormatVersion() == 3  # the default
+    writer.SetInputData(svdag)
+    writer.SetFileName(str(tmp_path / "v3.svdag"))
+    assert writer.Write() == 1
+    header, sections = parse((tmp_path / "v3.svdag").read_bytes())
+    assert header["version"] == (3, 0)
+    assert header["dims"] == (64, 64, 64) and header["spacing"] == (0.5, 0.75, 2.0)
+    assert list(sections) == ["coded volume"]
+    codec, payload = sections["coded volume"]
+    assert codec == 0 and payload[0] == 0  # stored as coded; a range coder's first byte
+    counts = header["counts"]
+    assert counts["labels"] == len(np.unique(labels[labels != 0]))
+    assert counts["blocks"] == svdag.GetNumberOfBlocks()
+    assert counts["roots"] == svdag.GetNumberOfRootNodes()
+    assert counts["mids"] == svdag.GetNumberOfMidNodes()
+    assert counts["leaves"] == svdag.GetNumberOfLeaves()
+    # Far smaller than the volume in memory, and than format 2 at zstd's strongest level.
+    assert len(payload) < 0.5 * svdag.GetCompressedSize()
+    v2 = write(svdag, tmp_path / "v2.svdag", level=19, version=2)
+    assert (tmp_path / "v3.svdag").stat().st_size < 0.6 * len(v2)
+
+    writer.SetFormatVersion(7)
+    assert writer.GetFormatVersion() == 3
+    writer.SetFormatVersion(1)
+    assert writer.GetFormatVersion() == 2
+    assert "FormatVersion: 2" in str(writer)  # PrintSelf
+
+
+def write(svdag, path, level=3, version=3):
     writer = vtkSegmentationSVDAGWriter()
     writer.SetInputData(svdag)
     writer.SetFileName(str(path))
     writer.SetCompressionLevel(level)
+    writer.SetFormatVersion(version)
     assert writer.Write() == 1
     return path.read_bytes()
 
@@ -147,11 +182,12 @@ def read(path):
     return reader, errors
 
 
+@pytest.mark.parametrize("version", [2, 3])
 @pytest.mark.parametrize("name", ["totalseg_ct", "gala_train_gt", "fib25_64"])
-def test_round_trip_through_the_reader_is_bit_identical(shared_data, tmp_path, name):
+def test_round_trip_through_the_reader_is_bit_identical(shared_data, tmp_path, name, version):
     labels, build = compress_real_volume(shared_data / f"{name}.nrrd")
     original = build.GetOutput()
-    data = write(original, tmp_path / "a.svdag")
+    data = write(original, tmp_path / "a.svdag", version=version)
     reader, errors = read(tmp_path / "a.svdag")
     assert reader.GetErrorCode() == vtkErrorCode.NoError and not errors.messages
     loaded = reader.GetOutput()
@@ -165,7 +201,7 @@ def test_round_trip_through_the_reader_is_bit_identical(shared_data, tmp_path, n
     loaded.GetOrigin(geometry)
     assert tuple(geometry) == (-4.0, 3.5, 10.0)
     # Same bytes when the loaded volume is written again: nothing was lost or reinterpreted.
-    assert write(loaded, tmp_path / "b.svdag") == data
+    assert write(loaded, tmp_path / "b.svdag", version=version) == data
     decode = vtkSegmentationSVDAGToImageData()
     decode.SetInputData(loaded)
     decode.Update()
@@ -174,9 +210,10 @@ def test_round_trip_through_the_reader_is_bit_identical(shared_data, tmp_path, n
     np.testing.assert_array_equal(decoded, labels)
 
 
-def test_reader_reports_damaged_files(shared_data, tmp_path):
+@pytest.mark.parametrize("version", [2, 3])
+def test_reader_reports_damaged_files(shared_data, tmp_path, version):
     _, build = compress_real_volume(shared_data / "fib25_64.nrrd")
-    data = write(build.GetOutput(), tmp_path / "good.svdag")
+    data = write(build.GetOutput(), tmp_path / "good.svdag", version=version)
     rng = np.random.default_rng(5)
     damaged = {
         "truncated": data[: len(data) // 2],
@@ -266,7 +303,7 @@ def reseal(data, sections):
 
 def raw_sections(data):
     _, sections = parse(data)
-    return {sid: bytearray(sections[name][1]) for sid, name in SECTIONS.items()}
+    return {sid: bytearray(sections[name][1]) for sid, name in SECTIONS.items() if name in sections}
 
 
 class Blocks:
@@ -324,7 +361,7 @@ def expect_refused(tmp_path, data, rule):
 
 def test_impossible_content_is_refused_naming_the_rule(tmp_path):
     labels = three_labels()
-    good = write(compress_zyx(labels), tmp_path / "good.svdag", level=0)
+    good = write(compress_zyx(labels), tmp_path / "good.svdag", level=0, version=2)
     blocks = Blocks(good)
     assert blocks.count >= 4
     # Unchanged sections load.
@@ -455,8 +492,8 @@ DTYPES = ["int8", "uint8", "int16", "uint16", "int32", "uint32", "int64", "uint6
 
 
 @pytest.mark.parametrize("dtype", DTYPES)
-@pytest.mark.parametrize("level", [0, 3])
-def test_every_dtype_round_trips_bit_exactly(tmp_path, rng, dtype, level):
+@pytest.mark.parametrize("level, version", [(0, 2), (3, 2), (3, 3)])
+def test_every_dtype_round_trips_bit_exactly(tmp_path, rng, dtype, level, version):
     import vtksvdag
 
     info = np.iinfo(dtype)
@@ -464,7 +501,7 @@ def test_every_dtype_round_trips_bit_exactly(tmp_path, rng, dtype, level):
     labels[labels == 1] = info.min
     labels[labels == 2] = info.max
     labels[3:9, 4:30, 2:17] = info.max - 1  # a solid region spanning cells
-    write(compress_zyx(labels), tmp_path / "v.svdag", level=level)
+    write(compress_zyx(labels), tmp_path / "v.svdag", level=level, version=version)
     decoded = vtksvdag.read(tmp_path / "v.svdag").to_numpy("zyx")
     assert decoded.dtype == np.dtype(dtype)
     np.testing.assert_array_equal(decoded, labels)

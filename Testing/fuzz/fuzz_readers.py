@@ -131,7 +131,7 @@ def _mha_header(zyx, compressed_size=None, data_file="LOCAL"):
     return ("\n".join(lines) + "\n").encode()
 
 
-def _svdag_bytes(zyx):
+def _svdag_bytes(zyx, version=3):
     import tempfile
 
     from vtksvdag.vtkSVDAGCore import vtkImageDataToSegmentationSVDAG
@@ -142,6 +142,7 @@ def _svdag_bytes(zyx):
     with tempfile.TemporaryDirectory() as tmp:
         path = os.path.join(tmp, "s.svdag")
         writer = vtkSegmentationSVDAGWriter()
+        writer.SetFormatVersion(version)
         writer.SetFileName(path)
         writer.SetInputConnection(build.GetOutputPort())
         writer.Write()
@@ -478,10 +479,20 @@ def _seeds_svdag_fixcrc(v):
     return [Seed(svdag_stored(_svdag_bytes(z)), z) for z in v.values()]
 
 
+def _seeds_svdag2(v):
+    return [Seed(_svdag_bytes(z, version=2), z, exact=True) for z in v.values()]
+
+
+def _seeds_svdag2_fixcrc(v):
+    return [Seed(svdag_stored(_svdag_bytes(z, version=2)), z) for z in v.values()]
+
+
 # target -> (seed maker, file name of the input, transform applied before writing)
 TARGETS = {
     "svdag": (_seeds_svdag, "in.svdag", None),
     "svdag_fixcrc": (_seeds_svdag_fixcrc, "in.svdag", svdag_fix_crcs),
+    "svdag2": (_seeds_svdag2, "in.svdag", None),
+    "svdag2_fixcrc": (_seeds_svdag2_fixcrc, "in.svdag", svdag_fix_crcs),
     "nrrd_raw": (_seeds_nrrd_raw, "in.nrrd", None),
     "nrrd_gzip": (_seeds_nrrd_gzip, "in.nrrd", None),
     "nhdr": (_seeds_nhdr, "in.nhdr", None),

@@ -19,6 +19,17 @@
 namespace svdag
 {
 
+// One label's voxels in one 16^3 cell, as the masks of the cell's 64 leaves (leaf lx + 4 ly + 16 lz,
+// bit x + 4 y + 16 z, Layout.h) and, for each mixed one (neither 0 nor all ones), the
+// (symmetry << 1 | complement) of canonicalLeaf (LeafSymmetry.h) that its class's stored mask is
+// read under.
+struct CellOccupancy
+{
+  uint64_t value = 0; // label pattern
+  uint64_t masks[64];
+  uint8_t codes[64];
+};
+
 struct BuildOptions
 {
   uint64_t background = 0;        // label pattern not stored (decodes where no block is)
@@ -62,7 +73,21 @@ public:
   // Next expected slab start, or dims[2] when every slab was added.
   int32_t nextSlab() const;
 
-  // Packs the pools with their final field widths. Throws std::logic_error if slabs are missing,
+  // Adds a block given as its occupancy instead of voxels (how a .svdag 3.0 file is loaded):
+  // the result is byte-identical to a build from the voxels those blocks hold, given every block
+  // in the order a build writes them: by cell, and within a cell by label value. The occupancy
+  // must be non-empty, inside the volume and disjoint from the cell's other blocks, and its codes
+  // canonicalLeaf's: not checked here. The value is not checked against the background and
+  // excluded labels either. Throws std::logic_error once slabs or volumes were added (and they
+  // cannot be added after a block), or for a block out of order.
+  void addBlock(uint32_t cell, const CellOccupancy& block);
+  // Starts taking blocks (addBlock, which calls it) instead of slabs: finish() then takes the
+  // cells no block was added to as empty, all of them for a volume without blocks. Throws
+  // std::logic_error once slabs or volumes were added.
+  void startBlocks();
+
+  // Packs the pools with their final field widths. Throws std::logic_error if slabs are missing
+  // (not for blocks added by addBlock: cells without a block are empty),
   // std::length_error if a pool outgrows the 32-bit reference widths.
   Volume finish();
 

@@ -1,15 +1,19 @@
 // The .svdag file format: a Volume on disk, checked on load so that a truncated or corrupt file
 // gives a FileError, never a crash, an out-of-bounds read or a huge allocation.
 //
-// Format version 2.0 (1.0 files are read too, see FileMajorVersion). Every integer is
-// little-endian, every real an IEEE-754 binary64 stored as its 64-bit pattern, little-endian;
-// fields are written one by one, never as memory images.
+// Format versions 3.0 (the default) and 2.0 share the header and section table below; 1.0 files
+// are read too (see FileMajorVersion). A 3.0 file holds one section, the coded volume
+// (CodedVolume.h: label values, and per cell its labels and their occupancy, arithmetic-coded),
+// from which loading rebuilds the volume as a build of the same voxels lays it out; a 2.0 file
+// holds the Volume's own parts (sections 1-5), which load as they are. IO/README.md documents
+// both. Every integer is little-endian, every real an IEEE-754 binary64 stored as its 64-bit
+// pattern, little-endian; fields are written one by one, never as memory images.
 //
 //   offset size  field
 //   0      8     magic  89 53 56 44 41 47 0D 0A  ("\x89SVDAG\r\n": the high byte catches 7-bit
 //                       transfers, CR LF catches line-ending conversion, a short file fails here)
-//   8      2     major version (2): a reader rejects a major version it does not know
-//   10     2     minor version (0): additions a 2.0 reader can ignore (more sections)
+//   8      2     major version (3 or 2): a reader rejects a major version it does not know
+//   10     2     minor version (0): additions a reader can ignore (more sections)
 //   12     12    dims: 3 x int32, each >= 1
 //   24     24    spacing[3] (float64), finite and > 0
 //   48     24    origin[3] (float64), finite
@@ -17,7 +21,8 @@
 //   144    4     scalar type (uint32, svdag::ScalarType: 0 int8 .. 7 uint64)
 //   148    8     background label (uint64 pattern, sign-extended for signed types)
 //   156    20    field widths (5 x uint32, each <= 32): cell, label, root ref, mid ref, leaf ref
-//   176    40    counts (5 x uint64): labels, blocks, root nodes, mid nodes, leaves
+//   176    40    counts (5 x uint64): labels, blocks, root nodes, mid nodes, leaves (3.0: the
+//                rebuilt volume's widths and counts, which loading checks)
 //   216    4     number of sections S (uint32, at most 64)
 //   220    36*S  section table, one entry per section:
 //                  id (uint32), codec (uint32: 0 none, 1 zstd), offset (uint64, from the start of
@@ -32,7 +37,9 @@
 //   3 roots   the root node stream as uint32 words, without the padding word
 //   4 mids    the mid node stream as uint32 words, without the padding word
 //   5 leaves  the 4^3 leaf masks, uint64 each
-// Sections 1-5 are required, once each; sections with other ids are skipped (minor additions).
+//   6 coded   (3.0) the coded volume, stored as the range coder wrote it (codec 0)
+// 2.0 requires sections 1-5 and 3.0 section 6, once each; sections with other ids are skipped
+// (minor additions).
 // The raw size of sections 1, 2 and 5 must be what the counts imply; the node streams must hold
 // between 16 and 16 + 8 * refBits bits per node. The reader re-adds the padding words.
 //
@@ -43,8 +50,13 @@
 // (every reference at a node start, blocks sorted by cell and label with bounds inside their cell
 // and the volume, each block's occupancy non-empty and inside its bounds, blocks of a cell
 // disjoint, the label table's counts and bounds equal to what the blocks hold), in time linear in
-// the file size. A loaded file may still describe a volume too large to decode densely: see
-// checkDecodeMemory in svdag/Decoder.h.
+// the file size. A 3.0 file's coded section is checked against its crc32 and decoded, every
+// decision checked against what the writer can have coded, and the rebuilt volume's widths and
+// counts against the header's. A loaded file may still describe a volume too large to decode
+// densely: see checkDecodeMemory in svdag/Decoder.h.
+//
+// Writing a 3.0 file decodes the coded bytes again and compares every block's cell, label and
+// occupancy with the volume's before anything is written.
 #pragma once
 
 #include "svdag/Volume.h"
@@ -76,14 +88,18 @@ struct FileWriteError : FileError
 
 // 2.0: leaf references carry a symmetry (Layout.h). 1.0 files (leaf references without one) are
 // read and re-laid out on load (FileVersion1.h).
-constexpr uint16_t FileMajorVersion = 2;
+constexpr uint16_t FileMajorVersion = 3;
 constexpr uint16_t FileMinorVersion = 0;
 constexpr size_t FileMagicSize = 8;
 extern const uint8_t FileMagic[FileMagicSize];
 
 struct WriteOptions
 {
-  int zstdLevel = 3; // 1..22; 0 stores the sections uncompressed
+  int zstdLevel = 3; // format 2: 1..22; 0 stores the sections uncompressed
+  // 3: the coded volume, the smallest file; loading rebuilds the DAG from it (a fraction of a
+  // build's time). 2: the layout's sections (zstd at zstdLevel), read by older readers too and
+  // loaded without a rebuild.
+  int formatVersion = 3;
 };
 
 // The whole file in memory. Throws FileError if the volume does not validate or the level is

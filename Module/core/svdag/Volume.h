@@ -136,6 +136,8 @@ public:
   bool occupied(uint64_t blockIndex, uint32_t x, uint32_t y, uint32_t z) const;
   // Occupancy of the 16^3 cell of block i, x fastest (4096 entries).
   void occupancy(uint64_t blockIndex, uint8_t* out4096) const;
+  // The same as the masks of the cell's 64 leaves: leaf lx + 4 ly + 16 lz, bit x + 4 y + 16 z.
+  void leafMasks(uint64_t blockIndex, uint64_t* out64) const;
   // Label pattern at voxel (i, j, k); background where no block holds it.
   uint64_t labelAt(int32_t i, int32_t j, int32_t k) const;
   // Range [first, last) of the blocks in a cell (blocks are sorted by cell).
