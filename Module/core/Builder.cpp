@@ -480,7 +480,6 @@ Builder::Builder(
   ex.erase(std::unique(ex.begin(), ex.end()), ex.end());
   impl->parallel = parallel ? parallel : ParallelFor(sequentialFor);
   impl->cells = geometry.cellCounts();
-  impl->rowResults.resize(size_t(impl->cells[0]));
   impl->blocks.widenTo(PendingCell, bitWidth(geometry.cellCount() - 1));
   impl->blocks.widenTo(PendingBox, layout::BLOCK_BOUNDS_BITS);
 }
@@ -506,6 +505,7 @@ void Builder::addSlab(int32_t z0, int32_t nz, const void* data)
   const uint64_t background = m.options.background;
   const auto& excluded = m.options.excluded;
   auto& results = m.rowResults;
+  results.resize(ncx); // on the first slab: a builder given blocks never needs them
   const uint32_t cz = uint32_t(z0) / S;
   // One row of cells at a time: scanned in parallel, then merged in cell order so that ids and
   // block order depend on the data only.

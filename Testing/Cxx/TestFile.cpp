@@ -1088,6 +1088,7 @@ TEST(CodedFile, HeaderValuesThatDisagreeWithTheCodedVolumeFail)
     { "leaf count", CountsAt + 8 * Leaves, v.leaves.size() + 3, 8 },
     { "leaf width", WidthsAt + 16, v.widths.leafRefBits + 1, 4 },
     { "dims x", DimsAt, 200, 4 },
+    { "dims x 2^31-1", DimsAt, 0x7FFFFFFF, 4 },
     { "dims z", DimsAt + 8, 5, 4 },
     { "scalar type int8", TypeAt, 0, 4 },
     { "background", TypeAt + 4, 7, 8 },

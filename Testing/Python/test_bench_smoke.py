@@ -111,7 +111,7 @@ def test_report_and_plot(quick_run):
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert "machine:" in stdout
     assert "REPORTED, NOT MEASURED HERE" in stdout
-    assert "The .svdag file (measured" in stdout
+    assert "The .svdag file, format 3.0 (coded) and 2.0" in stdout
     for name in EXPECTED_ROWS:
         assert f"{name}: " in stdout and "round trips ok" in stdout
 
