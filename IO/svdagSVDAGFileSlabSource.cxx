@@ -1,6 +1,7 @@
 #include "svdagSVDAGFileSlabSource.h"
 
 #include "vtkErrorCode.h"
+#include "vtkSVDAGParallel.h"
 
 #include "svdag/Decoder.h"
 #include "svdag/File.h"
@@ -15,7 +16,8 @@ svdagSVDAGFileSlabSource::svdagSVDAGFileSlabSource(const std::string& fileName)
 {
   try
   {
-    impl->volume = std::make_shared<const svdag::Volume>(svdag::readFile(fileName));
+    impl->volume =
+      std::make_shared<const svdag::Volume>(svdag::readFile(fileName, vtkSVDAGParallelFor()));
   }
   catch (const svdag::FileError& e)
   {
@@ -32,7 +34,8 @@ svdagSVDAGFileSlabSource::svdagSVDAGFileSlabSource(
 {
   try
   {
-    impl->volume = std::make_shared<const svdag::Volume>(svdag::deserialize(data, size));
+    impl->volume =
+      std::make_shared<const svdag::Volume>(svdag::deserialize(data, size, vtkSVDAGParallelFor()));
   }
   catch (const svdag::FileError& e)
   {

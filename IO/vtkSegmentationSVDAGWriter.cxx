@@ -4,6 +4,7 @@
 #include "vtkErrorCode.h"
 #include "vtkInformation.h"
 #include "vtkObjectFactory.h"
+#include "vtkSVDAGParallel.h"
 #include "vtkSegmentationSVDAG.h"
 
 #include "svdag/File.h"
@@ -64,12 +65,13 @@ void vtkSegmentationSVDAGWriter::WriteData()
   {
     if (this->WriteToOutputString)
     {
-      const std::vector<uint8_t> bytes = svdag::serialize(*input->GetVolume(), options);
+      const std::vector<uint8_t> bytes =
+        svdag::serialize(*input->GetVolume(), options, vtkSVDAGParallelFor());
       this->OutputBytes->SetNumberOfValues(vtkIdType(bytes.size()));
       std::copy(bytes.begin(), bytes.end(), this->OutputBytes->GetPointer(0));
     }
     else
-      svdag::writeFile(*input->GetVolume(), this->FileName, options);
+      svdag::writeFile(*input->GetVolume(), this->FileName, options, vtkSVDAGParallelFor());
   }
   catch (const svdag::FileOpenError& e)
   {

@@ -8,6 +8,7 @@
 #include "svdag/LeafSymmetry.h"
 
 #include <algorithm>
+#include <exception>
 #include <array>
 #include <memory>
 #include <string>
@@ -138,6 +139,11 @@ private:
 LeafMasks insideMasks(const std::array<uint32_t, 3>& extent)
 {
   LeafMasks m{};
+  if (extent[0] == 16 && extent[1] == 16 && extent[2] == 16)
+  {
+    m.fill(AllOnes);
+    return m;
+  }
   for (uint32_t z = 0; z < extent[2]; ++z)
     for (uint32_t y = 0; y < extent[1]; ++y)
       for (uint32_t x = 0; x < extent[0]; ++x)
@@ -511,24 +517,26 @@ private:
   std::unique_ptr<Models> M;
 };
 
-// The writer's side: the volume's blocks, cell by cell.
+// The writer's side: the blocks of one chunk of the volume, cell by cell, their cells numbered
+// from the chunk's first.
 class VolumeSource
 {
 public:
-  explicit VolumeSource(const Volume& v)
+  VolumeSource(const Volume& v, uint64_t first, uint64_t end, uint64_t firstCell, uint64_t cellCount)
     : V(v)
+    , Next(first)
+    , End(end)
+    , FirstCell(firstCell)
+    , CellCount(cellCount)
   {
   }
-  uint64_t nextCell() const
-  {
-    return Next < V.blockCount ? V.block(Next).cell : V.geometry.cellCount();
-  }
+  uint64_t nextCell() const { return Next < End ? V.block(Next).cell - FirstCell : CellCount; }
   void cell(std::vector<uint32_t>& labels, std::vector<LeafMasks>& masks)
   {
     const uint32_t cell = V.block(Next).cell;
     labels.clear();
     masks.clear();
-    for (; Next < V.blockCount && V.block(Next).cell == cell; ++Next)
+    for (; Next < End && V.block(Next).cell == cell; ++Next)
     {
       labels.push_back(V.block(Next).label);
       masks.emplace_back();
@@ -538,7 +546,7 @@ public:
 
 private:
   const Volume& V;
-  uint64_t Next = 0;
+  uint64_t Next, End, FirstCell, CellCount;
 };
 
 // The reader's side: every block into a Builder, as its occupancy. canonicalLeaf's search is
@@ -601,31 +609,198 @@ Frame frameOf(const Volume& v)
   return f;
 }
 
-std::vector<uint8_t> encode(const Volume& volume)
+uint32_t maxChunkCount(const Geometry& g)
 {
-  coding::Encoder encoder;
+  const uint64_t slabs = (uint64_t(g.dims[2]) + Builder::SlabDepth - 1) / Builder::SlabDepth;
+  return uint32_t(std::max<uint64_t>(1, std::min<uint64_t>(slabs, MaxChunks)));
+}
+
+uint32_t chunkCount(const Geometry& g)
+{
+  return uint32_t(std::max<uint64_t>(
+    1, std::min<uint64_t>(g.cellCount() / CellsPerChunk, maxChunkCount(g))));
+}
+
+namespace
+{
+// The section's table: chunk count, label stream bytes, then bytes and blocks of each chunk.
+constexpr size_t TableFixedBytes = 4 + 8, TableChunkBytes = 16;
+
+void putLE(std::vector<uint8_t>& out, uint64_t v, int n)
+{
+  for (int i = 0; i < n; ++i)
+    out.push_back(uint8_t(v >> (8 * i)));
+}
+uint64_t getLE(const uint8_t* at, int n)
+{
+  uint64_t v = 0;
+  for (int i = 0; i < n; ++i)
+    v |= uint64_t(at[i]) << (8 * i);
+  return v;
+}
+
+// The geometry of chunk i and its first cell.
+Frame chunkFrame(const Frame& whole, uint32_t i, uint32_t chunks, uint64_t& firstCell)
+{
+  const Geometry& g = whole.geometry;
+  const std::array<int32_t, 2> z = Builder::pieceZRange(g.dims[2], int(i), int(chunks));
+  Frame f = whole;
+  f.geometry = g.zRange(z[0], z[1]);
+  const std::array<int32_t, 3> cells = g.cellCounts();
+  firstCell = uint64_t(z[0] / Builder::SlabDepth) * uint64_t(cells[0]) * uint64_t(cells[1]);
+  return f;
+}
+
+// Runs f(i) for i in [0, n) through `parallel`; the first exception any call throws is thrown
+// here once all have run (a parallel-for need not carry exceptions across threads).
+template <class F>
+void forEachChunk(uint32_t n, const ParallelFor& parallel, const F& f)
+{
+  std::vector<std::exception_ptr> errors(n);
+  parallel(0, n, 1, [&](uint64_t begin, uint64_t end) {
+    for (uint64_t i = begin; i < end; ++i)
+    {
+      try
+      {
+        f(uint32_t(i));
+      }
+      catch (...)
+      {
+        errors[size_t(i)] = std::current_exception();
+      }
+    }
+  });
+  for (const std::exception_ptr& e : errors)
+  {
+    if (e)
+      std::rethrow_exception(e);
+  }
+}
+} // namespace
+
+std::vector<uint8_t> encode(const Volume& volume, const ParallelFor& parallel, uint32_t chunks)
+{
   const Frame frame = frameOf(volume);
-  Coding<coding::Encoder> coding(encoder, frame);
   std::vector<uint64_t> values;
   for (const LabelInfo& l : volume.labels)
     values.push_back(l.value);
-  coding.labelValues(values);
-  VolumeSource source(volume);
-  coding.cells(source);
-  return encoder.finish();
+  coding::Encoder labelEncoder;
+  Coding<coding::Encoder>(labelEncoder, frame).labelValues(values);
+  const std::vector<uint8_t> labelBytes = labelEncoder.finish();
+
+  if (chunks == 0)
+    chunks = chunkCount(volume.geometry);
+  if (chunks > maxChunkCount(volume.geometry))
+    throw std::invalid_argument("more chunks than the volume has slabs (or than MaxChunks)");
+  std::vector<std::vector<uint8_t>> streams(chunks);
+  std::vector<uint64_t> blocks(chunks);
+  forEachChunk(chunks, parallel, [&](uint32_t i) {
+    uint64_t firstCell;
+    Frame f = chunkFrame(frame, i, chunks, firstCell);
+    const uint64_t endCell = firstCell + f.geometry.cellCount();
+    auto firstBlockOf = [&](uint64_t cell) { // blocks are sorted by cell
+      uint64_t lo = 0, hi = volume.blockCount;
+      while (lo < hi)
+      {
+        const uint64_t mid = lo + (hi - lo) / 2;
+        if (volume.block(mid).cell < cell)
+          lo = mid + 1;
+        else
+          hi = mid;
+      }
+      return lo;
+    };
+    const uint64_t first = firstBlockOf(firstCell), end = firstBlockOf(endCell);
+    f.blockCount = blocks[i] = end - first;
+    coding::Encoder encoder;
+    VolumeSource source(volume, first, end, firstCell, f.geometry.cellCount());
+    Coding<coding::Encoder>(encoder, f).cells(source);
+    streams[i] = encoder.finish();
+  });
+
+  std::vector<uint8_t> out;
+  putLE(out, chunks, 4);
+  putLE(out, labelBytes.size(), 8);
+  for (uint32_t i = 0; i < chunks; ++i)
+  {
+    putLE(out, streams[i].size(), 8);
+    putLE(out, blocks[i], 8);
+  }
+  out.insert(out.end(), labelBytes.begin(), labelBytes.end());
+  for (std::vector<uint8_t>& stream : streams)
+  {
+    out.insert(out.end(), stream.begin(), stream.end());
+    std::vector<uint8_t>().swap(stream);
+  }
+  return out;
 }
 
-Volume decode(const uint8_t* data, size_t size, const Frame& frame)
+Volume decode(const uint8_t* data, size_t size, const Frame& frame, const ParallelFor& parallel)
 {
   if (frame.labelCount > frame.blockCount)
     throw CorruptStream("the header counts more labels than blocks");
-  coding::Decoder decoder(data, size);
-  Coding<coding::Decoder> coding(decoder, frame);
+  // The table: as many chunks as the writer's rule gives, streams that fill the section exactly,
+  // block counts that add up to the header's.
+  if (size < TableFixedBytes)
+    throw CorruptStream("the coded volume is truncated (its table)");
+  const uint32_t chunks = uint32_t(getLE(data, 4));
+  if (chunks == 0 || chunks > maxChunkCount(frame.geometry))
+    throw CorruptStream("the coded volume has " + std::to_string(chunks) + " chunks (1 to " +
+      std::to_string(maxChunkCount(frame.geometry)) + " for its geometry)");
+  const size_t tableBytes = TableFixedBytes + TableChunkBytes * chunks;
+  if (size < tableBytes)
+    throw CorruptStream("the coded volume is truncated (its table)");
+  std::vector<uint64_t> offsets(size_t(chunks) + 2), blocks(chunks);
+  offsets[0] = tableBytes;
+  uint64_t totalBlocks = 0;
+  for (uint32_t i = 0; i <= chunks; ++i)
+  {
+    const uint64_t bytes = i == 0 ? getLE(data + 4, 8) : getLE(data + TableFixedBytes + TableChunkBytes * (i - 1), 8);
+    if (bytes > size - offsets[i])
+      throw CorruptStream("the coded volume's streams run past its end");
+    offsets[i + 1] = offsets[i] + bytes;
+    if (i > 0)
+    {
+      blocks[i - 1] = getLE(data + TableFixedBytes + TableChunkBytes * (i - 1) + 8, 8);
+      if (blocks[i - 1] > frame.blockCount - totalBlocks)
+        throw CorruptStream("the coded volume's chunks hold more blocks than its header says");
+      totalBlocks += blocks[i - 1];
+    }
+  }
+  if (offsets[chunks + 1] != size)
+    throw CorruptStream("the coded volume's streams do not fill its section");
+  if (totalBlocks != frame.blockCount)
+    throw CorruptStream("the coded volume's chunks hold fewer blocks than its header says");
+
   std::vector<uint64_t> values;
-  coding.labelValues(values);
-  BuilderSink sink(frame, values);
-  coding.cells(sink);
-  Volume v = sink.finish();
+  {
+    coding::Decoder decoder(data + offsets[0], size_t(offsets[1] - offsets[0]));
+    Coding<coding::Decoder>(decoder, frame).labelValues(values);
+  }
+  std::vector<Volume> parts(chunks);
+  forEachChunk(chunks, parallel, [&](uint32_t i) {
+    uint64_t firstCell;
+    Frame f = chunkFrame(frame, i, chunks, firstCell);
+    f.blockCount = blocks[i];
+    coding::Decoder decoder(data + offsets[i + 1], size_t(offsets[i + 2] - offsets[i + 1]));
+    BuilderSink sink(f, values);
+    Coding<coding::Decoder>(decoder, f).cells(sink);
+    parts[i] = sink.finish();
+  });
+  Volume v;
+  if (chunks == 1)
+    v = std::move(parts[0]);
+  else
+  {
+    // The parts merge as a distributed build's do: into the volume one build gives.
+    Builder whole(frame.geometry, frame.scalarType, BuildOptions{ frame.background, {} });
+    for (Volume& part : parts)
+    {
+      whole.addVolume(part);
+      part = Volume();
+    }
+    v = whole.finish();
+  }
   if (v.labels.size() != values.size())
     throw CorruptStream("the coded volume's label table holds a label no block has");
   return v;

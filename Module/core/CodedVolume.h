@@ -7,7 +7,8 @@
 // the Builder (Builder::addBlock), which derives the rest (tight bounds, the shared DAG, the
 // label counts and bounds) exactly as a build from the voxels does.
 //
-// Cells come in index order; a run of empty cells costs one number. A cell's labels are coded as
+// The volume is cut into chunks of whole slabs, each its own stream (below). Within a chunk,
+// cells come in index order; a run of empty cells costs one number. A cell's labels are coded as
 // which labels of its -x, -y and -z neighbour cells occur in it, plus any others by index. Its
 // blocks come in label order, each given the voxels no earlier block of the cell holds (so two
 // labels' shared boundary is coded once), and the last one first says whether it simply takes all
@@ -17,6 +18,7 @@
 // one by one in contexts of their already known neighbours.
 #pragma once
 
+#include "svdag/Parallel.h"
 #include "svdag/Volume.h"
 
 #include <cstddef>
@@ -40,14 +42,32 @@ struct Frame
 
 Frame frameOf(const Volume& volume);
 
-// The coded bytes of a valid volume (Volume::validate).
-std::vector<uint8_t> encode(const Volume& volume);
+// The volume is coded in chunks, z-ranges of whole 16-slice slabs (Builder::pieceZRange), each
+// an independent stream, so that chunks are coded and decoded in parallel; the decoded parts
+// merge as a distributed build's do (Builder::addVolume). A chunk holds at least this many cells
+// (4M voxels), so that what a chunk's models learn pays for itself, and there are at most
+// MaxChunks of them.
+constexpr uint64_t CellsPerChunk = 1024;
+constexpr uint64_t MaxChunks = 64;
+// The chunks the writer makes, and the most a reader takes (one per slab, at most MaxChunks).
+uint32_t chunkCount(const Geometry& geometry);
+uint32_t maxChunkCount(const Geometry& geometry);
+
+// The coded bytes of a valid volume (Volume::validate):
+//   u32 chunk count C (1..maxChunkCount), u64 bytes of the label stream,
+//   C x (u64 bytes of the chunk's stream, u64 its blocks),
+//   the label stream (the label values), then the chunks' streams in z order,
+// every integer little-endian. Chunk i holds the slabs Builder::pieceZRange(dims z, i, C) gives.
+// `chunks` 0 takes chunkCount's (what files hold); others are for tests.
+std::vector<uint8_t> encode(
+  const Volume& volume, const ParallelFor& parallel = sequentialFor, uint32_t chunks = 0);
 
 // The volume a build from the coded voxels writes. Throws coding::CorruptStream (a
 // std::runtime_error) naming the problem for a stream the encoder cannot have written with this
 // frame; the work and memory any stream can cause are bounded by its size and the frame's block
 // count.
-Volume decode(const uint8_t* data, size_t size, const Frame& frame);
+Volume decode(const uint8_t* data, size_t size, const Frame& frame,
+  const ParallelFor& parallel = sequentialFor);
 
 // Empty if the two volumes hold the same voxels in the same blocks (cells, labels and
 // occupancy: their DAGs may be laid out differently), else the first difference.

@@ -346,13 +346,13 @@ void storedChunks(const Volume& v, const StoredSection& s, const ChunkSink& sink
 // Format 3's one section: the coded volume, checked by decoding it again. A volume read from an
 // older file may have its pools in another order than a build's first-use order, which loading
 // rebuilds, so the header describes the rebuilt volume.
-StoredSection storeCoded(const Volume& v, Volume& rebuilt)
+StoredSection storeCoded(const Volume& v, Volume& rebuilt, const ParallelFor& parallel)
 {
-  std::vector<uint8_t> bytes = coded::encode(v);
+  std::vector<uint8_t> bytes = coded::encode(v, parallel);
   std::string difference;
   try
   {
-    rebuilt = coded::decode(bytes.data(), bytes.size(), coded::frameOf(v));
+    rebuilt = coded::decode(bytes.data(), bytes.size(), coded::frameOf(v), parallel);
     difference = coded::compareOccupancy(v, rebuilt);
   }
   catch (const std::exception& e)
@@ -372,7 +372,7 @@ StoredSection storeCoded(const Volume& v, Volume& rebuilt)
   return s;
 }
 
-EncodedFile encode(const Volume& volume, const WriteOptions& options)
+EncodedFile encode(const Volume& volume, const WriteOptions& options, const ParallelFor& parallel)
 {
   if (options.formatVersion != 2 && options.formatVersion != 3)
     throw FileError("format version must be 2 or 3 (got " + std::to_string(options.formatVersion) + ")");
@@ -392,7 +392,7 @@ EncodedFile encode(const Volume& volume, const WriteOptions& options)
   Volume rebuilt;
   const Volume& v = options.formatVersion == 3 ? rebuilt : volume;
   if (options.formatVersion == 3)
-    file.sections.push_back(storeCoded(volume, rebuilt));
+    file.sections.push_back(storeCoded(volume, rebuilt, parallel));
   else
   {
     for (uint32_t id = LabelsSection; id <= LeavesSection; ++id)
@@ -589,8 +589,8 @@ void readLabels(const std::vector<uint8_t>& bytes, uint64_t count, Volume& v)
 }
 // A format 3 file's volume, rebuilt from its coded section; `header` holds what the file's header
 // says (geometry, type, background, widths and counts), which the rebuilt volume must match.
-Volume readCoded(
-  const SectionEntry& e, const uint8_t* data, uint64_t labelCount, uint64_t leafCount, const Volume& header)
+Volume readCoded(const SectionEntry& e, const uint8_t* data, uint64_t labelCount,
+  uint64_t leafCount, const Volume& header, const ParallelFor& parallel)
 {
   const uint8_t* stored = data + e.offset;
   if (crc32Of(stored, size_t(e.stored)) != e.crc)
@@ -604,7 +604,7 @@ Volume readCoded(
   Volume v;
   try
   {
-    v = coded::decode(stored, size_t(e.stored), frame);
+    v = coded::decode(stored, size_t(e.stored), frame, parallel);
   }
   catch (const std::bad_alloc&)
   {
@@ -621,9 +621,9 @@ Volume readCoded(
 }
 } // namespace
 
-std::vector<uint8_t> serialize(const Volume& v, const WriteOptions& options)
+std::vector<uint8_t> serialize(const Volume& v, const WriteOptions& options, const ParallelFor& parallel)
 {
-  EncodedFile file = encode(v, options);
+  EncodedFile file = encode(v, options, parallel);
   std::vector<uint8_t> bytes = std::move(file.header);
   size_t total = bytes.size();
   for (const StoredSection& s : file.sections)
@@ -638,7 +638,7 @@ std::vector<uint8_t> serialize(const Volume& v, const WriteOptions& options)
   return bytes;
 }
 
-Volume deserialize(const uint8_t* data, size_t size)
+Volume deserialize(const uint8_t* data, size_t size, const ParallelFor& parallel)
 {
   if (size < FileMagicSize || std::memcmp(data, FileMagic, FileMagicSize) != 0)
     throw FileError("not an .svdag file (the file does not start with the .svdag signature)");
@@ -786,7 +786,7 @@ Volume deserialize(const uint8_t* data, size_t size)
   }
 
   if (major >= 3)
-    return readCoded(*known[CodedSection], data, labelCount, leafCount, v);
+    return readCoded(*known[CodedSection], data, labelCount, leafCount, v, parallel);
 
   // Sections, one pass: decompress, checksum, decode (the padding words re-added). The sizes
   // were checked against the counts above, so each is a whole number of its elements.
@@ -820,9 +820,10 @@ Volume deserialize(const uint8_t* data, size_t size)
   return v;
 }
 
-void writeFile(const Volume& volume, const std::string& path, const WriteOptions& options)
+void writeFile(const Volume& volume, const std::string& path, const WriteOptions& options,
+  const ParallelFor& parallel)
 {
-  const EncodedFile file = encode(volume, options);
+  const EncodedFile file = encode(volume, options, parallel);
   // A temporary name next to the target: a failed write leaves the old file (if any) intact.
   const std::string temporary = path + ".partial";
   std::FILE* f = std::fopen(temporary.c_str(), "wb");
@@ -852,7 +853,7 @@ void writeFile(const Volume& volume, const std::string& path, const WriteOptions
   }
 }
 
-Volume readFile(const std::string& path)
+Volume readFile(const std::string& path, const ParallelFor& parallel)
 {
   struct stat info;
   if (::stat(path.c_str(), &info) != 0)
@@ -875,7 +876,7 @@ Volume readFile(const std::string& path)
   f.reset();
   try
   {
-    return deserialize(bytes.data(), bytes.size());
+    return deserialize(bytes.data(), bytes.size(), parallel);
   }
   catch (const FileError& e)
   {

@@ -2,6 +2,7 @@
 // random corruptions, absurd header values) that must give FileError, never a crash, an
 // out-of-bounds read or a huge allocation.
 #include "CodedVolume.h"
+#include "RangeCoder.h"
 #include "svdag/Builder.h"
 #include "svdag/Decoder.h"
 #include "svdag/File.h"
@@ -1029,6 +1030,52 @@ TEST(CodedFile, AVolumeInAnotherLayoutIsWrittenAsItsBuild)
   EXPECT_EQ(bytes, svdag::serialize(built));
 }
 
+// Chunks are coded and decoded apart (in parallel where the caller runs them so) and merge into
+// the one volume, whatever their number; corrupt chunk tables fail.
+TEST(CodedFile, ChunksDecodeToTheOneVolume)
+{
+  std::mt19937 rng(4);
+  const svdag::Volume v = build(ScalarType::UInt16, geometry(40, 30, 100), [&](int x, int y, int z) {
+    return rng() % 97 == 0 ? uint64_t(rng() % 50) : uint64_t((x / 7 + y / 9 + z / 11) % 13);
+  });
+  ASSERT_EQ(svdag::coded::maxChunkCount(v.geometry), 7u);
+  ASSERT_EQ(svdag::coded::chunkCount(v.geometry), 1u);
+  const svdag::coded::Frame frame = svdag::coded::frameOf(v);
+  svdag::ParallelFor pairs = [](uint64_t begin, uint64_t end, uint64_t, const svdag::RangeFunction& f) {
+    for (uint64_t i = begin; i < end; i += 2) // out of order and in pairs, as a thread pool might
+      f(i, std::min(end, i + 2));
+  };
+  for (uint32_t chunks : { 1u, 2u, 3u, 7u })
+  {
+    SCOPED_TRACE(std::to_string(chunks) + " chunks");
+    const Bytes coded = svdag::coded::encode(v, pairs, chunks);
+    EXPECT_EQ(getLE(coded, 0, 4), chunks);
+    EXPECT_TRUE(svdag::coded::decode(coded.data(), coded.size(), frame) == v);
+    EXPECT_TRUE(svdag::coded::decode(coded.data(), coded.size(), frame, pairs) == v);
+    if (chunks == 3)
+    {
+      Bytes bad = coded;
+      putLE(bad, 0, 8, 4); // more chunks than slabs
+      EXPECT_THROW(svdag::coded::decode(bad.data(), bad.size(), frame), svdag::coding::CorruptStream);
+      bad = coded;
+      putLE(bad, 0, 2, 4); // fewer: the table no longer fills the section
+      EXPECT_THROW(svdag::coded::decode(bad.data(), bad.size(), frame), svdag::coding::CorruptStream);
+      bad = coded;
+      putLE(bad, 12 + 8, getLE(coded, 12 + 8, 8) + 1, 8); // a chunk's block count
+      EXPECT_THROW(svdag::coded::decode(bad.data(), bad.size(), frame), svdag::coding::CorruptStream);
+      bad = coded;
+      putLE(bad, 12, getLE(coded, 12, 8) - 1, 8); // a chunk's bytes
+      EXPECT_THROW(svdag::coded::decode(bad.data(), bad.size(), frame), svdag::coding::CorruptStream);
+      // A chunk that fails while others decode beside it: its error, on the caller's thread.
+      bad = coded;
+      const size_t secondChunk = size_t(12 + 16 * 3 + getLE(coded, 4, 8) + getLE(coded, 12, 8));
+      bad[secondChunk] = 0x55; // not a range coder's first byte
+      EXPECT_THROW(svdag::coded::decode(bad.data(), bad.size(), frame, pairs), svdag::coding::CorruptStream);
+    }
+  }
+  EXPECT_THROW(svdag::coded::encode(v, svdag::sequentialFor, 8), std::invalid_argument);
+}
+
 TEST(CodedFile, EveryTruncationFails)
 {
   const Bytes bytes = svdag::serialize(spheres(ScalarType::UInt16, 20));
@@ -1116,7 +1163,7 @@ TEST(CodedFile, HeaderValuesThatDisagreeWithTheCodedVolumeFail)
 TEST(CodedFile, HugeSparseVolumeStaysSmallAndFast)
 {
   // 2^40 voxels, two small labelled boxes far apart: the empty cells between them cost a
-  // number, not a bit each.
+  // number, not a bit each (64 chunks of a few bytes each, the two blocks and the table).
   svdag::Geometry g = geometry(1 << 14, 1 << 13, 1 << 13);
   svdag::Builder builder(g, ScalarType::UInt8);
   svdag::CellOccupancy a;
@@ -1134,7 +1181,8 @@ TEST(CodedFile, HugeSparseVolumeStaysSmallAndFast)
   const svdag::Volume v = builder.finish();
   ASSERT_NO_THROW(v.validate());
   const Bytes bytes = svdag::serialize(v);
-  EXPECT_LT(bytes.size(), 400u);
+  EXPECT_EQ(svdag::coded::chunkCount(g), svdag::coded::MaxChunks);
+  EXPECT_LT(bytes.size(), 2000u);
   const svdag::Volume back = svdag::deserialize(bytes);
   EXPECT_TRUE(back == v);
   EXPECT_EQ(back.labelAt(0, 0, 0), 0u);

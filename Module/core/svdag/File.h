@@ -59,6 +59,7 @@
 // occupancy with the volume's before anything is written.
 #pragma once
 
+#include "svdag/Parallel.h"
 #include "svdag/Volume.h"
 
 #include <cstddef>
@@ -102,21 +103,26 @@ struct WriteOptions
   int formatVersion = 3;
 };
 
-// The whole file in memory. Throws FileError if the volume does not validate or the level is
-// outside 0..22.
-std::vector<uint8_t> serialize(const Volume& volume, const WriteOptions& options = {});
+// `parallel` runs format 3's chunks (CodedVolume.h) side by side; the bytes and volumes do not
+// depend on it.
+
+// The whole file in memory. Throws FileError if the volume does not validate or the level or
+// version is not one written.
+std::vector<uint8_t> serialize(
+  const Volume& volume, const WriteOptions& options = {}, const ParallelFor& parallel = sequentialFor);
 // Parses and validates a whole file held in memory. Throws FileError.
-Volume deserialize(const uint8_t* data, size_t size);
-inline Volume deserialize(const std::vector<uint8_t>& bytes)
+Volume deserialize(const uint8_t* data, size_t size, const ParallelFor& parallel = sequentialFor);
+inline Volume deserialize(const std::vector<uint8_t>& bytes, const ParallelFor& parallel = sequentialFor)
 {
-  return deserialize(bytes.data(), bytes.size());
+  return deserialize(bytes.data(), bytes.size(), parallel);
 }
 
 // Writes through a temporary file next to `path`, renamed at the end, so a failed write never
 // leaves a partial file under the final name. Throws FileOpenError, FileWriteError or FileError.
-void writeFile(const Volume& volume, const std::string& path, const WriteOptions& options = {});
+void writeFile(const Volume& volume, const std::string& path, const WriteOptions& options = {},
+  const ParallelFor& parallel = sequentialFor);
 // Reads and validates a file. Throws FileError (also when the file cannot be opened).
-Volume readFile(const std::string& path);
+Volume readFile(const std::string& path, const ParallelFor& parallel = sequentialFor);
 // True if the file starts with the .svdag magic (nothing else is checked).
 bool isSVDAGFile(const std::string& path);
 
