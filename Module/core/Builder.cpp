@@ -83,8 +83,8 @@ bool canonicalize(uint32_t& mixed, uint32_t& full, uint32_t* refs)
   return true;
 }
 
-// canonicalLeaf's search runs in the parallel scan, so that the ordered merge only undoes one
-// symmetry and interns.
+// One label's voxels inside one cell (Builder.h). Its codes come from canonicalLeaf's search in
+// the parallel scan, so that the ordered merge only undoes one symmetry and interns.
 using CellLabel = CellOccupancy;
 
 void canonicalizeLeaves(CellLabel& cl)

@@ -281,11 +281,24 @@ void Volume::occupancy(uint64_t blockIndex, uint8_t* out) const
 {
   uint64_t masks[64];
   leafMasks(blockIndex, masks);
-  for (uint32_t z = 0; z < layout::CELL_SIZE; ++z)
-    for (uint32_t y = 0; y < layout::CELL_SIZE; ++y)
-      for (uint32_t x = 0; x < layout::CELL_SIZE; ++x)
-        out[x + 16 * (y + 16 * z)] = uint8_t(
-          (masks[(x >> 2) + 4 * (y >> 2) + 16 * (z >> 2)] >> layout::leafBit(x & 3, y & 3, z & 3)) & 1u);
+  std::memset(out, 0, layout::CELL_SIZE * layout::CELL_SIZE * layout::CELL_SIZE);
+  for (uint32_t l = 0; l < 64; ++l)
+  {
+    const uint64_t mask = masks[l];
+    if (!mask)
+      continue;
+    uint8_t* corner = out + 4 * (l & 3) + 16 * (4 * ((l >> 2) & 3) + 16 * 4 * (l >> 4));
+    for (uint32_t row = 0; row < 16; ++row) // 4 voxels in x for each (y, z) of the leaf
+    {
+      const uint32_t bits = uint32_t(mask >> (4 * row)) & 0xFu;
+      uint8_t* at = corner + 16 * ((row & 3) + 16 * (row >> 2));
+      if (bits == 0xFu)
+        std::memset(at, 1, 4);
+      else
+        for (uint32_t x = 0; x < 4; ++x)
+          at[x] = uint8_t((bits >> x) & 1u);
+    }
+  }
 }
 
 std::pair<uint64_t, uint64_t> Volume::cellBlocks(uint32_t cell) const
