@@ -549,40 +549,67 @@ private:
   uint64_t Next, End, FirstCell, CellCount;
 };
 
-// The reader's side: every block into a Builder, as its occupancy. canonicalLeaf's search is
-// remembered per mask in a small direct-mapped cache (neighbouring blocks repeat leaves).
-class BuilderSink
+// The reader's side of one chunk: its blocks as they decode, compactly (most leaves of a block
+// are empty or full), each mixed leaf with its code from canonicalLeaf's search, which runs here,
+// in the chunk's thread, remembered per mask in a small direct-mapped cache (neighbouring blocks
+// repeat leaves). addTo() then hands them to the one Builder, in order.
+class ChunkBlocks
 {
 public:
-  BuilderSink(const Frame& f, const std::vector<uint64_t>& values)
-    : B(f.geometry, f.scalarType, BuildOptions{ f.background, {} })
-    , Values(values)
+  explicit ChunkBlocks(uint64_t firstCell)
+    : FirstCell(firstCell)
     , Cache(size_t(1) << CacheBits)
   {
-    B.startBlocks();
   }
   void block(uint64_t cell, uint32_t label, const LeafMasks& masks)
   {
-    CellOccupancy occupancy;
-    occupancy.value = Values[label];
+    uint64_t full = 0, mixed = 0;
     for (uint32_t l = 0; l < LeafCount; ++l)
     {
       const uint64_t m = masks[l];
-      occupancy.masks[l] = m;
-      occupancy.codes[l] = 0;
-      if (m == 0 || m == AllOnes)
-        continue;
-      Entry& e = Cache[size_t(bits::mix64(m) >> (64 - CacheBits))];
-      if (!e.valid || e.mask != m)
+      if (m == AllOnes)
+        full |= uint64_t(1) << l;
+      else if (m != 0)
       {
-        const CanonicalLeaf c = canonicalLeaf(m);
-        e = Entry{ m, uint8_t((c.symmetry << 1) | c.complement), true };
+        mixed |= uint64_t(1) << l;
+        Entry& e = Cache[size_t(bits::mix64(m) >> (64 - CacheBits))];
+        if (!e.valid || e.mask != m)
+        {
+          const CanonicalLeaf c = canonicalLeaf(m);
+          e = Entry{ m, uint8_t((c.symmetry << 1) | c.complement), true };
+        }
+        Masks.push_back(m);
+        Codes.push_back(e.code);
       }
-      occupancy.codes[l] = e.code;
     }
-    B.addBlock(uint32_t(cell), occupancy);
+    Blocks.push_back({ FirstCell + cell, label, full, mixed });
   }
-  Volume finish() { return B.finish(); }
+  // Frees what it held as it goes.
+  void addTo(Builder& builder, const std::vector<uint64_t>& values)
+  {
+    std::vector<Entry>().swap(Cache);
+    CellOccupancy occupancy;
+    size_t next = 0;
+    for (const Record& r : Blocks)
+    {
+      occupancy.value = values[r.label];
+      for (uint32_t l = 0; l < LeafCount; ++l)
+      {
+        occupancy.codes[l] = 0;
+        if ((r.mixed >> l) & 1u)
+        {
+          occupancy.masks[l] = Masks[next];
+          occupancy.codes[l] = Codes[next++];
+        }
+        else
+          occupancy.masks[l] = ((r.full >> l) & 1u) ? AllOnes : 0;
+      }
+      builder.addBlock(uint32_t(r.cell), occupancy);
+    }
+    std::vector<Record>().swap(Blocks);
+    std::vector<uint64_t>().swap(Masks);
+    std::vector<uint8_t>().swap(Codes);
+  }
 
 private:
   static constexpr uint32_t CacheBits = 14;
@@ -592,9 +619,17 @@ private:
     uint8_t code = 0;
     bool valid = false;
   };
-  Builder B;
-  const std::vector<uint64_t>& Values;
+  struct Record
+  {
+    uint64_t cell;
+    uint32_t label;
+    uint64_t full, mixed; // leaves that are all ones, and mixed ones (in Masks and Codes)
+  };
+  uint64_t FirstCell;
   std::vector<Entry> Cache;
+  std::vector<Record> Blocks;
+  std::vector<uint64_t> Masks;
+  std::vector<uint8_t> Codes;
 };
 } // namespace
 
@@ -777,30 +812,24 @@ Volume decode(const uint8_t* data, size_t size, const Frame& frame, const Parall
     coding::Decoder decoder(data + offsets[0], size_t(offsets[1] - offsets[0]));
     Coding<coding::Decoder>(decoder, frame).labelValues(values);
   }
-  std::vector<Volume> parts(chunks);
+  // The chunks decode side by side; the one builder then takes their blocks in order.
+  std::vector<std::unique_ptr<ChunkBlocks>> parts(chunks);
   forEachChunk(chunks, parallel, [&](uint32_t i) {
     uint64_t firstCell;
     Frame f = chunkFrame(frame, i, chunks, firstCell);
     f.blockCount = blocks[i];
     coding::Decoder decoder(data + offsets[i + 1], size_t(offsets[i + 2] - offsets[i + 1]));
-    BuilderSink sink(f, values);
-    Coding<coding::Decoder>(decoder, f).cells(sink);
-    parts[i] = sink.finish();
+    parts[i].reset(new ChunkBlocks(firstCell));
+    Coding<coding::Decoder>(decoder, f).cells(*parts[i]);
   });
-  Volume v;
-  if (chunks == 1)
-    v = std::move(parts[0]);
-  else
+  Builder whole(frame.geometry, frame.scalarType, BuildOptions{ frame.background, {} });
+  whole.startBlocks();
+  for (std::unique_ptr<ChunkBlocks>& part : parts)
   {
-    // The parts merge as a distributed build's do: into the volume one build gives.
-    Builder whole(frame.geometry, frame.scalarType, BuildOptions{ frame.background, {} });
-    for (Volume& part : parts)
-    {
-      whole.addVolume(part);
-      part = Volume();
-    }
-    v = whole.finish();
+    part->addTo(whole, values);
+    part.reset();
   }
+  Volume v = whole.finish();
   if (v.labels.size() != values.size())
     throw CorruptStream("the coded volume's label table holds a label no block has");
   return v;

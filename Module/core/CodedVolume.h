@@ -43,8 +43,9 @@ struct Frame
 Frame frameOf(const Volume& volume);
 
 // The volume is coded in chunks, z-ranges of whole 16-slice slabs (Builder::pieceZRange), each
-// an independent stream, so that chunks are coded and decoded in parallel; the decoded parts
-// merge as a distributed build's do (Builder::addVolume). A chunk holds at least this many cells
+// an independent stream, so that chunks are coded and decoded in parallel (with canonicalLeaf's
+// search for their leaves); one builder then takes their blocks in order. A chunk holds at least
+// this many cells
 // (4M voxels), so that what a chunk's models learn pays for itself, and there are at most
 // MaxChunks of them.
 constexpr uint64_t CellsPerChunk = 1024;

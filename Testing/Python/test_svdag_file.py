@@ -145,7 +145,18 @@ def test_format_3_holds_one_coded_section_and_the_rebuilt_counts(shared_data, tm
     assert header["dims"] == (64, 64, 64) and header["spacing"] == (0.5, 0.75, 2.0)
     assert list(sections) == ["coded volume"]
     codec, payload = sections["coded volume"]
-    assert codec == 0 and payload[0] == 0  # stored as coded; a range coder's first byte
+    assert codec == 0  # stored as coded
+    # Its table: one chunk for 64^3 voxels (one per 1024 cells), streams that fill the section,
+    # block counts that add up; every stream starts with a range coder's zero byte.
+    chunks, label_bytes = struct.unpack_from("<IQ", payload, 0)
+    assert chunks == 1
+    table = [struct.unpack_from("<QQ", payload, 12 + 16 * i) for i in range(chunks)]
+    assert sum(n for _, n in table) == header["counts"]["blocks"]
+    start = 12 + 16 * chunks
+    assert start + label_bytes + sum(b for b, _ in table) == len(payload)
+    for size in [label_bytes] + [b for b, _ in table]:
+        assert payload[start] == 0
+        start += size
     counts = header["counts"]
     assert counts["labels"] == len(np.unique(labels[labels != 0]))
     assert counts["blocks"] == svdag.GetNumberOfBlocks()
