@@ -8,8 +8,8 @@
 #include "svdag/LeafSymmetry.h"
 
 #include <algorithm>
-#include <exception>
 #include <array>
+#include <exception>
 #include <memory>
 #include <string>
 #include <type_traits>

@@ -3,7 +3,6 @@
 
 #include "CodedVolume.h"
 #include "FileVersion1.h"
-#include "RangeCoder.h"
 
 #include <zlib.h>
 #include <zstd.h>
@@ -402,7 +401,7 @@ EncodedFile encode(const Volume& volume, const WriteOptions& options, const Para
   ByteWriter w;
   w.bytes.insert(w.bytes.end(), FileMagic, FileMagic + FileMagicSize);
   w.u16(uint16_t(options.formatVersion));
-  w.u16(0);
+  w.u16(FileMinorVersion);
   const Geometry& g = v.geometry;
   for (int32_t d : g.dims)
     w.i32(d);
