@@ -1030,8 +1030,8 @@ TEST(CodedFile, AVolumeInAnotherLayoutIsWrittenAsItsBuild)
   EXPECT_EQ(bytes, svdag::serialize(built));
 }
 
-// Chunks are coded and decoded apart (in parallel where the caller runs them so) and merge into
-// the one volume, whatever their number; corrupt chunk tables fail.
+// Chunks are coded and decoded apart (in parallel where the caller runs them so) and one builder
+// takes their blocks: the one volume, whatever their number; corrupt chunk tables fail.
 TEST(CodedFile, ChunksDecodeToTheOneVolume)
 {
   std::mt19937 rng(4);
