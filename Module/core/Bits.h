@@ -39,6 +39,21 @@ inline uint32_t readBits(const std::vector<uint32_t>& stream, uint64_t offset, u
   return result;
 }
 
+// Little-endian fields of a byte buffer, whatever the host's byte order (compilers turn these
+// into plain loads and stores on little-endian hosts): the .svdag file's and its coded volume's.
+inline void storeLE(uint8_t* at, uint64_t v, int n)
+{
+  for (int i = 0; i < n; ++i)
+    at[i] = uint8_t(v >> (8 * i));
+}
+inline uint64_t loadLE(const uint8_t* at, int n)
+{
+  uint64_t v = 0;
+  for (int i = 0; i < n; ++i)
+    v |= uint64_t(at[i]) << (8 * i);
+  return v;
+}
+
 // ORs `value` (at most `width` bits, 0..32) into a zero-filled field of a stream that has a word
 // past the field's last one.
 inline void writeBits(std::vector<uint32_t>& stream, uint64_t offset, uint32_t width, uint32_t value)

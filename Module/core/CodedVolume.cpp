@@ -552,7 +552,7 @@ private:
 // The reader's side of one chunk: its blocks as they decode, compactly (most leaves of a block
 // are empty or full), each mixed leaf with its code from canonicalLeaf's search, which runs here,
 // in the chunk's thread, remembered per mask in a small direct-mapped cache (neighbouring blocks
-// repeat leaves). addTo() then hands them to the one Builder, in order.
+// repeat leaves) that decoded() frees. addTo() then hands them to the one Builder, in order.
 class ChunkBlocks
 {
 public:
@@ -584,10 +584,11 @@ public:
     }
     Blocks.push_back({ FirstCell + cell, label, full, mixed });
   }
+  // The chunk is decoded: its cache goes, so that only the decoding chunks hold one.
+  void decoded() { std::vector<Entry>().swap(Cache); }
   // Frees what it held as it goes.
   void addTo(Builder& builder, const std::vector<uint64_t>& values)
   {
-    std::vector<Entry>().swap(Cache);
     CellOccupancy occupancy;
     size_t next = 0;
     for (const Record& r : Blocks)
@@ -661,18 +662,12 @@ namespace
 // The section's table: chunk count, label stream bytes, then bytes and blocks of each chunk.
 constexpr size_t TableFixedBytes = 4 + 8, TableChunkBytes = 16;
 
-void putLE(std::vector<uint8_t>& out, uint64_t v, int n)
+void appendLE(std::vector<uint8_t>& out, uint64_t v, int n)
 {
-  for (int i = 0; i < n; ++i)
-    out.push_back(uint8_t(v >> (8 * i)));
+  out.resize(out.size() + size_t(n));
+  bits::storeLE(out.data() + out.size() - size_t(n), v, n);
 }
-uint64_t getLE(const uint8_t* at, int n)
-{
-  uint64_t v = 0;
-  for (int i = 0; i < n; ++i)
-    v |= uint64_t(at[i]) << (8 * i);
-  return v;
-}
+using bits::loadLE;
 
 // The geometry of chunk i and its first cell.
 Frame chunkFrame(const Frame& whole, uint32_t i, uint32_t chunks, uint64_t& firstCell)
@@ -733,17 +728,10 @@ std::vector<uint8_t> encode(const Volume& volume, const ParallelFor& parallel, u
     uint64_t firstCell;
     Frame f = chunkFrame(frame, i, chunks, firstCell);
     const uint64_t endCell = firstCell + f.geometry.cellCount();
-    auto firstBlockOf = [&](uint64_t cell) { // blocks are sorted by cell
-      uint64_t lo = 0, hi = volume.blockCount;
-      while (lo < hi)
-      {
-        const uint64_t mid = lo + (hi - lo) / 2;
-        if (volume.block(mid).cell < cell)
-          lo = mid + 1;
-        else
-          hi = mid;
-      }
-      return lo;
+    // Where a cell's blocks start (or would: cellBlocks finds the place in an empty cell too).
+    auto firstBlockOf = [&](uint64_t cell) {
+      return cell == volume.geometry.cellCount() ? volume.blockCount
+                                                 : volume.cellBlocks(uint32_t(cell)).first;
     };
     const uint64_t first = firstBlockOf(firstCell), end = firstBlockOf(endCell);
     f.blockCount = blocks[i] = end - first;
@@ -754,12 +742,12 @@ std::vector<uint8_t> encode(const Volume& volume, const ParallelFor& parallel, u
   });
 
   std::vector<uint8_t> out;
-  putLE(out, chunks, 4);
-  putLE(out, labelBytes.size(), 8);
+  appendLE(out, chunks, 4);
+  appendLE(out, labelBytes.size(), 8);
   for (uint32_t i = 0; i < chunks; ++i)
   {
-    putLE(out, streams[i].size(), 8);
-    putLE(out, blocks[i], 8);
+    appendLE(out, streams[i].size(), 8);
+    appendLE(out, blocks[i], 8);
   }
   out.insert(out.end(), labelBytes.begin(), labelBytes.end());
   for (std::vector<uint8_t>& stream : streams)
@@ -778,7 +766,7 @@ Volume decode(const uint8_t* data, size_t size, const Frame& frame, const Parall
   // block counts that add up to the header's.
   if (size < TableFixedBytes)
     throw CorruptStream("the coded volume is truncated (its table)");
-  const uint32_t chunks = uint32_t(getLE(data, 4));
+  const uint32_t chunks = uint32_t(loadLE(data, 4));
   if (chunks == 0 || chunks > maxChunkCount(frame.geometry))
     throw CorruptStream("the coded volume has " + std::to_string(chunks) + " chunks (1 to " +
       std::to_string(maxChunkCount(frame.geometry)) + " for its geometry)");
@@ -790,13 +778,13 @@ Volume decode(const uint8_t* data, size_t size, const Frame& frame, const Parall
   uint64_t totalBlocks = 0;
   for (uint32_t i = 0; i <= chunks; ++i)
   {
-    const uint64_t bytes = i == 0 ? getLE(data + 4, 8) : getLE(data + TableFixedBytes + TableChunkBytes * (i - 1), 8);
+    const uint64_t bytes = i == 0 ? loadLE(data + 4, 8) : loadLE(data + TableFixedBytes + TableChunkBytes * (i - 1), 8);
     if (bytes > size - offsets[i])
       throw CorruptStream("the coded volume's streams run past its end");
     offsets[i + 1] = offsets[i] + bytes;
     if (i > 0)
     {
-      blocks[i - 1] = getLE(data + TableFixedBytes + TableChunkBytes * (i - 1) + 8, 8);
+      blocks[i - 1] = loadLE(data + TableFixedBytes + TableChunkBytes * (i - 1) + 8, 8);
       if (blocks[i - 1] > frame.blockCount - totalBlocks)
         throw CorruptStream("the coded volume's chunks hold more blocks than its header says");
       totalBlocks += blocks[i - 1];
@@ -821,6 +809,7 @@ Volume decode(const uint8_t* data, size_t size, const Frame& frame, const Parall
     coding::Decoder decoder(data + offsets[i + 1], size_t(offsets[i + 2] - offsets[i + 1]));
     parts[i].reset(new ChunkBlocks(firstCell));
     Coding<coding::Decoder>(decoder, f).cells(*parts[i]);
+    parts[i]->decoded();
   });
   Builder whole(frame.geometry, frame.scalarType, BuildOptions{ frame.background, {} });
   whole.startBlocks();

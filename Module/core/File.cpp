@@ -1,6 +1,7 @@
 // The .svdag file format (the layout is documented in svdag/File.h and IO/README.md).
 #include "svdag/File.h"
 
+#include "Bits.h"
 #include "CodedVolume.h"
 #include "FileVersion1.h"
 
@@ -78,21 +79,7 @@ uint32_t crc32Of(const uint8_t* data, size_t size)
   return uint32_t(crc);
 }
 
-// Little-endian fields of a byte buffer, whatever the host's byte order (compilers turn these
-// into plain loads and stores on little-endian hosts).
-void storeLE(uint8_t* at, uint64_t v, int n)
-{
-  for (int i = 0; i < n; ++i)
-    at[i] = uint8_t(v >> (8 * i));
-}
-template <typename T>
-T loadLE(const uint8_t* at)
-{
-  uint64_t v = 0;
-  for (size_t i = 0; i < sizeof(T); ++i)
-    v |= uint64_t(at[i]) << (8 * i);
-  return T(v);
-}
+using bits::storeLE;
 
 // Files are read and written at most this many bytes per stdio call: a single read or write of
 // more than 2 GiB fails on some systems (macOS's write, for one).
@@ -548,7 +535,7 @@ std::vector<T> sectionElements(
     out.assign(count + padding, T(0));
   // In place for a decompressed section (each element is read whole before it is written).
   for (size_t i = 0; i < count; ++i)
-    out[i] = loadLE<T>(raw + sizeof(T) * i);
+    out[i] = T(bits::loadLE(raw + sizeof(T) * i, int(sizeof(T))));
   return out;
 }
 

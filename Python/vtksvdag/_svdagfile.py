@@ -22,11 +22,16 @@ FORMAT_VERSIONS = (2, 3)
 DEFAULT_FORMAT_VERSION = 3
 
 
+def _integer(value, name):
+    """``value`` as an int; TypeError naming ``name`` unless it is an integer (a bool is not)."""
+    if not isinstance(value, (numbers.Integral, np.integer)) or isinstance(value, (bool, np.bool_)):
+        raise TypeError(f"{name} must be an integer, not {value!r}")
+    return int(value)
+
+
 def check_compression_level(level):
     """Return ``level`` as an int, or raise TypeError / ValueError naming the range 0..22."""
-    if not isinstance(level, (numbers.Integral, np.integer)) or isinstance(level, (bool, np.bool_)):
-        raise TypeError(f"compression_level must be an integer, not {level!r}")
-    level = int(level)
+    level = _integer(level, "compression_level")
     if level not in COMPRESSION_LEVELS:
         raise ValueError(
             f"compression_level must be in {COMPRESSION_LEVELS.start}..{COMPRESSION_LEVELS.stop - 1} "
@@ -37,9 +42,7 @@ def check_compression_level(level):
 
 def check_format_version(version):
     """Return ``version`` as an int, or raise TypeError / ValueError naming the versions written."""
-    if not isinstance(version, (numbers.Integral, np.integer)) or isinstance(version, (bool, np.bool_)):
-        raise TypeError(f"format_version must be an integer, not {version!r}")
-    version = int(version)
+    version = _integer(version, "format_version")
     if version not in FORMAT_VERSIONS:
         raise ValueError(
             f"format_version must be 3 (the coded volume, the smallest file) or 2 (the in-memory "

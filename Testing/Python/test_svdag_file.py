@@ -19,6 +19,7 @@ from vtksvdag.vtkSVDAGCore import (
     vtkSegmentationSVDAG,
     vtkSegmentationSVDAGToImageData,
 )
+from vtksvdag._svdagfile import DEFAULT_FORMAT_VERSION
 from vtksvdag.vtkSVDAGIO import vtkSegmentationSVDAGWriter, vtkSegmentationVolumeReader
 
 MAGIC = b"\x89SVDAG\r\n"
@@ -136,7 +137,8 @@ def test_format_3_holds_one_coded_section_and_the_rebuilt_counts(shared_data, tm
     labels, build = compress_real_volume(shared_data / "dvid_fib19_64.nrrd")
     svdag = build.GetOutput()
     writer = vtkSegmentationSVDAGWriter()
-    assert writer.GetFormatVersion() == 3  # the default
+    assert writer.GetFormatVersion() == 3  # the default, the Python layer's too
+    assert DEFAULT_FORMAT_VERSION == writer.GetFormatVersion()
     writer.SetInputData(svdag)
     writer.SetFileName(str(tmp_path / "v3.svdag"))
     assert writer.Write() == 1
