@@ -23,8 +23,9 @@ export DEBIAN_FRONTEND=noninteractive
 bash scripts/install-deps.sh
 
 # paraview: pvbatch, pvserver, the GUI; paraview-dev: headers and CMake package (it also needs
-# the MPI and other development packages below); mpi-default-bin: mpiexec.
-PKGS=(paraview paraview-dev mpi-default-dev mpi-default-bin xvfb xauth)
+# the MPI and other development packages below); qtbase5-dev, libqt5opengl5-dev: Qt's
+# headers and CMake files for the GUI's label read-out in the plugin; mpi-default-bin: mpiexec.
+PKGS=(paraview paraview-dev qtbase5-dev libqt5opengl5-dev mpi-default-dev mpi-default-bin xvfb xauth)
 missing=()
 for p in "${PKGS[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -2,7 +2,8 @@
 pvbatch runs Testing/ParaView/pv_scene.py on ParaView's own VTK, and this test checks what it
 reports against vtksvdag on Debian's VTK: the Information-panel numbers against stats(), the
 labels picked in ParaView against the CPU ray caster, hidden labels, the categorical lookup
-table's colors, the decoded slice, and the image against its baseline. Skipped (with the
+table's colors, the decoded slice, and the image against its baseline; the paraview GUI loads
+the plugin from its Plugin Manager and shows the label under the pointer. Skipped (with the
 command to run) when the plugin is not built."""
 import json
 import os
@@ -293,6 +294,121 @@ def test_paraview_plugin_path_autoloads(tmp_path):
                       " hasattr(s, 'CompressSegmentation'), hasattr(s, 'SegmentationSlice'))\n")
     done = run_paraview(["pvbatch", str(script)], PV_PLUGIN_PATH=str(PLUGIN.parent))
     assert "proxies True True True" in done.stdout
+
+
+# The GUI: paraview starts without the plugin; a QtTesting script loads it through the Plugin
+# Manager (Tools > Manage Plugins > Load New), runs pv_gui_hover.py in the Python shell, then
+# moves the mouse over the view and checks the hover read-out (ParaView/Plugin/
+# pqSegmentationLabelReadout, in the status bar) at each stop against the CPU ray caster.
+GUI_SCENE = ROOT / "Testing" / "ParaView" / "pv_gui_hover.py"
+GUI_MAIN = "pqClientMainWindow"
+GUI_VIEWPORT = (f"{GUI_MAIN}/centralwidget/MultiViewWidget/CoreWidget/qt_tabwidget_stackedwidget/"
+                "MultiViewWidget1/Container/Frame.0/CentralWidgetFrame/Viewport")
+GUI_READOUT = f"{GUI_MAIN}/statusbar/SegmentationLabelReadout"
+GUI_PYTHON = f"{GUI_MAIN}/pythonShellDock/pythonShell/consoleWidget"
+GUI_PLUGINS = f"{GUI_MAIN}/PluginManagerDialog"
+GUI_SIZE = (300, 240)
+# The GUI's Python shell writes what the view is at the end (the file pv_gui_hover.py names).
+WRITE_VIEW = ("import json, os; v = GetActiveView(); c = v.GetActiveCamera(); "
+              "json.dump({'representation': GetDisplayProperties().GetXMLName(), "
+              "'size': list(v.ViewSize), 'position': c.GetPosition(), "
+              "'focal_point': c.GetFocalPoint(), 'view_up': c.GetViewUp()}, "
+              "open(json.load(open(os.environ['VTKSVDAG_GUI_SCENE']))['out'], 'w'))")
+
+
+def gui_camera(cells):
+    extent = np.array(cells.dims) * np.array(cells.spacing)
+    center = np.array(cells.origin) + extent / 2
+    direction = np.array([1.0, -0.6, 0.5]) / np.linalg.norm([1.0, -0.6, 0.5])
+    distance = 2.0 * np.linalg.norm(extent)
+    # A ray's line does not depend on the clipping range; this one starts rays before the volume.
+    return {"position": list(center + distance * direction), "focal_point": list(center),
+            "view_up": [0.0, 0.0, 1.0], "view_angle": 30.0, "size": list(GUI_SIZE),
+            "clipping_range": [0.1 * distance, 3.0 * distance]}
+
+
+def label_at(caster, renderer, x, y):
+    hit = caster_pick(caster, *pixel_ray(renderer, x, y))
+    return None if hit is None else hit[0]
+
+
+def steady_pixels(caster, renderer, step):
+    """{(x, y): label} of every step-th display pixel (None for a miss) whose 8 neighbours have
+    its label too: a pointer a pixel off still reads the same label there (Qt's and VTK's pixel
+    rounding need not agree)."""
+    steady = {}
+    for y in range(step, GUI_SIZE[1] - step, step):
+        for x in range(step, GUI_SIZE[0] - step, step):
+            label = label_at(caster, renderer, x, y)
+            if all(label_at(caster, renderer, x + dx, y + dy) == label
+                   for dx in (-1, 0, 1) for dy in (-1, 0, 1) if dx or dy):
+                steady[(x, y)] = label
+    return steady
+
+
+def gui_event(obj, command, arguments=""):
+    return f'  <pqevent object="{obj}" command="{command}" arguments="{arguments}"/>\n'
+
+
+def hover_events(x, y, label):
+    """QtTesting: the pointer to display pixel (x, y) (origin bottom left), a rest longer than
+    the read-out's delay, and the read-out's text checked."""
+    u, v = (x + 0.5) / GUI_SIZE[0], (GUI_SIZE[1] - 1 - y + 0.5) / GUI_SIZE[1]
+    text = "" if label is None else f"Label {label} (cells.nrrd)"
+    return (gui_event(GUI_VIEWPORT, "mouseMove", f"({u:.6f},{v:.6f},0,0,0)")
+            + gui_event(GUI_MAIN, "pause", "700")
+            + f'  <pqcheck object="{GUI_READOUT}" property="text" arguments="{text}"/>\n')
+
+
+def test_paraview_gui_plugin_manager_hover_readout(cells, tmp_path):
+    """In the paraview GUI, the plugin loads from the Plugin Manager's Load New, and then the
+    status bar's read-out shows the caster's label under the resting pointer, clears over the
+    background, and follows a change of HiddenLabels: over a hidden label it reads what the
+    caster finds in the volume read without that label."""
+    camera = gui_camera(cells)
+    window, renderer = view_renderer(camera)
+    caster = vtkSegmentationSVDAGRayCaster()
+    caster.SetInputData(cells.dataobject)
+    steady = steady_pixels(caster, renderer, 6)
+    hits = {}
+    for pixel, label in steady.items():
+        if label is not None and label not in hits:
+            hits[label] = pixel
+    misses = [pixel for pixel, label in steady.items() if label is None]
+    assert len(hits) >= 3 and misses, "the view should show several labels and background"
+    (first, a), (second, b), (third, c) = list(hits.items())[:3]
+    without = vtksvdag.read(str(CELLS), exclude=[second])
+    behind = vtkSegmentationSVDAGRayCaster()
+    behind.SetInputData(without.dataobject)
+    events = ('<?xml version="1.0" ?>\n<pqevents>\n'
+              + gui_event(f"{GUI_MAIN}/menubar", "activate", "menuTools")
+              + gui_event(f"{GUI_MAIN}/menubar/menuTools", "activate", "actionManage_Plugins")
+              + gui_event(f"{GUI_PLUGINS}/splitter/localGroup/loadLocal", "activate")
+              + gui_event(f"{GUI_PLUGINS}/pqFileDialog", "filesSelected", str(PLUGIN))
+              + gui_event(f"{GUI_PLUGINS}/buttonBox/1QPushButton0", "activate")
+              + gui_event(GUI_PYTHON, "executeCommand", f"exec(open('{GUI_SCENE}').read())")
+              + gui_event(GUI_MAIN, "pause", "500")
+              + hover_events(*a, first) + hover_events(*misses[0], None)
+              + hover_events(*b, second) + hover_events(*c, third)
+              + gui_event(GUI_PYTHON, "executeCommand",
+                          f"GetDisplayProperties().HiddenLabels = [{second}]; Render()")
+              + hover_events(*b, label_at(behind, renderer, *b))
+              + gui_event(GUI_PYTHON, "executeCommand", WRITE_VIEW)
+              + "</pqevents>\n")
+    (tmp_path / "gui.xml").write_text(events)
+    scene = {"file": str(CELLS), "name": "cells.nrrd", "size": list(GUI_SIZE),
+             "camera": camera, "out": str(tmp_path / "view.json")}
+    (tmp_path / "scene.json").write_text(json.dumps(scene))
+    # No PV_PLUGIN_PATH: the plugin comes from the Plugin Manager only.
+    run_paraview(["paraview", "--dr", f"--test-script={tmp_path / 'gui.xml'}", "--exit"],
+                 PV_PLUGIN_PATH="", VTKSVDAG_GUI_SCENE=str(tmp_path / "scene.json"))
+    # The checks assumed the view this test set up: it was still so at the end.
+    with open(tmp_path / "view.json") as f:
+        view = json.load(f)
+    assert view["representation"] == "SegmentationPathTracingRepresentation"
+    assert view["size"] == list(GUI_SIZE)
+    for key in ("position", "focal_point", "view_up"):
+        np.testing.assert_allclose(view[key], camera[key], atol=1e-9)
 
 
 def mpi_pvbatch(out, *options):
