@@ -1,5 +1,6 @@
-"""Smoke tests of `bench/paraview.py --quick` (the pvbatch and pyvista routes each run in a
-process of their own and the CSV has one row per route with positive times) and of
+"""Smoke tests of `bench/paraview.py --quick` (the pvbatch, pvbatch --no-mpi and pyvista routes
+each run in a process of their own and the CSV has one row per route with positive times, the
+host ready before the first image) and of
 `bench/paraview_mpi.py --quick`. They assert structure, never
 timings. Skipped when the ParaView plugin is not built (scripts/setup-paraview.sh)."""
 import csv
@@ -25,9 +26,9 @@ def test_paraview_bench_quick(tmp_path):
     assert "pvbatch / pyvista, still frame" in completed.stdout
     with open(tmp_path / "paraview.csv", newline="") as f:
         rows = list(csv.DictReader(f))
-    assert sorted(r["route"] for r in rows) == ["pvbatch", "pyvista"]
+    assert sorted(r["route"] for r in rows) == ["pvbatch", "pvbatch-no-mpi", "pyvista"]
     for r in rows:
-        assert float(r["first_image_s"]) > 0 and float(r["frame_ms"]) > 0
+        assert 0 < float(r["ready_s"]) < float(r["first_image_s"]) and float(r["frame_ms"]) > 0
 
 
 @pytest.mark.skipif(not PLUGIN.exists() or shutil.which("mpiexec") is None,
