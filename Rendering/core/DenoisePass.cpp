@@ -94,7 +94,7 @@ void DenoisePass::record(VkCommandBuffer cmd, const Frame& frame, gpu::DenoisePa
     params.colors = addresses(in, out);
     params.variances =
       addresses(this->Guides[k % 2].address(), this->Guides[(k + 1) % 2].address());
-    params.geometry = addresses(0, last ? frame.color : 0);
+    params.geometry = addresses(last ? frame.coverage : 0, last ? frame.color : 0);
     this->dispatch(cmd, 1 + k, params);
   }
   barrier(cmd, VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_HOST_READ_BIT,

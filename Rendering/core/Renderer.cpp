@@ -170,7 +170,7 @@ struct TraceImages
   uint64_t bytes() const
   {
     return label.size() + depth.size() + normal.size() + hdr.size() + color.size() +
-      variance.size() + accumulation.size() + squares.size() + rayLimits.size();
+      variance.size() + accumulation.size() + squares.size() + rayLimits.size() + coverage.size();
   }
 
   void resize(Context& context, uint32_t count, bool shareColor)
@@ -194,6 +194,17 @@ struct TraceImages
     squares = Buffer(context, count * sizeof(float), usage, MemoryUse::Device);
     rayLimits = Buffer(context, count * sizeof(float), usage, MemoryUse::Upload);
     pixels = count;
+  }
+
+  // The label edge coverage records (GpuLayout.h), made for the denoiser's first use.
+  Buffer coverage;
+
+  VkDeviceAddress coverageRecords(Context& context)
+  {
+    if (coverage.size() != uint64_t(pixels) * 32)
+      coverage = Buffer(context, uint64_t(pixels) * 32, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+        MemoryUse::Device);
+    return coverage.address();
   }
 
   void release() { *this = TraceImages(); }
@@ -1165,7 +1176,12 @@ const Image& Renderer::render(PassUse use)
     denoised.variance = traced.variance.address();
     denoised.hdr = traced.hdr.address();
     denoised.color = traced.color.address();
+    denoised.coverage = r == 1 ? traced.coverageRecords(g.context) : 0;
   }
+  // A new accumulation's edges get their coverage traced once, for every later pass; not in a
+  // reduced trace, whose edges the upsampler places from the full-resolution guides (and whose
+  // frames keep to a time budget).
+  const bool traceCoverage = settings.denoise && u.sampling.x == 0 && r == 1;
   if (r > 1 && !g.upsampler)
     g.upsampler = std::make_unique<UpsamplePass>(g.context);
   gpu::UpsampleParams upsample{};
@@ -1183,15 +1199,36 @@ const Image& Renderer::render(PassUse use)
   }
 
   const auto start = Clock::now();
-  g.context.submitAndWait([&](VkCommandBuffer cmd) {
-    if (limitsPass)
-      limitsPass->record(cmd, limitsParams);
-    pipeline.record(cmd, tracedWidth, tracedHeight);
+  auto recordAfterTrace = [&](VkCommandBuffer cmd) {
     if (denoiseNow)
       g.denoiser->record(cmd, denoised, denoise);
     if (r > 1)
       g.upsampler->record(cmd, upsample);
+  };
+  g.context.submitAndWait([&](VkCommandBuffer cmd) {
+    if (limitsPass)
+      limitsPass->record(cmd, limitsParams);
+    pipeline.record(cmd, tracedWidth, tracedHeight);
+    if (!traceCoverage)
+      recordAfterTrace(cmd);
   });
+  if (traceCoverage)
+  {
+    // The same pipeline again, in its coverage mode: the uniform block differs, so it is a
+    // submission of its own, after the labels it reads were written.
+    gpu::FrameUniforms c = u;
+    c.coverage = glm::uvec4(uint32_t(denoised.coverage), uint32_t(denoised.coverage >> 32), 1u, 0u);
+    std::memcpy(g.uniforms.mapped(), &c, sizeof(c));
+    g.context.submitAndWait([&](VkCommandBuffer cmd) {
+      VkMemoryBarrier labelsWritten{ VK_STRUCTURE_TYPE_MEMORY_BARRIER };
+      labelsWritten.srcAccessMask = VK_ACCESS_MEMORY_WRITE_BIT;
+      labelsWritten.dstAccessMask = VK_ACCESS_MEMORY_READ_BIT | VK_ACCESS_MEMORY_WRITE_BIT;
+      vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_ALL_COMMANDS_BIT,
+        VK_PIPELINE_STAGE_ALL_COMMANDS_BIT, 0, 1, &labelsWritten, 0, nullptr, 0, nullptr);
+      pipeline.record(cmd, tracedWidth, tracedHeight);
+      recordAfterTrace(cmd);
+    });
+  }
   g.tracedRays = given;
   g.tracedAdvance = advance;
   this->FrameMilliseconds =

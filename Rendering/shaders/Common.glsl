@@ -33,6 +33,22 @@ layout(buffer_reference, std430, buffer_reference_align = 16) writeonly buffer S
 {
   vec4 v[];
 };
+layout(buffer_reference, std430, buffer_reference_align = 16) writeonly buffer SvdagUvec4Output
+{
+  uvec4 v[];
+};
+
+// A unit vector (or 0) in 16 bits: octahedral, two snorm8 (the coverage records, GpuLayout.h).
+uint svdagPackDirection8(vec3 n)
+{
+  float l1 = abs(n.x) + abs(n.y) + abs(n.z);
+  if (l1 == 0.0)
+    return 0u;
+  vec2 o = n.xy / l1;
+  if (n.z < 0.0)
+    o = (1.0 - abs(o.yx)) * vec2(o.x >= 0.0 ? 1.0 : -1.0, o.y >= 0.0 ? 1.0 : -1.0);
+  return packSnorm4x8(vec4(o, 0.0, 0.0)) & 0xFFFFu;
+}
 
 layout(buffer_reference, std430, buffer_reference_align = 4) readonly buffer SvdagFloats
 {

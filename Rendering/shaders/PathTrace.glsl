@@ -181,8 +181,62 @@ void writePrimaryOutputs(uint index, uint width, uint height)
   normals.v[faces + 3u * index + 2u] = payload.normal.z;
 }
 
+// Whether pixel (x, y)'s pixel-center surface (label and entry face, as the first pass of this
+// accumulation wrote them) differs from one of its 8 neighbours': a label edge, or a crease or
+// step within a label (a voxel staircase's), both of which one sample through the center aliases.
+bool surfaceEdge(uvec2 pixel, uint width, uint height)
+{
+  SvdagWords labels = SvdagWords(frame.sceneOutputs.zw);
+  SvdagFloats normals = SvdagFloats(frame.outputs.zw);
+  uint faces = 3u * width * height; // where the entry face normals start (GpuLayout.h)
+  uint i = pixel.x + width * pixel.y;
+  uint label = labels.w[i];
+  vec3 face = vec3(normals.v[faces + 3u * i], normals.v[faces + 3u * i + 1u],
+    normals.v[faces + 3u * i + 2u]);
+  for (int dy = -1; dy <= 1; ++dy)
+  {
+    for (int dx = -1; dx <= 1; ++dx)
+    {
+      ivec2 q = ivec2(pixel) + ivec2(dx, dy);
+      if (q.x < 0 || q.y < 0 || q.x >= int(width) || q.y >= int(height))
+        continue;
+      uint j = uint(q.x) + width * uint(q.y);
+      if (labels.w[j] != label)
+        return true;
+      if (label != 0u && vec3(normals.v[faces + 3u * j], normals.v[faces + 3u * j + 1u],
+            normals.v[faces + 3u * j + 2u]) != face)
+        return true;
+    }
+  }
+  return false;
+}
+
+// Counts one coverage ray's surface (label index + 1, 0: background; its entry face normal) in
+// the pixel's record (GpuLayout.h): labels in `labels`, counts and packed faces in `keys`.
+void countCoverage(inout uvec4 labels, inout uvec4 keys, uint label, vec3 face)
+{
+  uint faceBits = label != 0u ? svdagPackDirection8(face) << 16u : 0u;
+  for (uint k = 0u; k < SVDAG_COVERAGE_SLOTS; ++k)
+  {
+    if (keys[k] == 0u)
+    {
+      labels[k] = label;
+      keys[k] = faceBits | 1u;
+      return;
+    }
+    if (labels[k] == label && (keys[k] & 0xFFFF0000u) == faceBits)
+    {
+      keys[k] += 1u;
+      return;
+    }
+  }
+}
+
 // One pixel of the frame: its primary outputs (on the first pass of an accumulation) and
-// frame.sampling.y camera paths added to its sums.
+// frame.sampling.y camera paths added to its sums; or, in the coverage dispatch
+// (frame.coverage.z, GpuLayout.h), the first hits of its sub-pixel rays if it is on a label edge.
+// Both go through the path tracer's one trace site: a coverage ray is a path that ends at its
+// first hit (no bounces, no next-event estimation).
 void svdagRenderPixel(uvec2 pixel)
 {
   uint width = frame.image.x;
@@ -192,13 +246,21 @@ void svdagRenderPixel(uvec2 pixel)
   uint index = pixel.x + width * pixel.y;
   uint before = frame.sampling.x;
   uint samples = frame.sampling.y;
+  bool coverage = frame.coverage.z != 0u;
+  const uint coverageRays = SVDAG_COVERAGE_GRID * SVDAG_COVERAGE_GRID;
+  if (coverage)
+    samples = surfaceEdge(pixel, width, height) ? coverageRays : 0u;
+  uvec4 coveredLabels = uvec4(0u), coveredKeys = uvec4(0u);
 
   gEnvMarginal = SvdagFloats(frame.environmentMap.xy);
   gEnvConditional = SvdagFloats(frame.environmentMap.zw);
   gEnvTexels = SvdagVec4s(frame.environmentMap2.xy);
   gMaterials = SvdagMaterials(frame.materials.xy);
+  uvec4 lighting = frame.lighting;
+  if (coverage)
+    lighting.zw = uvec2(0u, lighting.w & ~FLAG_NEE);
   PathTracerParams params =
-    PathTracerParams(frame.sunDirection, frame.sunRadiance, frame.environment, frame.lighting);
+    PathTracerParams(frame.sunDirection, frame.sunRadiance, frame.environment, lighting);
 
   vec4 sum = vec4(0.0);
   float squares = 0.0;
@@ -208,17 +270,21 @@ void svdagRenderPixel(uvec2 pixel)
     // One independent stream per (pixel, global sample index, seed).
     uint rng = pcgHash(index ^ pcgHash((before + s) ^ pcgHash(frame.sampling.z)));
     vec2 jitter = vec2(random01(rng), random01(rng));
-    bool primary = before == 0u && s == 0u;
+    if (coverage)
+      jitter = (vec2(s % SVDAG_COVERAGE_GRID, s / SVDAG_COVERAGE_GRID) + 0.5) /
+        float(SVDAG_COVERAGE_GRID);
+    bool primary = before == 0u && s == 0u && !coverage;
     if (primary)
-    {
       jitter = vec2(0.5);
+    if (primary || coverage)
+    {
       // A miss unless the path's camera ray hits (traceRay).
       gPrimaryPayload.label = 0u;
       gPrimaryPayload.t = SVDAG_DEPTH_MISS;
       gPrimaryPayload.normal = vec3(0.0);
       gPrimaryPayload.shading = vec4(0.0);
     }
-    gCapturePrimary = primary;
+    gCapturePrimary = primary || coverage;
     CameraRay ray = cameraRay(vec2(pixel) + jitter, index, width, height);
     gFirstQuery = true;
     gCameraRayHit = false;
@@ -227,12 +293,24 @@ void svdagRenderPixel(uvec2 pixel)
       ? min(tracePath(params, ray.origin, ray.direction, ray.tmax, rng), vec3(1.0e30))
       : vec3(0.0);
     gCapturePrimary = false;
+    if (coverage)
+    {
+      countCoverage(coveredLabels, coveredKeys, gPrimaryPayload.label, gPrimaryPayload.normal);
+      continue;
+    }
     if (primary)
       writePrimaryOutputs(index, width, height);
     vec4 value = gCameraRayHit ? vec4(radiance, 1.0) : frame.background;
     sum += value;
     float y = min(dot(value.rgb, luminance), 1.0e15);
     squares += y * y;
+  }
+  if (coverage)
+  {
+    SvdagUvec4Output records = SvdagUvec4Output(frame.coverage.xy);
+    records.v[2u * index] = coveredLabels;
+    records.v[2u * index + 1u] = coveredKeys;
+    return;
   }
 
   SvdagVec4Accumulation accumulation = SvdagVec4Accumulation(frame.materials.zw);

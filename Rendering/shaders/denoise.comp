@@ -28,6 +28,11 @@ layout(buffer_reference, std430, buffer_reference_align = 16) buffer DenoiseGuid
 {
   uvec4 v[];
 };
+// Per pixel: the label edge coverage record (GpuLayout.h).
+layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer DenoiseUvec4s
+{
+  uvec4 v[];
+};
 layout(buffer_reference, std430, buffer_reference_align = 4) writeonly buffer DenoiseColor
 {
   uint v[];
@@ -128,6 +133,90 @@ void prepare(uint x, uint y)
     uvec4(label, packNormal(n), floatBitsToUint(edge ? -t : t), floatBitsToUint(variance));
 }
 
+// The color of a surface (label index + 1, 0: background; entry face packed as the coverage
+// record packs it) near pixel (x, y) in this iteration's input: the mean of the pixels in the 5x5
+// window that show it, nearer ones weighing more. Preferred are pixels of its label and face that
+// are not on a label edge (an edge pixel's value may mix labels), then edge pixels of them (a
+// thin part, a groove's wall), then its label's pixels whatever their face. Background pixels are
+// all exact. False where its label is not there.
+bool surfaceColorNear(uint x, uint y, uint label, uint faceBits, out vec4 color)
+{
+  uint width = p.sizes.x, height = p.sizes.y;
+  DenoiseVec4s colors = DenoiseVec4s(p.colors.xy);
+  DenoiseGuides guides = DenoiseGuides(p.variances.xy);
+  DenoiseFloats normals = DenoiseFloats(p.guides2.xy);
+  uint faces = 3u * width * height; // where the entry face normals start (GpuLayout.h)
+  vec4 sums[4] = vec4[4](vec4(0.0), vec4(0.0), vec4(0.0), vec4(0.0));
+  float weights[4] = float[4](0.0, 0.0, 0.0, 0.0);
+  for (int dy = -2; dy <= 2; ++dy)
+  {
+    for (int dx = -2; dx <= 2; ++dx)
+    {
+      ivec2 q = ivec2(x, y) + ivec2(dx, dy);
+      if (q.x < 0 || q.y < 0 || q.x >= int(width) || q.y >= int(height))
+        continue;
+      uint j = uint(q.x) + width * uint(q.y);
+      uvec4 gq = guides.v[j];
+      if (gq.x != label)
+        continue;
+      uint kind = 0u;
+      if (label != 0u)
+      {
+        vec3 face = vec3(normals.v[faces + 3u * j], normals.v[faces + 3u * j + 1u],
+          normals.v[faces + 3u * j + 2u]);
+        kind = ((svdagPackDirection8(face) << 16u) == faceBits ? 0u : 2u) +
+          ((gq.z & 0x80000000u) != 0u ? 1u : 0u);
+      }
+      float w = 1.0 / float(1 + dx * dx + dy * dy);
+      sums[kind] += w * colors.v[j];
+      weights[kind] += w;
+    }
+  }
+  for (uint kind = 0u; kind < 4u; ++kind)
+  {
+    if (weights[kind] > 0.0)
+    {
+      color = sums[kind] / weights[kind];
+      return true;
+    }
+  }
+  color = vec4(0.0);
+  return false;
+}
+
+// A label edge pixel's color from its coverage record (GpuLayout.h): the colors of the surfaces
+// its sub-pixel rays hit, taken from pixels nearby, weighted by how many rays hit each. `own`
+// (the pixel's value) stands for a surface of its own label where none is near, and the estimate
+// gives way to the pixel's own mean as samples accumulate (weight G / (G + samples), G the
+// coverage rays), so that the accumulating image still converges to the path tracer's.
+vec4 resolveEdge(uint x, uint y, uvec4 labels, uvec4 keys, uint ownLabel, vec4 own)
+{
+  vec4 sum = vec4(0.0);
+  float counted = 0.0;
+  for (uint k = 0u; k < SVDAG_COVERAGE_SLOTS; ++k)
+  {
+    float n = float(keys[k] & 0xFFu);
+    if (n == 0.0)
+      continue;
+    vec4 c;
+    bool found = surfaceColorNear(x, y, labels[k], keys[k] & 0xFFFF0000u, c);
+    if (!found && labels[k] == ownLabel)
+    {
+      c = own;
+      found = true;
+    }
+    if (found)
+    {
+      sum += n * c;
+      counted += n;
+    }
+  }
+  if (counted == 0.0)
+    return own;
+  float rays = float(SVDAG_COVERAGE_GRID * SVDAG_COVERAGE_GRID);
+  return mix(own, sum / counted, rays / (rays + float(max(p.samples.x, 1u))));
+}
+
 // One a-trous iteration at pixel (x, y).
 void filterPixel(uint x, uint y)
 {
@@ -160,8 +249,9 @@ void filterPixel(uint x, uint y)
           continue;
         uint j = uint(q.x) + width * uint(q.y);
         uvec4 gq = guides.v[j];
-        // Another label, or a label edge pixel (the sign bit of its depth) other than this one.
-        if (gq.x != g.x || (j != i && (gq.z & 0x80000000u) != 0u))
+        // Another label, or a label edge pixel (the sign bit of its depth) other than this one,
+        // unless the image is one sample (through the pixel center: of its own label only).
+        if (gq.x != g.x || (j != i && (gq.z & 0x80000000u) != 0u && p.samples.x > 1u))
           continue;
         vec4 c = colors.v[j];
         // The 3x3 kernel (1/4, 1/2, 1/4) in each direction.
@@ -173,7 +263,7 @@ void filterPixel(uint x, uint y)
           float facing = max(dot(n, unpackNormal(gq.y)), 0.0);
           for (uint k = 0u; k < SVDAG_DENOISE_NORMAL_POWER_LOG2; ++k)
             facing *= facing;
-          float distance = abs(dot(n, position(q.x, q.y, uintBitsToFloat(gq.z))) - plane);
+          float distance = abs(dot(n, position(q.x, q.y, abs(uintBitsToFloat(gq.z)))) - plane);
           w *= facing * exp(-distance * planeScale -
             abs(dot(c.rgb, LUMINANCE) - luma) * lumaScale);
         }
@@ -185,6 +275,14 @@ void filterPixel(uint x, uint y)
     // The center's own weight is never 0, so weights > 0.
     result = sum / weights;
     resultVariance = varianceSum / (weights * weights);
+  }
+  // The last iteration resolves label edge pixels from their coverage (background ones too).
+  if (p.samples.y != 0u && (p.geometry.x != 0u || p.geometry.y != 0u))
+  {
+    DenoiseUvec4s records = DenoiseUvec4s(p.geometry.xy);
+    uvec4 keys = records.v[2u * i + 1u];
+    if (keys != uvec4(0u))
+      result = resolveEdge(x, y, records.v[2u * i], keys, g.x, result);
   }
   DenoiseVec4s(p.colors.zw).v[i] = result;
   DenoiseGuides(p.variances.zw).v[i] = uvec4(g.xyz, floatBitsToUint(resultVariance));

@@ -23,11 +23,15 @@
  * SVDAG_DENOISE_TEMPORAL_SAMPLES samples on; before that the spatial variance of the luminance
  * over the 5x5 same-label neighbourhood, divided by the samples; 0, i.e. unfiltered, for a pixel
  * with an 8-neighbour of another label from then on: its mean is the edge's antialiasing, not
- * noise). Such edge pixels are never taps of another pixel (their samples may have hit the
- * neighbouring label), so no radiance of one label reaches a pixel inside another. Positions are
- * recomputed from
- * the depth and the rays. Every iteration filters the variance with the squared weights, as SVGF
- * does.
+ * noise). Such edge pixels are taps of another pixel only while the image is one sample (through
+ * the pixel center, so of its own label); later their samples may have hit the neighbouring
+ * label, so no radiance of one label reaches a pixel inside another. Positions are recomputed
+ * from the depth and the rays. Every iteration filters the variance with the squared weights, as
+ * SVGF does. The last iteration resolves the pixels that have a coverage record (GpuLayout.h:
+ * label edges and steps between entry faces): the colors of the surfaces their sub-pixel rays
+ * hit, each the 5x5 neighbourhood's mean of the pixels showing it (same label and entry face,
+ * not on a label edge where some are; nearer ones weigh more), weighted by the rays' counts, then
+ * mixed with the pixel's own value by G / (G + samples), G the coverage rays.
  * Parameters live in a buffer reached through its device address (pushed as a uvec2), one slot
  * per dispatch of a frame. Only vec4 / uvec4 members: the std430 layout is the C++ struct's.
  */
@@ -88,7 +92,8 @@ SVDAG_DENOISE_PARAMS_BEGIN(DenoiseParams)
   // shading normal packed in 32 bits, the depth's float bits with the sign bit set on a label
   // edge, the variance's float bits)
   uvec4 variances;
-  uvec4 geometry;  // addresses: xy unused; zw the color output (RGBA8), written by the last
+  uvec4 geometry;  // addresses: xy the label edge coverage records (GpuLayout.h; 0: none), read
+                   // by the last iteration; zw the color output (RGBA8), written by the last
                    // iteration
 SVDAG_DENOISE_PARAMS_END
 

@@ -120,6 +120,23 @@ SVDAG_GPU_CONST SVDAG_SHADING_SMOOTH = 1u;
 /* Depth written where a ray hits nothing (FLT_MAX; finite, so no inf ever reaches an output). */
 #define SVDAG_DEPTH_MISS 3.402823466e38f
 
+/* Edge coverage, for the denoiser (DenoiseLayout.h). One sample per pixel goes through the pixel
+ * center, so a pixel on an edge shows one surface where the image should show a blend. With the
+ * denoiser on, the first full-resolution pass of an accumulation is followed by a second dispatch
+ * of the trace with coverage.z = 1: every pixel whose pixel-center surface (label and entry face)
+ * differs from one of its 8 neighbours' (a label edge, or a step of a voxel staircase) traces the
+ * first hits of SVDAG_COVERAGE_GRID^2 camera rays through the centers of a grid of as many
+ * sub-pixels (clipping, hidden labels and ray limits as for any camera ray; one trace each, no
+ * shading) and counts the surfaces they hit: a surface is a label and an entry face (a groove's
+ * walls and floor are lit unlike the face around them). Its record is two uvec4 per pixel (index
+ * 2 i and 2 i + 1): up to SVDAG_COVERAGE_SLOTS surfaces, slot k's label index + 1 (0: background)
+ * in the first, and in the second its count (bits 0..7) and its world entry face normal,
+ * octahedral, as two snorm8 (bits 16..31; 0 for none); a count of 0 marks an unused slot, all
+ * counts 0 any other pixel; rays beyond the slots go uncounted. Samples and accumulations are
+ * untouched by that dispatch. */
+#define SVDAG_COVERAGE_GRID 4u
+#define SVDAG_COVERAGE_SLOTS 4u
+
 SVDAG_UNIFORMS_BEGIN(FrameUniforms)
   vec4 rayOrigin;      // xyz: ray origin at u = v = 0 minus the scene's reference point (Scene.h:
                        // the instance transform is shifted alike); w: 1 = bounded (far plane)
@@ -174,6 +191,8 @@ SVDAG_UNIFORMS_BEGIN(FrameUniforms)
   uvec4 stepStatistics; // addresses: xy per-pixel step counters (the statistics variant only:
                        // Traversal.h's SVDAG_STAT_COUNT uint32 per pixel, counter c of pixel i
                        // at i * SVDAG_STAT_COUNT + c, summed over the pass's rays); z, w unused
+  uvec4 coverage;      // addresses: xy the coverage records (two uvec4 per pixel, above); z: 1 = this
+                       // dispatch traces the coverage of label edge pixels, not samples
   // Clipping (Module/core/svdag/Clipping.h): every ray, primary and secondary, is clipped to the
   // region the planes keep. x: planes used in clipPlanes (0: no clipping); y, z, w unused.
   uvec4 clipping;
@@ -208,8 +227,8 @@ SVDAG_GPU_FN vec3 svdagLabelColor(uint labelIndex)
 }
 
 #ifdef __cplusplus
-// 35 members and the clipping plane array (a vec4 array has a 16-byte stride in std140 too).
-static_assert(sizeof(FrameUniforms) == (35 + SVDAG_CLIP_MAX_SLOTS) * 16,
+// 36 members and the clipping plane array (a vec4 array has a 16-byte stride in std140 too).
+static_assert(sizeof(FrameUniforms) == (36 + SVDAG_CLIP_MAX_SLOTS) * 16,
   "FrameUniforms must stay a list of 16-byte members");
 } // namespace gpu
 } // namespace render
