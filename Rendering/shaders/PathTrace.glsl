@@ -211,11 +211,16 @@ bool surfaceEdge(uvec2 pixel, uint width, uint height)
   return false;
 }
 
-// Counts one coverage ray's surface (label index + 1, 0: background; its entry face normal) in
-// the pixel's record (GpuLayout.h): labels in `labels`, counts and packed faces in `keys`.
-void countCoverage(inout uvec4 labels, inout uvec4 keys, uint label, vec3 face)
+// A coverage ray's entry face as its record keeps it (GpuLayout.h; 0 for the background).
+uint coverageFaceBits(uint label, vec3 face)
 {
-  uint faceBits = label != 0u ? svdagPackDirection8(face) << 16u : 0u;
+  return label != 0u ? svdagPackDirection8(face) << 16u : 0u;
+}
+
+// Counts one coverage ray's surface (label index + 1, 0: background; coverageFaceBits) in the
+// pixel's record (GpuLayout.h): labels in `labels`, counts and packed faces in `keys`.
+void countCoverage(inout uvec4 labels, inout uvec4 keys, uint label, uint faceBits)
+{
   for (uint k = 0u; k < SVDAG_COVERAGE_SLOTS; ++k)
   {
     if (keys[k] == 0u)
@@ -232,25 +237,59 @@ void countCoverage(inout uvec4 labels, inout uvec4 keys, uint label, vec3 face)
   }
 }
 
+#ifdef SVDAG_COVERAGE_WORKGROUP_SIZE
+// The compute backend shares out a workgroup's coverage rays (SVDAG_COVERAGE_WORKGROUP_SIZE
+// invocations, all calling svdagRenderPixel): its edge pixels are listed, and every invocation
+// traces an equal share of their rays, where one invocation per edge pixel would keep its SIMD
+// neighbours idle through all of them. Then each edge pixel counts its rays' hits.
+shared uint sCoverageEdges;
+shared uint sCoveragePixels[SVDAG_COVERAGE_WORKGROUP_SIZE];
+shared uint sCoverageLabels[SVDAG_COVERAGE_WORKGROUP_SIZE * SVDAG_COVERAGE_GRID * SVDAG_COVERAGE_GRID];
+shared uint sCoverageFaces[SVDAG_COVERAGE_WORKGROUP_SIZE * SVDAG_COVERAGE_GRID * SVDAG_COVERAGE_GRID];
+#endif
+
 // One pixel of the frame: its primary outputs (on the first pass of an accumulation) and
 // frame.sampling.y camera paths added to its sums; or, in the coverage dispatch
-// (frame.coverage.z, GpuLayout.h), the first hits of its sub-pixel rays if it is on a label edge.
+// (frame.coverage.z, GpuLayout.h), the first hits of its sub-pixel rays if it is on an edge.
 // Both go through the path tracer's one trace site: a coverage ray is a path that ends at its
-// first hit (no bounces, no next-event estimation).
+// first hit (no bounces, no next-event estimation). With SVDAG_COVERAGE_WORKGROUP_SIZE every
+// invocation of the workgroup must call this (it has barriers in the coverage dispatch).
 void svdagRenderPixel(uvec2 pixel)
 {
   uint width = frame.image.x;
   uint height = frame.image.y;
-  if (pixel.x >= width || pixel.y >= height)
+  bool coverage = frame.coverage.z != 0u;
+  bool inImage = pixel.x < width && pixel.y < height;
+  if (!inImage && !coverage)
     return;
-  uint index = pixel.x + width * pixel.y;
+  uint index = inImage ? pixel.x + width * pixel.y : 0u;
   uint before = frame.sampling.x;
   uint samples = frame.sampling.y;
-  bool coverage = frame.coverage.z != 0u;
   const uint coverageRays = SVDAG_COVERAGE_GRID * SVDAG_COVERAGE_GRID;
-  if (coverage)
-    samples = surfaceEdge(pixel, width, height) ? coverageRays : 0u;
+  bool edge = coverage && inImage && surfaceEdge(pixel, width, height);
   uvec4 coveredLabels = uvec4(0u), coveredKeys = uvec4(0u);
+#ifdef SVDAG_COVERAGE_WORKGROUP_SIZE
+  const uint group = SVDAG_COVERAGE_WORKGROUP_SIZE;
+  uint lane = gl_LocalInvocationIndex;
+  uint edgeSlot = 0u;
+  if (coverage)
+  {
+    if (lane == 0u)
+      sCoverageEdges = 0u;
+    barrier();
+    if (edge)
+    {
+      edgeSlot = atomicAdd(sCoverageEdges, 1u);
+      sCoveragePixels[edgeSlot] = index;
+    }
+    barrier();
+    uint rays = sCoverageEdges * coverageRays;
+    samples = lane < rays ? (rays - lane + group - 1u) / group : 0u;
+  }
+#else
+  if (coverage)
+    samples = edge ? coverageRays : 0u;
+#endif
 
   gEnvMarginal = SvdagFloats(frame.environmentMap.xy);
   gEnvConditional = SvdagFloats(frame.environmentMap.zw);
@@ -270,9 +309,23 @@ void svdagRenderPixel(uvec2 pixel)
     // One independent stream per (pixel, global sample index, seed).
     uint rng = pcgHash(index ^ pcgHash((before + s) ^ pcgHash(frame.sampling.z)));
     vec2 jitter = vec2(random01(rng), random01(rng));
+    // The pixel the ray goes through: this one, or in the shared coverage, the edge pixel whose
+    // ray number `slot` of the workgroup's list this is.
+    uint rayIndex = index;
+    uint slot = s;
+#ifdef SVDAG_COVERAGE_WORKGROUP_SIZE
     if (coverage)
-      jitter = (vec2(s % SVDAG_COVERAGE_GRID, s / SVDAG_COVERAGE_GRID) + 0.5) /
+    {
+      slot = lane + s * group;
+      rayIndex = sCoveragePixels[slot / coverageRays];
+    }
+#endif
+    if (coverage)
+    {
+      uint sub = slot % coverageRays;
+      jitter = (vec2(sub % SVDAG_COVERAGE_GRID, sub / SVDAG_COVERAGE_GRID) + 0.5) /
         float(SVDAG_COVERAGE_GRID);
+    }
     bool primary = before == 0u && s == 0u && !coverage;
     if (primary)
       jitter = vec2(0.5);
@@ -285,7 +338,8 @@ void svdagRenderPixel(uvec2 pixel)
       gPrimaryPayload.shading = vec4(0.0);
     }
     gCapturePrimary = primary || coverage;
-    CameraRay ray = cameraRay(vec2(pixel) + jitter, index, width, height);
+    CameraRay ray = cameraRay(vec2(rayIndex % width, rayIndex / width) + jitter, rayIndex, width,
+      height);
     gFirstQuery = true;
     gCameraRayHit = false;
     // Bounded so that sums of absurd emissions stay finite (tracePath never returns NaN/Inf).
@@ -295,7 +349,13 @@ void svdagRenderPixel(uvec2 pixel)
     gCapturePrimary = false;
     if (coverage)
     {
-      countCoverage(coveredLabels, coveredKeys, gPrimaryPayload.label, gPrimaryPayload.normal);
+      uint faceBits = coverageFaceBits(gPrimaryPayload.label, gPrimaryPayload.normal);
+#ifdef SVDAG_COVERAGE_WORKGROUP_SIZE
+      sCoverageLabels[slot] = gPrimaryPayload.label;
+      sCoverageFaces[slot] = faceBits;
+#else
+      countCoverage(coveredLabels, coveredKeys, gPrimaryPayload.label, faceBits);
+#endif
       continue;
     }
     if (primary)
@@ -307,6 +367,16 @@ void svdagRenderPixel(uvec2 pixel)
   }
   if (coverage)
   {
+#ifdef SVDAG_COVERAGE_WORKGROUP_SIZE
+    barrier();
+    if (edge)
+    {
+      for (uint r = edgeSlot * coverageRays; r < (edgeSlot + 1u) * coverageRays; ++r)
+        countCoverage(coveredLabels, coveredKeys, sCoverageLabels[r], sCoverageFaces[r]);
+    }
+#endif
+    if (!inImage)
+      return;
     SvdagUvec4Output records = SvdagUvec4Output(frame.coverage.xy);
     records.v[2u * index] = coveredLabels;
     records.v[2u * index + 1u] = coveredKeys;

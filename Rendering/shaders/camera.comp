@@ -110,6 +110,8 @@ void svdagTraceInterval(vec3 origin, vec3 direction, float tmin, float tmax, uin
     h.lod == SVDAG_LOD_VOXEL ? h.block : SVDAG_NO_BLOCK, local, d, worldToIndex);
 }
 
+// The coverage dispatch shares a workgroup's sub-pixel rays among its invocations (PathTrace.glsl).
+#define SVDAG_COVERAGE_WORKGROUP_SIZE (SVDAG_COMPUTE_GROUP_SIZE * SVDAG_COMPUTE_GROUP_SIZE)
 #include "PathTrace.glsl"
 
 void main()
