@@ -196,8 +196,11 @@ struct TraceImages
     pixels = count;
   }
 
-  // The label edge coverage records (GpuLayout.h), made for the denoiser's first use.
+  // The edge coverage records (GpuLayout.h), made for the denoiser's first use, and whether they
+  // are the current accumulation's (traced on its first pass: the denoiser may be switched on
+  // later, or the first pass may have been reduced).
   Buffer coverage;
+  bool coverageCurrent = false;
 
   VkDeviceAddress coverageRecords(Context& context)
   {
@@ -1176,12 +1179,15 @@ const Image& Renderer::render(PassUse use)
     denoised.variance = traced.variance.address();
     denoised.hdr = traced.hdr.address();
     denoised.color = traced.color.address();
-    denoised.coverage = r == 1 ? traced.coverageRecords(g.context) : 0;
   }
   // A new accumulation's edges get their coverage traced once, for every later pass; not in a
   // reduced trace, whose edges the upsampler places from the full-resolution guides (and whose
   // frames keep to a time budget).
   const bool traceCoverage = settings.denoise && u.sampling.x == 0 && r == 1;
+  if (u.sampling.x == 0)
+    traced.coverageCurrent = traceCoverage;
+  if (settings.denoise && traced.coverageCurrent)
+    denoised.coverage = traced.coverageRecords(g.context);
   if (r > 1 && !g.upsampler)
     g.upsampler = std::make_unique<UpsamplePass>(g.context);
   gpu::UpsampleParams upsample{};

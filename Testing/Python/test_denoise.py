@@ -209,3 +209,26 @@ def test_denoise_in_every_layer(two_boxes, tmp_path):
                                  timeout=300)
             assert run.returncode == 0, run.stderr
             assert json.loads(run.stdout.strip().splitlines()[-1])["denoise"] is expected
+
+
+def test_denoiser_switched_on_mid_accumulation(two_boxes):
+    """Edge coverage is traced on an accumulation's first pass: a denoiser switched on later in
+    the accumulation (which goes on) leaves the edges as the samples have them, from 4 samples on,
+    rather than resolving them from the records of another view."""
+    raw, later = renderer(two_boxes, False), renderer(two_boxes, True)
+    expected = render_to(raw, 4)
+    # Records of another view first (the denoiser on), then this view's accumulation without it.
+    assert later.ResetCamera(70, 40, 1.0)
+    render_to(later, 1)
+    later.GetSettings().SetDenoise(False)
+    assert later.ResetCamera(35, 25, 1.0)
+    render_to(later, 3)
+    later.GetSettings().SetDenoise(True)
+    got = render_to(later, 4)
+    assert later.GetAccumulatedSamples() == 4  # the accumulation went on
+    label = output(raw, "Label")
+    edges = (label != 0) & ~(inside(label, 1) | inside(label, 2))
+    assert edges.sum() > 50
+    assert np.array_equal(got[edges], expected[edges])
+    # Inside the labels the filter did run.
+    assert not np.array_equal(got[~edges & (label != 0)], expected[~edges & (label != 0)])
