@@ -134,8 +134,9 @@ void prepare(uint x, uint y)
 }
 
 // The color of a surface (label index + 1, 0: background; entry face packed as the coverage
-// record packs it) near pixel (x, y) in this iteration's input: the mean of the pixels in the 5x5
-// window that show it, nearer ones weighing more. Preferred are pixels of its label and face that
+// record packs it) near pixel (x, y) in this iteration's input: the mean of the pixels in the 7x7
+// window that show it (wider windows served membranes' thin strips better, narrower ones rounded
+// cells' staircases: bench/README.md). Preferred are pixels of its label and face that
 // are not on a label edge (an edge pixel's value may mix labels), then edge pixels of them (a
 // thin part, a groove's wall), then its label's pixels whatever their face. Background pixels are
 // all exact. False where its label is not there.
@@ -148,9 +149,9 @@ bool surfaceColorNear(uint x, uint y, uint label, uint faceBits, out vec4 color)
   uint faces = 3u * width * height; // where the entry face normals start (GpuLayout.h)
   vec4 sums[4] = vec4[4](vec4(0.0), vec4(0.0), vec4(0.0), vec4(0.0));
   float weights[4] = float[4](0.0, 0.0, 0.0, 0.0);
-  for (int dy = -2; dy <= 2; ++dy)
+  for (int dy = -3; dy <= 3; ++dy)
   {
-    for (int dx = -2; dx <= 2; ++dx)
+    for (int dx = -3; dx <= 3; ++dx)
     {
       ivec2 q = ivec2(x, y) + ivec2(dx, dy);
       if (q.x < 0 || q.y < 0 || q.x >= int(width) || q.y >= int(height))
@@ -167,9 +168,8 @@ bool surfaceColorNear(uint x, uint y, uint label, uint faceBits, out vec4 color)
         kind = ((svdagPackDirection8(face) << 16u) == faceBits ? 0u : 2u) +
           ((gq.z & 0x80000000u) != 0u ? 1u : 0u);
       }
-      float w = 1.0 / float(1 + dx * dx + dy * dy);
-      sums[kind] += w * colors.v[j];
-      weights[kind] += w;
+      sums[kind] += colors.v[j];
+      weights[kind] += 1.0;
     }
   }
   for (uint kind = 0u; kind < 4u; ++kind)
