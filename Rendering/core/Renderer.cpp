@@ -1222,8 +1222,10 @@ const Image& Renderer::render(PassUse use)
   {
     // The same pipeline again, in its coverage mode: the uniform block differs, so it is a
     // submission of its own, after the labels it reads were written.
+    // (Its rays are not the frame's: the step counters stay the trace's.)
     gpu::FrameUniforms c = u;
     c.coverage = glm::uvec4(uint32_t(denoised.coverage), uint32_t(denoised.coverage >> 32), 1u, 0u);
+    c.stepStatistics = glm::uvec4(0u);
     std::memcpy(g.uniforms.mapped(), &c, sizeof(c));
     g.context.submitAndWait([&](VkCommandBuffer cmd) {
       VkMemoryBarrier labelsWritten{ VK_STRUCTURE_TYPE_MEMORY_BARRIER };

@@ -28,7 +28,7 @@ layout(buffer_reference, std430, buffer_reference_align = 16) buffer DenoiseGuid
 {
   uvec4 v[];
 };
-// Per pixel: the label edge coverage record (GpuLayout.h).
+// Per pixel: the edge coverage record, two uvec4 (GpuLayout.h).
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer DenoiseUvec4s
 {
   uvec4 v[];
@@ -184,7 +184,7 @@ bool surfaceColorNear(uint x, uint y, uint label, uint faceBits, out vec4 color)
   return false;
 }
 
-// A label edge pixel's color from its coverage record (GpuLayout.h): the colors of the surfaces
+// An edge pixel's color from its coverage record (GpuLayout.h): the colors of the surfaces
 // its sub-pixel rays hit, taken from pixels nearby, weighted by how many rays hit each. `own`
 // (the pixel's value) stands for a surface of its own label where none is near, and the estimate
 // gives way to the pixel's own mean as samples accumulate (weight G / (G + samples), G the
@@ -276,7 +276,8 @@ void filterPixel(uint x, uint y)
     result = sum / weights;
     resultVariance = varianceSum / (weights * weights);
   }
-  // The last iteration resolves label edge pixels from their coverage (background ones too).
+  // The last iteration resolves edge pixels (label edges and steps between faces, background
+  // ones too) from their coverage.
   if (p.samples.y != 0u && (p.geometry.x != 0u || p.geometry.y != 0u))
   {
     DenoiseUvec4s records = DenoiseUvec4s(p.geometry.xy);

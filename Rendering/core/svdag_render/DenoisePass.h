@@ -26,7 +26,7 @@ public:
     VkDeviceAddress label = 0, depth = 0, normal = 0, variance = 0;
     VkDeviceAddress hdr = 0;   // read, and written with the filtered image
     VkDeviceAddress color = 0; // written from the filtered image
-    VkDeviceAddress coverage = 0; // the label edge coverage records (GpuLayout.h; 0: none)
+    VkDeviceAddress coverage = 0; // the edge coverage records (GpuLayout.h; 0: none)
   };
 
   // Throws std::runtime_error where Vulkan refuses.

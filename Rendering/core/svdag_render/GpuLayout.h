@@ -192,7 +192,7 @@ SVDAG_UNIFORMS_BEGIN(FrameUniforms)
                        // Traversal.h's SVDAG_STAT_COUNT uint32 per pixel, counter c of pixel i
                        // at i * SVDAG_STAT_COUNT + c, summed over the pass's rays); z, w unused
   uvec4 coverage;      // addresses: xy the coverage records (two uvec4 per pixel, above); z: 1 = this
-                       // dispatch traces the coverage of label edge pixels, not samples
+                       // dispatch traces the coverage of edge pixels, not samples
   // Clipping (Module/core/svdag/Clipping.h): every ray, primary and secondary, is clipped to the
   // region the planes keep. x: planes used in clipPlanes (0: no clipping); y, z, w unused.
   uvec4 clipping;
