@@ -1221,18 +1221,13 @@ const Image& Renderer::render(PassUse use)
   if (traceCoverage)
   {
     // The same pipeline again, in its coverage mode: the uniform block differs, so it is a
-    // submission of its own, after the labels it reads were written.
-    // (Its rays are not the frame's: the step counters stay the trace's.)
+    // submission of its own (submitAndWait's opening barrier makes the labels and faces it reads
+    // visible). Its rays are not the frame's: the step counters stay the trace's.
     gpu::FrameUniforms c = u;
     c.coverage = glm::uvec4(uint32_t(denoised.coverage), uint32_t(denoised.coverage >> 32), 1u, 0u);
     c.stepStatistics = glm::uvec4(0u);
     std::memcpy(g.uniforms.mapped(), &c, sizeof(c));
     g.context.submitAndWait([&](VkCommandBuffer cmd) {
-      VkMemoryBarrier labelsWritten{ VK_STRUCTURE_TYPE_MEMORY_BARRIER };
-      labelsWritten.srcAccessMask = VK_ACCESS_MEMORY_WRITE_BIT;
-      labelsWritten.dstAccessMask = VK_ACCESS_MEMORY_READ_BIT | VK_ACCESS_MEMORY_WRITE_BIT;
-      vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_ALL_COMMANDS_BIT,
-        VK_PIPELINE_STAGE_ALL_COMMANDS_BIT, 0, 1, &labelsWritten, 0, nullptr, 0, nullptr);
       pipeline.record(cmd, tracedWidth, tracedHeight);
       recordAfterTrace(cmd);
     });

@@ -38,16 +38,20 @@ layout(buffer_reference, std430, buffer_reference_align = 16) writeonly buffer S
   uvec4 v[];
 };
 
+// The octahedral map of a unit vector into [-1, 1]^2 ((0, 0) for the zero vector), which the
+// packings below quantize.
+vec2 svdagOctahedral(vec3 n)
+{
+  vec2 o = n.xy / (abs(n.x) + abs(n.y) + abs(n.z) + 1e-20);
+  if (n.z < 0.0)
+    o = (1.0 - abs(o.yx)) * vec2(o.x >= 0.0 ? 1.0 : -1.0, o.y >= 0.0 ? 1.0 : -1.0);
+  return o;
+}
+
 // A unit vector (or 0) in 16 bits: octahedral, two snorm8 (the coverage records, GpuLayout.h).
 uint svdagPackDirection8(vec3 n)
 {
-  float l1 = abs(n.x) + abs(n.y) + abs(n.z);
-  if (l1 == 0.0)
-    return 0u;
-  vec2 o = n.xy / l1;
-  if (n.z < 0.0)
-    o = (1.0 - abs(o.yx)) * vec2(o.x >= 0.0 ? 1.0 : -1.0, o.y >= 0.0 ? 1.0 : -1.0);
-  return packSnorm4x8(vec4(o, 0.0, 0.0)) & 0xFFFFu;
+  return packSnorm4x8(vec4(svdagOctahedral(n), 0.0, 0.0)) & 0xFFFFu;
 }
 
 layout(buffer_reference, std430, buffer_reference_align = 4) readonly buffer SvdagFloats

@@ -45,10 +45,7 @@ DenoiseParams p;
 // A unit normal in 32 bits (octahedral, two snorm16), so that a tap reads its guides in one load.
 uint packNormal(vec3 n)
 {
-  vec2 o = n.xy / (abs(n.x) + abs(n.y) + abs(n.z) + 1e-20);
-  if (n.z < 0.0)
-    o = (1.0 - abs(o.yx)) * vec2(o.x >= 0.0 ? 1.0 : -1.0, o.y >= 0.0 ? 1.0 : -1.0);
-  return packSnorm2x16(o);
+  return packSnorm2x16(svdagOctahedral(n));
 }
 
 vec3 unpackNormal(uint bits)
@@ -133,22 +130,35 @@ void prepare(uint x, uint y)
     uvec4(label, packNormal(n), floatBitsToUint(edge ? -t : t), floatBitsToUint(variance));
 }
 
-// The color of a surface (label index + 1, 0: background; entry face packed as the coverage
-// record packs it) near pixel (x, y) in this iteration's input: the mean of the pixels in the 7x7
-// window that show it (wider windows served membranes' thin strips better, narrower ones rounded
-// cells' staircases: bench/README.md). Preferred are pixels of its label and face that
-// are not on a label edge (an edge pixel's value may mix labels), then edge pixels of them (a
-// thin part, a groove's wall), then its label's pixels whatever their face. Background pixels are
-// all exact. False where its label is not there.
-bool surfaceColorNear(uint x, uint y, uint label, uint faceBits, out vec4 color)
+// An edge pixel's color from its coverage record (GpuLayout.h): the colors of the surfaces (label
+// index + 1, 0: background; entry face) its sub-pixel rays hit, weighted by how many rays hit each.
+// A surface's color is the mean of the pixels in the 7x7 window that show it, in this
+// iteration's input (wider windows served membranes' thin strips better, narrower ones rounded
+// cells' staircases: bench/README.md). Preferred are pixels of its label and face that are not on
+// a label edge (an edge pixel's value may mix labels), then edge pixels of them (a thin part, a
+// groove's wall), then its label's pixels whatever their face; background pixels are all exact.
+// `own` (the pixel's value) stands for a surface of its own label where its label is not in the
+// window. The estimate gives way to the pixel's own mean as samples accumulate (weight
+// G / (G + samples), G the coverage rays), so that the accumulating image still converges to the
+// path tracer's. The window is read once for all the record's surfaces.
+vec4 resolveEdge(uint x, uint y, uvec4 labels, uvec4 keys, uint ownLabel, vec4 own)
 {
   uint width = p.sizes.x, height = p.sizes.y;
   DenoiseVec4s colors = DenoiseVec4s(p.colors.xy);
   DenoiseGuides guides = DenoiseGuides(p.variances.xy);
   DenoiseFloats normals = DenoiseFloats(p.guides2.xy);
   uint faces = 3u * width * height; // where the entry face normals start (GpuLayout.h)
-  vec4 sums[4] = vec4[4](vec4(0.0), vec4(0.0), vec4(0.0), vec4(0.0));
-  float weights[4] = float[4](0.0, 0.0, 0.0, 0.0);
+  // Per surface k of the record and kind of pixel (the preference order above).
+  vec4 sums[SVDAG_COVERAGE_SLOTS][4];
+  float weights[SVDAG_COVERAGE_SLOTS][4];
+  for (uint k = 0u; k < SVDAG_COVERAGE_SLOTS; ++k)
+  {
+    for (uint kind = 0u; kind < 4u; ++kind)
+    {
+      sums[k][kind] = vec4(0.0);
+      weights[k][kind] = 0.0;
+    }
+  }
   for (int dy = -3; dy <= 3; ++dy)
   {
     for (int dx = -3; dx <= 3; ++dx)
@@ -158,39 +168,24 @@ bool surfaceColorNear(uint x, uint y, uint label, uint faceBits, out vec4 color)
         continue;
       uint j = uint(q.x) + width * uint(q.y);
       uvec4 gq = guides.v[j];
-      if (gq.x != label)
+      if (all(notEqual(labels, uvec4(gq.x))))
         continue;
-      uint kind = 0u;
-      if (label != 0u)
+      uint faceBits = 0u;
+      uint edge = (gq.z & 0x80000000u) != 0u ? 1u : 0u;
+      if (gq.x != 0u)
+        faceBits = svdagPackDirection8(vec3(normals.v[faces + 3u * j],
+                     normals.v[faces + 3u * j + 1u], normals.v[faces + 3u * j + 2u])) << 16u;
+      vec4 c = colors.v[j];
+      for (uint k = 0u; k < SVDAG_COVERAGE_SLOTS; ++k)
       {
-        vec3 face = vec3(normals.v[faces + 3u * j], normals.v[faces + 3u * j + 1u],
-          normals.v[faces + 3u * j + 2u]);
-        kind = ((svdagPackDirection8(face) << 16u) == faceBits ? 0u : 2u) +
-          ((gq.z & 0x80000000u) != 0u ? 1u : 0u);
+        if (labels[k] != gq.x || (keys[k] & 0xFFu) == 0u)
+          continue;
+        uint kind = gq.x == 0u ? 0u : (faceBits == (keys[k] & 0xFFFF0000u) ? 0u : 2u) + edge;
+        sums[k][kind] += c;
+        weights[k][kind] += 1.0;
       }
-      sums[kind] += colors.v[j];
-      weights[kind] += 1.0;
     }
   }
-  for (uint kind = 0u; kind < 4u; ++kind)
-  {
-    if (weights[kind] > 0.0)
-    {
-      color = sums[kind] / weights[kind];
-      return true;
-    }
-  }
-  color = vec4(0.0);
-  return false;
-}
-
-// An edge pixel's color from its coverage record (GpuLayout.h): the colors of the surfaces
-// its sub-pixel rays hit, taken from pixels nearby, weighted by how many rays hit each. `own`
-// (the pixel's value) stands for a surface of its own label where none is near, and the estimate
-// gives way to the pixel's own mean as samples accumulate (weight G / (G + samples), G the
-// coverage rays), so that the accumulating image still converges to the path tracer's.
-vec4 resolveEdge(uint x, uint y, uvec4 labels, uvec4 keys, uint ownLabel, vec4 own)
-{
   vec4 sum = vec4(0.0);
   float counted = 0.0;
   for (uint k = 0u; k < SVDAG_COVERAGE_SLOTS; ++k)
@@ -198,14 +193,17 @@ vec4 resolveEdge(uint x, uint y, uvec4 labels, uvec4 keys, uint ownLabel, vec4 o
     float n = float(keys[k] & 0xFFu);
     if (n == 0.0)
       continue;
-    vec4 c;
-    bool found = surfaceColorNear(x, y, labels[k], keys[k] & 0xFFFF0000u, c);
-    if (!found && labels[k] == ownLabel)
+    bool found = false;
+    vec4 c = own;
+    for (uint kind = 0u; kind < 4u && !found; ++kind)
     {
-      c = own;
-      found = true;
+      if (weights[k][kind] > 0.0)
+      {
+        c = sums[k][kind] / weights[k][kind];
+        found = true;
+      }
     }
-    if (found)
+    if (found || labels[k] == ownLabel)
     {
       sum += n * c;
       counted += n;

@@ -122,17 +122,19 @@ def view_renderer(camera):
     return window, renderer
 
 
+def label_at(caster, renderer, x, y):
+    """The caster's label under display pixel (x, y) of the renderer's view, None for a miss."""
+    hit = caster_pick(caster, *pixel_ray(renderer, x, y))
+    return None if hit is None else hit[0]
+
+
 def expected_picks(cells, camera, picks, clip_plane=None):
     window, renderer = view_renderer(camera)
     caster = vtkSegmentationSVDAGRayCaster()
     caster.SetInputData(cells.dataobject)
     if clip_plane:
         caster.AddClippingPlane(clip_plane["origin"], clip_plane["normal"])
-    expected = []
-    for x, y, _ in picks:
-        hit = caster_pick(caster, *pixel_ray(renderer, x, y))
-        expected.append(None if hit is None else hit[0])
-    return expected
+    return [label_at(caster, renderer, x, y) for x, y, _ in picks]
 
 
 def test_paraview_information_numbers(scene, cells):
@@ -325,11 +327,6 @@ def gui_camera(cells):
     return {"position": list(center + distance * direction), "focal_point": list(center),
             "view_up": [0.0, 0.0, 1.0], "view_angle": 30.0, "size": list(GUI_SIZE),
             "clipping_range": [0.1 * distance, 3.0 * distance]}
-
-
-def label_at(caster, renderer, x, y):
-    hit = caster_pick(caster, *pixel_ray(renderer, x, y))
-    return None if hit is None else hit[0]
 
 
 def steady_pixels(caster, renderer, step):
