@@ -250,7 +250,8 @@ shared uint sCoverageFaces[SVDAG_COVERAGE_WORKGROUP_SIZE * SVDAG_COVERAGE_GRID *
 
 // One pixel of the frame: its primary outputs (on the first pass of an accumulation) and
 // frame.sampling.y camera paths added to its sums; or, in the coverage dispatch
-// (frame.coverage.z, GpuLayout.h), the first hits of its sub-pixel rays if it is on an edge.
+// (GpuLayout.h: frame.coverage.z; the compute backend's coverage program), the first hits of its
+// sub-pixel rays if it is on an edge.
 // Both go through the path tracer's one trace site: a coverage ray is a path that ends at its
 // first hit (no bounces, no next-event estimation). With SVDAG_COVERAGE_WORKGROUP_SIZE every
 // invocation of the workgroup must call this (it has barriers in the coverage dispatch).
@@ -258,7 +259,11 @@ void svdagRenderPixel(uvec2 pixel)
 {
   uint width = frame.image.x;
   uint height = frame.image.y;
-  bool coverage = frame.coverage.z != 0u;
+#ifdef SVDAG_COVERAGE_WORKGROUP_SIZE
+  const bool coverage = featureCoverage;
+#else
+  const bool coverage = frame.coverage.z != 0u;
+#endif
   bool inImage = pixel.x < width && pixel.y < height;
   if (!inImage && !coverage)
     return;

@@ -122,8 +122,9 @@ TEST(DeviceSharing, RenderersShareOneDeviceAndRenderWhatTheyRenderAlone)
   }
   // Every byte on the device is one renderer's or the shared pipelines' (none is counted twice).
   EXPECT_EQ(together[0]->deviceAllocatedBytes(), sum + together[0]->sharedDeviceBytes());
-  // One pipeline per backend for all four renderers.
-  EXPECT_EQ(together[0]->pipelineCompilations(), 2u);
+  // One pipeline per backend for all four renderers, and the compute backend's coverage program
+  // for the denoiser's edges.
+  EXPECT_EQ(together[0]->pipelineCompilations(), 3u);
 
   // The device goes with its last user; the next one creates a new device.
   together.clear();
