@@ -12,49 +12,39 @@ ComputePipeline::ComputePipeline(
   : Ctx(context)
 {
   VkDevice device = context.device();
-  VkPushConstantRange range{ VK_SHADER_STAGE_COMPUTE_BIT, 0, 2 * sizeof(uint32_t) };
+  const VkPushConstantRange range{ VK_SHADER_STAGE_COMPUTE_BIT, 0, 2 * sizeof(uint32_t) };
   VkPipelineLayoutCreateInfo layout{ VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO };
   layout.pushConstantRangeCount = 1;
   layout.pPushConstantRanges = &range;
   check(vkCreatePipelineLayout(device, &layout, nullptr, &this->Layout),
     (std::string(what) + ": vkCreatePipelineLayout").c_str());
-  VkShaderModuleCreateInfo module{ VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO };
-  module.codeSize = bytes;
-  module.pCode = code;
-  VkShaderModule shader = VK_NULL_HANDLE;
-  VkResult result = vkCreateShaderModule(device, &module, nullptr, &shader);
-  if (result == VK_SUCCESS)
+  ComputeProgram::Interface interface;
+  interface.layout = this->Layout;
+  interface.pushConstants = &range;
+  interface.pushConstantCount = 1;
+  try
   {
-    VkComputePipelineCreateInfo info{ VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO };
-    info.stage = VkPipelineShaderStageCreateInfo{ VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO };
-    info.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
-    info.stage.module = shader;
-    info.stage.pName = "main";
-    info.layout = this->Layout;
-    result = vkCreateComputePipelines(
-      device, context.shared().pipelineCache(), 1, &info, nullptr, &this->Handle);
-    vkDestroyShaderModule(device, shader, nullptr);
+    this->Program = std::make_unique<ComputeProgram>(context, code, bytes, nullptr, interface, what);
   }
-  if (result != VK_SUCCESS)
+  catch (...)
   {
     vkDestroyPipelineLayout(device, this->Layout, nullptr);
-    check(result, what);
+    throw;
   }
   context.shared().savePipelineCache();
 }
 
 ComputePipeline::~ComputePipeline()
 {
-  VkDevice device = this->Ctx.device();
-  vkDestroyPipeline(device, this->Handle, nullptr);
-  vkDestroyPipelineLayout(device, this->Layout, nullptr);
+  this->Program.reset();
+  vkDestroyPipelineLayout(this->Ctx.device(), this->Layout, nullptr);
 }
 
 void ComputePipeline::dispatch(VkCommandBuffer cmd, VkDeviceAddress params, uint32_t width,
   uint32_t height, uint32_t groupSize) const
 {
   const uint32_t push[2] = { uint32_t(params), uint32_t(params >> 32) };
-  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, this->Handle);
+  this->Program->bind(cmd);
   vkCmdPushConstants(cmd, this->Layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(push), push);
   vkCmdDispatch(cmd, (width + groupSize - 1) / groupSize, (height + groupSize - 1) / groupSize, 1);
 }

@@ -33,6 +33,9 @@ const char* const MemoryExportExtension = VK_KHR_EXTERNAL_MEMORY_FD_EXTENSION_NA
 // Set (not "0"): every device counts as one without ray tracing (what a GPU without the
 // extensions does: the renderer uses its compute backend).
 const char* const NoRayTracingVariable = "SVDAG_VK_NO_RAY_TRACING";
+// Set (not "0"): compute shaders are pipelines even where the device has shader objects (a
+// comparison, or a driver whose shader objects misbehave).
+const char* const NoShaderObjectsVariable = "SVDAG_VK_NO_SHADER_OBJECTS";
 const char* const ValidationLayer = "VK_LAYER_KHRONOS_validation";
 
 std::string lower(std::string s)
@@ -92,6 +95,7 @@ struct Candidate
   std::vector<std::string> rayTracingMissing;
   bool memoryExport = false;
   bool float64 = false;
+  bool shaderObject = false;
   uint32_t queueFamily = 0;
 };
 
@@ -138,6 +142,17 @@ Candidate inspect(VkPhysicalDevice device)
   if (!features.v12.bufferDeviceAddress)
     c.missing.push_back("bufferDeviceAddress feature");
   c.float64 = features.base.features.shaderFloat64 == VK_TRUE;
+  if (hasExtension(extensions, VK_EXT_SHADER_OBJECT_EXTENSION_NAME) &&
+    !envFlag(NoShaderObjectsVariable))
+  {
+    VkPhysicalDeviceShaderObjectFeaturesEXT shaderObject{
+      VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SHADER_OBJECT_FEATURES_EXT
+    };
+    VkPhysicalDeviceFeatures2 query{ VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2 };
+    query.pNext = &shaderObject;
+    vkGetPhysicalDeviceFeatures2(device, &query);
+    c.shaderObject = shaderObject.shaderObject == VK_TRUE;
+  }
   if (c.rayTracingMissing.empty())
   {
     if (!features.as.accelerationStructure)
@@ -528,6 +543,7 @@ void Device::pickPhysicalDevice()
   this->RayTracing = best->rayTracingMissing.empty();
   this->MemoryExport = best->memoryExport;
   this->Float64 = best->float64;
+  this->ShaderObjects = best->shaderObject;
   for (size_t i = 0; i < best->rayTracingMissing.size(); ++i)
     this->RayTracingMissing += (i ? ", " : "") + best->rayTracingMissing[i];
 }
@@ -547,12 +563,20 @@ void Device::createDevice()
   asProps.pNext = &m3Props;
   VkPhysicalDeviceIDProperties idProps{ VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_ID_PROPERTIES };
   m3Props.pNext = &idProps;
+  VkPhysicalDeviceShaderObjectPropertiesEXT shaderObjectProps{
+    VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SHADER_OBJECT_PROPERTIES_EXT
+  };
+  if (this->ShaderObjects)
+    idProps.pNext = &shaderObjectProps;
   VkPhysicalDeviceProperties2 props{ VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2 };
   // The ray tracing property structs only where the device has the extensions.
   props.pNext = this->RayTracing ? static_cast<void*>(&rtProps) : static_cast<void*>(&m3Props);
   vkGetPhysicalDeviceProperties2(this->PhysicalDevice, &props);
   std::copy(std::begin(idProps.deviceUUID), std::end(idProps.deviceUUID), this->Uuids.device.begin());
   std::copy(std::begin(idProps.driverUUID), std::end(idProps.driverUUID), this->Uuids.driver.begin());
+  std::copy(std::begin(shaderObjectProps.shaderBinaryUUID),
+    std::end(shaderObjectProps.shaderBinaryUUID), this->ShaderBinaryUuid.begin());
+  this->ShaderBinaryVersion = shaderObjectProps.shaderBinaryVersion;
   for (int a = 0; a < 2; ++a)
     this->Limits.maxComputeWorkGroupCount[a] = props.properties.limits.maxComputeWorkGroupCount[a];
   this->Limits.maxMemoryAllocationSize = m3Props.maxMemoryAllocationSize;
@@ -590,6 +614,16 @@ void Device::createDevice()
     enabled.v12.pNext = nullptr;
   if (this->MemoryExport)
     extensions.push_back(MemoryExportExtension);
+  VkPhysicalDeviceShaderObjectFeaturesEXT shaderObject{
+    VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SHADER_OBJECT_FEATURES_EXT
+  };
+  if (this->ShaderObjects)
+  {
+    extensions.push_back(VK_EXT_SHADER_OBJECT_EXTENSION_NAME);
+    shaderObject.shaderObject = VK_TRUE;
+    shaderObject.pNext = enabled.base.pNext;
+    enabled.base.pNext = &shaderObject;
+  }
   const float priority = 1.0f;
   VkDeviceQueueCreateInfo queueInfo{ VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO };
   queueInfo.queueFamilyIndex = this->QueueFamily;
@@ -627,6 +661,13 @@ void Device::createDevice()
   }
   if (this->MemoryExport)
     load(f.getMemoryFd, "vkGetMemoryFdKHR");
+  if (this->ShaderObjects)
+  {
+    load(f.createShaders, "vkCreateShadersEXT");
+    load(f.destroyShader, "vkDestroyShaderEXT");
+    load(f.getShaderBinaryData, "vkGetShaderBinaryDataEXT");
+    load(f.cmdBindShaders, "vkCmdBindShadersEXT");
+  }
 
   // One cache for every pipeline any user compiles, started from the file an earlier process
   // left (PipelineCacheFile.h) where there is one to trust.
@@ -636,6 +677,7 @@ void Device::createDevice()
   std::copy(std::begin(props.properties.pipelineCacheUUID),
     std::end(props.properties.pipelineCacheUUID), this->PipelineCacheUuid.begin());
   const std::string directory = pipelineCacheDirectory();
+  this->ShaderBinaryDirectory = this->ShaderObjects ? directory : std::string();
   std::vector<uint8_t> initial;
   if (!directory.empty())
   {
@@ -669,6 +711,65 @@ PipelineCacheKey Device::pipelineCacheKey() const
   key.cacheUuid = this->PipelineCacheUuid;
   key.shaderHash = PipelineLibrary::shaderHash();
   return key;
+}
+
+PipelineCacheKey Device::shaderBinaryKey(uint64_t shaderHash) const
+{
+  PipelineCacheKey key = this->pipelineCacheKey();
+  key.cacheUuid = this->ShaderBinaryUuid;
+  // The device's binary version changes when the driver's binaries would no longer load.
+  key.shaderHash = fnv1a64(&this->ShaderBinaryVersion, sizeof(this->ShaderBinaryVersion), shaderHash);
+  return key;
+}
+
+std::vector<uint8_t> Device::loadShaderBinary(uint64_t shaderHash)
+{
+  if (this->ShaderBinaryDirectory.empty())
+    return {};
+  const PipelineCacheKey key = this->shaderBinaryKey(shaderHash);
+  std::string why;
+  std::vector<uint8_t> binary =
+    render::loadShaderBinary(shaderBinaryFileName(this->ShaderBinaryDirectory, key), key, why);
+  if (!why.empty())
+  {
+    std::lock_guard<std::mutex> lock(this->PipelineCacheLock);
+    this->ShaderBinaryProblem = why;
+  }
+  return binary;
+}
+
+void Device::saveShaderBinary(uint64_t shaderHash, const std::vector<uint8_t>& binary)
+{
+  if (this->ShaderBinaryDirectory.empty())
+    return;
+  const PipelineCacheKey key = this->shaderBinaryKey(shaderHash);
+  std::string why;
+  if (binary.empty())
+    why = "the driver returned no shader binary";
+  else
+    render::saveShaderBinary(
+      shaderBinaryFileName(this->ShaderBinaryDirectory, key), key, binary, why);
+  if (!why.empty())
+  {
+    std::lock_guard<std::mutex> lock(this->PipelineCacheLock);
+    this->ShaderBinaryProblem = why;
+  }
+}
+
+void Device::noteShaderCreated(bool fromBinary, const std::string& problem)
+{
+  ++(fromBinary ? this->ShaderBinariesLoaded : this->ShadersCompiled);
+  if (!problem.empty())
+  {
+    std::lock_guard<std::mutex> lock(this->PipelineCacheLock);
+    this->ShaderBinaryProblem = problem;
+  }
+}
+
+std::string Device::shaderBinaryProblem() const
+{
+  std::lock_guard<std::mutex> lock(this->PipelineCacheLock);
+  return this->ShaderBinaryProblem;
 }
 
 std::string Device::pipelineCacheProblem() const

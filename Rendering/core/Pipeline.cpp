@@ -125,6 +125,7 @@ void PipelineLibrary::destroy()
   for (auto& entry : this->Programs)
   {
     entry->program.table.reset();
+    entry->program.compute.reset();
     vkDestroyPipeline(device, entry->program.handle, nullptr);
   }
   this->Programs.clear();
@@ -310,6 +311,7 @@ void PipelineLibrary::compile(Program& program)
   catch (...)
   {
     program.table.reset();
+    program.compute.reset();
     if (program.handle)
       vkDestroyPipeline(this->Ctx.device(), program.handle, nullptr);
     program.handle = VK_NULL_HANDLE;
@@ -419,7 +421,10 @@ void Pipeline::record(VkCommandBuffer cmd, uint32_t width, uint32_t height,
   const bool compute = this->backend() == Backend::Compute;
   const VkPipelineBindPoint bind =
     compute ? VK_PIPELINE_BIND_POINT_COMPUTE : VK_PIPELINE_BIND_POINT_RAY_TRACING_KHR;
-  vkCmdBindPipeline(cmd, bind, p.handle);
+  if (p.compute)
+    p.compute->bind(cmd);
+  else
+    vkCmdBindPipeline(cmd, bind, p.handle);
   vkCmdBindDescriptorSets(cmd, bind, this->layout(), 0, 1, &this->Set, 0, nullptr);
   if (compute)
   {
@@ -442,20 +447,12 @@ void Pipeline::record(VkCommandBuffer cmd, uint32_t width, uint32_t height,
 void PipelineLibrary::createComputePipeline(
   Program& program, const VkSpecializationInfo& specialization)
 {
-  VkDevice device = this->Ctx.device();
-  Modules modules{ device, {} };
-  modules.list.push_back(
-    createModule(device, svdagShader_camera_comp, sizeof(svdagShader_camera_comp)));
-  VkComputePipelineCreateInfo info{ VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO };
-  info.stage = VkPipelineShaderStageCreateInfo{ VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO };
-  info.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
-  info.stage.module = modules.list.back();
-  info.stage.pName = "main";
-  info.stage.pSpecializationInfo = &specialization;
-  info.layout = this->Layout;
-  check(vkCreateComputePipelines(
-          device, this->Ctx.shared().pipelineCache(), 1, &info, nullptr, &program.handle),
-    "vkCreateComputePipelines");
+  ComputeProgram::Interface interface;
+  interface.layout = this->Layout;
+  interface.setLayouts = &this->SetLayout;
+  interface.setLayoutCount = 1;
+  program.compute = std::make_unique<ComputeProgram>(this->Ctx, svdagShader_camera_comp,
+    sizeof(svdagShader_camera_comp), &specialization, interface, "the path tracer");
 }
 
 void PipelineLibrary::createRayTracingPipeline(

@@ -19,7 +19,19 @@ namespace render
 namespace
 {
 
+// A pipeline cache file and a shader binary file differ in their magic: neither is ever taken for
+// the other.
+enum class Kind
+{
+  PipelineCache,
+  ShaderBinary
+};
 constexpr char Magic[8] = { 'V', 'T', 'K', 'S', 'V', 'D', 'A', 'G' };
+constexpr char ShaderBinaryMagic[8] = { 'V', 'T', 'K', 'S', 'V', 'B', 'I', 'N' };
+const char* magic(Kind kind)
+{
+  return kind == Kind::PipelineCache ? Magic : ShaderBinaryMagic;
+}
 constexpr uint32_t FormatVersion = 1;
 // Magic (8 bytes), version (4), key (36: vendor, device, driver, UUID, shader hash), data size
 // (8), checksum (8).
@@ -60,9 +72,10 @@ uint64_t get64(const uint8_t* p)
   return v;
 }
 
-std::vector<uint8_t> header(const PipelineCacheKey& key, const std::vector<uint8_t>& data)
+std::vector<uint8_t> header(
+  Kind kind, const PipelineCacheKey& key, const std::vector<uint8_t>& data)
 {
-  std::vector<uint8_t> h(Magic, Magic + sizeof(Magic));
+  std::vector<uint8_t> h(magic(kind), magic(kind) + sizeof(Magic));
   put32(h, FormatVersion);
   put32(h, key.vendorId);
   put32(h, key.deviceId);
@@ -122,7 +135,10 @@ std::string pipelineCacheDirectory()
   return "";
 }
 
-std::string pipelineCacheFileName(const std::string& directory, const PipelineCacheKey& key)
+namespace
+{
+std::string cacheFileName(
+  const std::string& directory, const char* prefix, const PipelineCacheKey& key)
 {
   char ids[64];
   std::snprintf(ids, sizeof(ids), "%08x-%08x-%08x-", key.vendorId, key.deviceId,
@@ -130,79 +146,73 @@ std::string pipelineCacheFileName(const std::string& directory, const PipelineCa
   uint8_t shader[8];
   for (int i = 0; i < 8; ++i)
     shader[i] = uint8_t(key.shaderHash >> (8 * (7 - i)));
-  return directory + "/pipelines-" + ids + hex(key.cacheUuid.data(), key.cacheUuid.size()) + "-" +
-    hex(shader, sizeof(shader)) + ".bin";
+  return directory + "/" + prefix + "-" + ids + hex(key.cacheUuid.data(), key.cacheUuid.size()) +
+    "-" + hex(shader, sizeof(shader)) + ".bin";
 }
 
-std::vector<uint8_t> loadPipelineCache(
-  const std::string& path, const PipelineCacheKey& key, std::string& why)
+// The data of a file of this kind and key, checked against our header (see the header file):
+// true where one was read; false for a file that does not exist (`why` empty) or one not to
+// trust (`why` says why).
+bool loadCacheFile(Kind kind, const std::string& path, const PipelineCacheKey& key,
+  std::vector<uint8_t>& data, std::string& why)
 {
   why.clear();
   std::error_code error;
   const std::filesystem::file_status status = std::filesystem::status(path, error);
   if (error || status.type() == std::filesystem::file_type::not_found)
-    return {};
+    return false;
   if (status.type() != std::filesystem::file_type::regular)
   {
     why = "not a regular file";
-    return {};
+    return false;
   }
   const uintmax_t size = std::filesystem::file_size(path, error);
   if (error)
   {
     why = "its size cannot be read: " + error.message();
-    return {};
+    return false;
   }
   if (size < HeaderBytes || size - HeaderBytes > MaxDataBytes)
   {
     why = "its size (" + std::to_string(size) + " bytes) is not that of a cache file";
-    return {};
+    return false;
   }
   std::ifstream in(path, std::ios::binary);
   std::vector<uint8_t> bytes(size_t(size), 0);
   if (!in || !in.read(reinterpret_cast<char*>(bytes.data()), std::streamsize(size)))
   {
     why = "it cannot be read";
-    return {};
+    return false;
   }
-  std::vector<uint8_t> data(bytes.begin() + HeaderBytes, bytes.end());
-  if (std::memcmp(bytes.data(), Magic, sizeof(Magic)) != 0 ||
+  data.assign(bytes.begin() + HeaderBytes, bytes.end());
+  if (std::memcmp(bytes.data(), magic(kind), sizeof(Magic)) != 0 ||
     get32(bytes.data() + 8) != FormatVersion)
   {
-    why = "not a vtkSVDAG pipeline cache of this format";
-    return {};
+    why = kind == Kind::PipelineCache ? "not a vtkSVDAG pipeline cache of this format"
+                                      : "not a vtkSVDAG shader binary of this format";
+    return false;
   }
-  const std::vector<uint8_t> expected = header(key, data);
+  const std::vector<uint8_t> expected = header(kind, key, data);
   if (std::memcmp(bytes.data() + KeyOffset, expected.data() + KeyOffset, KeyBytes) != 0)
   {
     why = "written for another device, driver or build";
-    return {};
+    return false;
   }
   if (get64(bytes.data() + SizeOffset) != data.size())
   {
     why = "truncated or extended (size field " + std::to_string(get64(bytes.data() + SizeOffset)) +
       ", data " + std::to_string(data.size()) + " bytes)";
-    return {};
+    return false;
   }
   if (get64(bytes.data() + ChecksumOffset) != get64(expected.data() + ChecksumOffset))
   {
     why = "its checksum does not match its data";
-    return {};
+    return false;
   }
-  // The driver's header must name this device too (the driver would reject it anyway; a file
-  // that passes the checksum but not this was written by something else).
-  if (data.size() < DriverHeaderBytes || get32(data.data()) < DriverHeaderBytes ||
-    get32(data.data() + 4) != 1u || get32(data.data() + 8) != key.vendorId ||
-    get32(data.data() + 12) != key.deviceId ||
-    std::memcmp(data.data() + 16, key.cacheUuid.data(), 16) != 0)
-  {
-    why = "the driver's header inside does not name this device";
-    return {};
-  }
-  return data;
+  return true;
 }
 
-bool savePipelineCache(const std::string& path, const PipelineCacheKey& key,
+bool saveCacheFile(Kind kind, const std::string& path, const PipelineCacheKey& key,
   const std::vector<uint8_t>& data, std::string& why)
 {
   why.clear();
@@ -219,7 +229,7 @@ bool savePipelineCache(const std::string& path, const PipelineCacheKey& key,
     path + ".tmp." + std::to_string(::getpid()) + "." + std::to_string(counter++);
   {
     std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
-    const std::vector<uint8_t> h = header(key, data);
+    const std::vector<uint8_t> h = header(kind, key, data);
     out.write(reinterpret_cast<const char*>(h.data()), std::streamsize(h.size()));
     out.write(reinterpret_cast<const char*>(data.data()), std::streamsize(data.size()));
     out.close();
@@ -238,6 +248,57 @@ bool savePipelineCache(const std::string& path, const PipelineCacheKey& key,
     return false;
   }
   return true;
+}
+} // namespace
+
+std::string pipelineCacheFileName(const std::string& directory, const PipelineCacheKey& key)
+{
+  return cacheFileName(directory, "pipelines", key);
+}
+
+std::string shaderBinaryFileName(const std::string& directory, const PipelineCacheKey& key)
+{
+  return cacheFileName(directory, "shader", key);
+}
+
+std::vector<uint8_t> loadPipelineCache(
+  const std::string& path, const PipelineCacheKey& key, std::string& why)
+{
+  std::vector<uint8_t> data;
+  if (!loadCacheFile(Kind::PipelineCache, path, key, data, why))
+    return {};
+  // The driver's header must name this device too (the driver would reject it anyway; a file
+  // that passes the checksum but not this was written by something else).
+  if (data.size() < DriverHeaderBytes || get32(data.data()) < DriverHeaderBytes ||
+    get32(data.data() + 4) != 1u || get32(data.data() + 8) != key.vendorId ||
+    get32(data.data() + 12) != key.deviceId ||
+    std::memcmp(data.data() + 16, key.cacheUuid.data(), 16) != 0)
+  {
+    why = "the driver's header inside does not name this device";
+    return {};
+  }
+  return data;
+}
+
+bool savePipelineCache(const std::string& path, const PipelineCacheKey& key,
+  const std::vector<uint8_t>& data, std::string& why)
+{
+  return saveCacheFile(Kind::PipelineCache, path, key, data, why);
+}
+
+std::vector<uint8_t> loadShaderBinary(
+  const std::string& path, const PipelineCacheKey& key, std::string& why)
+{
+  std::vector<uint8_t> data;
+  if (!loadCacheFile(Kind::ShaderBinary, path, key, data, why))
+    return {};
+  return data;
+}
+
+bool saveShaderBinary(const std::string& path, const PipelineCacheKey& key,
+  const std::vector<uint8_t>& data, std::string& why)
+{
+  return saveCacheFile(Kind::ShaderBinary, path, key, data, why);
 }
 
 } // namespace render

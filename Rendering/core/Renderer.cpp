@@ -376,7 +376,8 @@ Renderer::PipelineCacheStatus Renderer::pipelineCache() const
 {
   const auto& device = this->Device->context.shared();
   return { device.pipelineCacheFile(), device.pipelineCacheLoadedBytes(),
-    device.pipelineCacheProblem() };
+    device.pipelineCacheProblem(), device.hasShaderObjects(), device.shaderBinariesLoaded(),
+    device.shadersCompiled(), device.shaderBinaryProblem() };
 }
 
 bool Renderer::hasRayTracing() const

@@ -5,6 +5,7 @@
 #include <svdag/Builder.h>
 #include <svdag_render/Camera.h>
 #include <svdag_render/Context.h>
+#include <svdag_render/PipelineCacheFile.h>
 #include <svdag_render/Renderer.h>
 
 #include <gtest/gtest.h>
@@ -270,6 +271,108 @@ TEST(DeviceSharing, PipelineCacheFileIsReusedAndABadOneIgnored)
     expectSameImage(renderTwice(*r).image, reference.image, 0);
   }
   unsetenv("VTKSVDAG_PIPELINE_CACHE");
+  unsetenv("XDG_CACHE_HOME");
+  fs::remove_all(home);
+}
+
+// Compute shaders as shader objects (ComputeProgram.h) keep their binaries on disk: the next
+// device creates every one from its binary (none compiled) and renders the same image; a corrupt
+// binary file, or one the driver refuses, is compiled again (same image, a reason given) and
+// replaced; SVDAG_VK_NO_SHADER_OBJECTS=1 makes them pipelines, with the same image.
+TEST(DeviceSharing, ShaderBinariesAreReusedAndABadOneIgnored)
+{
+  namespace fs = std::filesystem;
+  const fs::path home = fs::temp_directory_path() / ("svdag-xdg-so-" + std::to_string(::getpid()));
+  fs::remove_all(home);
+  setenv("XDG_CACHE_HOME", home.c_str(), 1);
+  unsetenv("VTKSVDAG_PIPELINE_CACHE");
+  unsetenv("SVDAG_VK_NO_SHADER_OBJECTS");
+  const auto volume = randomVolume(9);
+  ASSERT_EQ(svdag::render::Renderer::deviceUsers(), 0u);
+  auto binaries = [&] {
+    std::vector<fs::path> files;
+    for (const auto& entry : fs::directory_iterator(home / "vtksvdag"))
+    {
+      if (entry.path().filename().string().rfind("shader-", 0) == 0)
+        files.push_back(entry.path());
+    }
+    return files;
+  };
+
+  Frame reference;
+  uint64_t shaders = 0;
+  {
+    auto r = makeRenderer(volume, svdag::render::Backend::Compute);
+    reference = renderTwice(*r);
+    const auto status = r->pipelineCache();
+    if (!status.shaderObjects)
+    {
+      unsetenv("XDG_CACHE_HOME");
+      fs::remove_all(home);
+      GTEST_SKIP() << "this device has no VK_EXT_shader_object";
+    }
+    // The path tracer, its coverage program and the denoiser at least.
+    shaders = status.shadersCompiled;
+    EXPECT_GE(shaders, 3u);
+    EXPECT_EQ(status.shaderBinariesLoaded, 0u);
+    EXPECT_EQ(status.shaderBinaryProblem, "");
+  }
+  ASSERT_EQ(binaries().size(), shaders);
+  {
+    auto r = makeRenderer(volume, svdag::render::Backend::Compute);
+    expectSameImage(renderTwice(*r).image, reference.image, 0);
+    const auto status = r->pipelineCache();
+    EXPECT_EQ(status.shaderBinariesLoaded, shaders);
+    EXPECT_EQ(status.shadersCompiled, 0u);
+    EXPECT_EQ(status.shaderBinaryProblem, "");
+  }
+  // A flipped bit (caught by our checksum), then a payload of garbage under a sound header
+  // (handed to the driver, which must refuse it): compiled again, the same image, the files
+  // rewritten.
+  for (const bool resealed : { false, true })
+  {
+    for (const fs::path& file : binaries())
+    {
+      std::vector<uint8_t> bytes(fs::file_size(file));
+      {
+        std::ifstream in(file, std::ios::binary);
+        in.read(reinterpret_cast<char*>(bytes.data()), std::streamsize(bytes.size()));
+      }
+      if (!resealed)
+        bytes[bytes.size() / 2] ^= 0x10;
+      else
+      {
+        for (size_t i = 64; i < bytes.size(); ++i)
+          bytes[i] = uint8_t((i * 2654435761u) >> 11);
+        const uint64_t sum = svdag::render::fnv1a64(bytes.data() + 64, bytes.size() - 64);
+        for (int i = 0; i < 8; ++i)
+          bytes[56 + i] = uint8_t(sum >> (8 * i));
+      }
+      std::ofstream out(file, std::ios::binary | std::ios::trunc);
+      out.write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size()));
+    }
+    auto r = makeRenderer(volume, svdag::render::Backend::Compute);
+    expectSameImage(renderTwice(*r).image, reference.image, 0);
+    const auto status = r->pipelineCache();
+    EXPECT_EQ(status.shaderBinariesLoaded, 0u) << resealed;
+    EXPECT_EQ(status.shadersCompiled, shaders) << resealed;
+    EXPECT_NE(status.shaderBinaryProblem.find(resealed ? "refused" : "checksum"),
+      std::string::npos)
+      << status.shaderBinaryProblem;
+  }
+  {
+    auto r = makeRenderer(volume, svdag::render::Backend::Compute);
+    renderTwice(*r);
+    EXPECT_EQ(r->pipelineCache().shaderBinariesLoaded, shaders) << "the binaries were not rewritten";
+  }
+  setenv("SVDAG_VK_NO_SHADER_OBJECTS", "1", 1);
+  {
+    auto r = makeRenderer(volume, svdag::render::Backend::Compute);
+    expectSameImage(renderTwice(*r).image, reference.image, 0);
+    EXPECT_FALSE(r->pipelineCache().shaderObjects);
+    EXPECT_EQ(r->pipelineCache().shadersCompiled, 0u);
+  }
+  unsetenv("SVDAG_VK_NO_SHADER_OBJECTS");
   unsetenv("XDG_CACHE_HOME");
   fs::remove_all(home);
 }

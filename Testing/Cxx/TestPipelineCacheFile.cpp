@@ -1,7 +1,8 @@
-// The persistent pipeline cache's file (PipelineCacheFile.h), without a device: what is saved
-// loads back byte for byte, and every kind of bad file (truncated, extended, flipped bits in the
-// header or the data, another key, a foreign driver header, not a file at all) is ignored with
-// a reason instead of reaching the driver.
+// The persistent pipeline cache's file and the shader binaries' files (PipelineCacheFile.h),
+// without a device: what is saved loads back byte for byte, and every kind of bad file
+// (truncated, extended, flipped bits in the header or the data, another key, a foreign driver
+// header, the other kind of file, not a file at all) is ignored with a reason instead of reaching
+// the driver.
 #include <svdag_render/PipelineCacheFile.h>
 
 #include <gtest/gtest.h>
@@ -197,6 +198,53 @@ TEST_F(PipelineCacheFile, BadFilesAreIgnoredWithAReason)
   EXPECT_NE(why.find("not a regular file"), std::string::npos) << why;
   EXPECT_FALSE(svdag::render::savePipelineCache(this->Path, key, data, why));
   EXPECT_NE(why, "");
+}
+
+// Shader binaries: opaque driver data (no driver header to check), in files named and marked
+// apart from the pipeline cache's, so that neither is ever read as the other.
+TEST_F(PipelineCacheFile, ShaderBinariesLoadBackAndAreNeverTakenForACache)
+{
+  const PipelineCacheKey key = testKey();
+  const std::string binaryPath = svdag::render::shaderBinaryFileName(this->Directory, key);
+  EXPECT_NE(binaryPath, this->Path);
+  EXPECT_EQ(std::filesystem::path(binaryPath).filename().string().rfind("shader-", 0), 0u)
+    << binaryPath;
+  std::vector<uint8_t> binary(777);
+  for (size_t i = 0; i < binary.size(); ++i)
+    binary[i] = uint8_t(i * 13 + 7);
+  std::string why = "stale";
+  EXPECT_TRUE(svdag::render::loadShaderBinary(binaryPath, key, why).empty());
+  EXPECT_EQ(why, "") << "a missing binary is no problem";
+  ASSERT_TRUE(svdag::render::saveShaderBinary(binaryPath, key, binary, why)) << why;
+  EXPECT_EQ(svdag::render::loadShaderBinary(binaryPath, key, why), binary);
+  EXPECT_EQ(why, "");
+  const std::vector<uint8_t> goodBinary = readFile(binaryPath);
+
+  // A pipeline cache where a binary is expected, and the other way round.
+  const std::vector<uint8_t> cache = driverData(key, 100);
+  ASSERT_TRUE(svdag::render::savePipelineCache(this->Path, key, cache, why)) << why;
+  const std::vector<uint8_t> goodCache = readFile(this->Path);
+  writeFile(binaryPath, goodCache);
+  EXPECT_TRUE(svdag::render::loadShaderBinary(binaryPath, key, why).empty());
+  EXPECT_NE(why.find("not a vtkSVDAG shader binary"), std::string::npos) << why;
+  writeFile(this->Path, goodBinary);
+  EXPECT_TRUE(svdag::render::loadPipelineCache(this->Path, key, why).empty());
+  EXPECT_NE(why.find("not a vtkSVDAG pipeline cache"), std::string::npos) << why;
+
+  // The checks of the shared form apply.
+  std::vector<uint8_t> flipped = goodBinary;
+  flipped[64 + 500] ^= 1;
+  writeFile(binaryPath, flipped);
+  EXPECT_TRUE(svdag::render::loadShaderBinary(binaryPath, key, why).empty());
+  EXPECT_NE(why.find("checksum"), std::string::npos) << why;
+  writeFile(binaryPath, std::vector<uint8_t>(goodBinary.begin(), goodBinary.end() - 3));
+  EXPECT_TRUE(svdag::render::loadShaderBinary(binaryPath, key, why).empty());
+  EXPECT_NE(why.find("truncated"), std::string::npos) << why;
+  writeFile(binaryPath, goodBinary);
+  PipelineCacheKey otherShader = key;
+  otherShader.shaderHash += 1;
+  EXPECT_TRUE(svdag::render::loadShaderBinary(binaryPath, otherShader, why).empty());
+  EXPECT_NE(why.find("another device, driver or build"), std::string::npos) << why;
 }
 
 TEST_F(PipelineCacheFile, DirectoryFromTheEnvironment)

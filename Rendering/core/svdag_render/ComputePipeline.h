@@ -1,11 +1,14 @@
-// A compute pipeline whose only input is a push constant (the device address of its parameters):
-// the depth pass and the denoiser. Compiled through the device's pipeline cache.
+// A compute shader whose only input is a push constant (the device address of its parameters):
+// the depth pass, the denoiser, the upsampler. A ComputeProgram: a shader object from its binary
+// on disk or a pipeline, whichever the device has.
 #pragma once
 
+#include "svdag_render/ComputeProgram.h"
 #include "svdag_render/Context.h"
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 
 namespace svdag
 {
@@ -34,7 +37,7 @@ public:
 private:
   Context& Ctx;
   VkPipelineLayout Layout = VK_NULL_HANDLE;
-  VkPipeline Handle = VK_NULL_HANDLE;
+  std::unique_ptr<ComputeProgram> Program;
 };
 
 } // namespace render

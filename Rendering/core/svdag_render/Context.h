@@ -19,6 +19,8 @@
 
 #include <vulkan/vulkan.h>
 
+#include "svdag_render/ShaderObjectApi.h"
+
 #include <array>
 #include <atomic>
 #include <cstdint>
@@ -55,6 +57,11 @@ struct DeviceFunctions
   PFN_vkCmdTraceRaysKHR cmdTraceRays = nullptr;
   // Null where the device cannot export memory (Device::canExportMemory).
   PFN_vkGetMemoryFdKHR getMemoryFd = nullptr;
+  // Null where compute shaders are pipelines (Device::hasShaderObjects).
+  PFN_vkCreateShadersEXT createShaders = nullptr;
+  PFN_vkDestroyShaderEXT destroyShader = nullptr;
+  PFN_vkGetShaderBinaryDataEXT getShaderBinaryData = nullptr;
+  PFN_vkCmdBindShadersEXT cmdBindShaders = nullptr;
 };
 
 // Which device and driver this is, as Vulkan and OpenGL both report them
@@ -148,6 +155,24 @@ public:
   // Writes the cache's data to its file (after a compilation); a failure is noted, not thrown.
   void savePipelineCache();
 
+  // Whether compute shaders are shader objects (VK_EXT_shader_object, where the device has it and
+  // SVDAG_VK_NO_SHADER_OBJECTS is not set; ComputeProgram.h) rather than pipelines: their
+  // binaries are kept on disk (PipelineCacheFile.h), so a later process creates them without
+  // compiling, which a pipeline cache does not give on lavapipe (it holds no pipeline data).
+  bool hasShaderObjects() const { return this->ShaderObjects; }
+  // The binary kept on disk for a shader of this hash (ComputeProgram.h's key), or none (empty:
+  // no file, no cache directory, or a file not to trust, whose reason shaderBinaryProblem()
+  // gives); and the binary of a shader just compiled, written to disk (a failure noted).
+  std::vector<uint8_t> loadShaderBinary(uint64_t shaderHash);
+  void saveShaderBinary(uint64_t shaderHash, const std::vector<uint8_t>& binary);
+  // Counts over the device's life: shaders created from a binary on disk, and compiled from
+  // SPIR-V (a binary the driver refused counts as compiled); why the last binary file was not
+  // used or written ("" when all went well).
+  uint64_t shaderBinariesLoaded() const { return this->ShaderBinariesLoaded.load(); }
+  uint64_t shadersCompiled() const { return this->ShadersCompiled.load(); }
+  void noteShaderCreated(bool fromBinary, const std::string& problem);
+  std::string shaderBinaryProblem() const;
+
   // Device memory every user holds together, and the part the device holds for all of them
   // (the pipelines' shader binding tables).
   uint64_t allocatedBytes() const { return this->AllocatedBytes.load(); }
@@ -173,6 +198,7 @@ private:
   void createDevice();
   void destroy();
   PipelineCacheKey pipelineCacheKey() const;
+  PipelineCacheKey shaderBinaryKey(uint64_t shaderHash) const;
 
   uint64_t Serial = 0;
   VkInstance Instance = VK_NULL_HANDLE;
@@ -194,6 +220,13 @@ private:
   std::string RayTracingMissing;
   bool MemoryExport = false;
   bool Float64 = false;
+  bool ShaderObjects = false;
+  std::array<uint8_t, 16> ShaderBinaryUuid{};
+  uint32_t ShaderBinaryVersion = 0;
+  std::string ShaderBinaryDirectory; // "" when the cache is disabled
+  std::string ShaderBinaryProblem;   // under PipelineCacheLock
+  std::atomic<uint64_t> ShaderBinariesLoaded{ 0 };
+  std::atomic<uint64_t> ShadersCompiled{ 0 };
   DeviceUuids Uuids;
   VkPhysicalDeviceMemoryProperties MemoryProperties{};
   uint64_t HeapBytes = 0; // device-local heaps (all heaps if none is device-local)

@@ -20,6 +20,7 @@
 #pragma once
 
 #include "svdag_render/Buffer.h"
+#include "svdag_render/ComputeProgram.h"
 #include "svdag_render/Context.h"
 #include "svdag_render/GpuLayout.h"
 #include "svdag_render/RenderSettings.h"
@@ -92,7 +93,8 @@ public:
   struct Program
   {
     ShaderFeatures features;
-    VkPipeline handle = VK_NULL_HANDLE;
+    VkPipeline handle = VK_NULL_HANDLE;           // ray tracing
+    std::unique_ptr<ComputeProgram> compute;      // compute
     Buffer table;
     VkStridedDeviceAddressRegionKHR raygen{}, miss{}, hit{}, callable{};
     double compileSeconds = 0; // wall time of its compilation (pipeline and binding table)

@@ -54,5 +54,17 @@ std::vector<uint8_t> loadPipelineCache(
 bool savePipelineCache(const std::string& path, const PipelineCacheKey& key,
   const std::vector<uint8_t>& data, std::string& why);
 
+// Compute shader binaries (VK_EXT_shader_object; ComputeProgram.h) live beside it in files of the
+// same form with a magic of their own, one per compiled shader:
+//   shader-<vendor>-<device>-<driver version>-<shader binary UUID>-<shader hash>.bin
+// where the key's cacheUuid is the device's shaderBinaryUUID and its shaderHash covers the
+// SPIR-V, the specialization and the device's shaderBinaryVersion. The same checks apply but the
+// driver's own header: the driver checks a binary itself, and one it refuses is compiled again.
+std::string shaderBinaryFileName(const std::string& directory, const PipelineCacheKey& key);
+std::vector<uint8_t> loadShaderBinary(
+  const std::string& path, const PipelineCacheKey& key, std::string& why);
+bool saveShaderBinary(const std::string& path, const PipelineCacheKey& key,
+  const std::vector<uint8_t>& data, std::string& why);
+
 } // namespace render
 } // namespace svdag

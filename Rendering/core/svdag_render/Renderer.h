@@ -110,12 +110,18 @@ public:
   uint64_t pipelineCompilations() const;
   // The device's persistent pipeline cache (PipelineCacheFile.h): its file ("" when disabled),
   // the bytes of driver data it started from (0: none, or none to trust) and why a file was not
-  // used or written ("" when all went well).
+  // used or written ("" when all went well). Where compute shaders are shader objects
+  // (ComputeProgram.h), how many the device created from binaries on disk and how many it
+  // compiled, and why a binary file was not used or written.
   struct PipelineCacheStatus
   {
     std::string file;
     uint64_t loadedBytes = 0;
     std::string problem;
+    bool shaderObjects = false;
+    uint64_t shaderBinariesLoaded = 0;
+    uint64_t shadersCompiled = 0;
+    std::string shaderBinaryProblem;
   };
   PipelineCacheStatus pipelineCache() const;
 
