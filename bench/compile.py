@@ -7,7 +7,10 @@ Run from the repository root (after the build):
 
 Each measurement is a new process of the C++ tool (build/bin/vtksvdag-render, 64x64, one frame)
 with fresh, empty folders for Mesa's shader cache (MESA_SHADER_CACHE_DIR) and for ours
-(XDG_CACHE_HOME), so the driver compiles the path tracer's pipeline from SPIR-V. The tool's
+(XDG_CACHE_HOME), so the driver compiles the path tracer's pipeline from SPIR-V ("cold"), then a
+second process on the same folders ("warm": where the device has shader objects, lavapipe's
+case, the compute shaders come from the binaries the first one saved; the ray tracing pipeline
+from whatever the driver's pipeline cache holds). The tool's
 JSON gives the pipeline creation time of its frame's pipeline (pipeline_compile_seconds) and the
 first frame's wall time (creation, the first dispatch and the trace of 64x64 pixels: lavapipe
 translates the shader to machine code at the first dispatch, so there the first frame is the
@@ -39,6 +42,7 @@ import tempfile
 
 REPO = pathlib.Path(__file__).resolve().parents[1]
 TOOL = REPO / "build" / "bin" / "vtksvdag-render"
+CACHES = ["cold", "warm"]
 VARIANTS = {
     "sky": [],
     "sun": ["--sun", "0,-20"],
@@ -57,22 +61,26 @@ def example_svdag(out: pathlib.Path) -> pathlib.Path:
     return path
 
 
-def measure(svdag: pathlib.Path, backend: str, variant: str, out: pathlib.Path) -> dict:
+def measure(svdag: pathlib.Path, backend: str, variant: str, out: pathlib.Path) -> list:
+    """Two processes on the same, initially empty cache folders: cold, then warm."""
+    rows = []
     with tempfile.TemporaryDirectory() as caches:
         env = dict(os.environ, MESA_SHADER_CACHE_DIR=os.path.join(caches, "mesa"),
                    XDG_CACHE_HOME=os.path.join(caches, "xdg"))
-        completed = subprocess.run(
-            [str(TOOL), str(svdag), str(out / "compile.png"), "--width", "64", "--height", "64",
-             "--backend", backend, *VARIANTS[variant]],
-            capture_output=True, text=True, env=env, timeout=600)
-    if completed.returncode != 0:
-        raise RuntimeError(f"{backend} {variant}: {completed.stderr.strip()}")
-    result = json.loads(completed.stdout.strip().splitlines()[-1])
-    if result["previewed"] != (variant == "preview"):
-        raise RuntimeError(f"{backend} {variant}: previewed is {result['previewed']}")
-    return {"backend": backend, "variant": variant,
-            "compile_seconds": result["pipeline_compile_seconds"],
-            "first_frame_seconds": result["ms_per_frame"] / 1000}
+        for state in CACHES:
+            completed = subprocess.run(
+                [str(TOOL), str(svdag), str(out / "compile.png"), "--width", "64", "--height",
+                 "64", "--backend", backend, *VARIANTS[variant]],
+                capture_output=True, text=True, env=env, timeout=600)
+            if completed.returncode != 0:
+                raise RuntimeError(f"{backend} {variant}: {completed.stderr.strip()}")
+            result = json.loads(completed.stdout.strip().splitlines()[-1])
+            if result["previewed"] != (variant == "preview"):
+                raise RuntimeError(f"{backend} {variant} {state}: previewed is {result['previewed']}")
+            rows.append({"backend": backend, "variant": variant, "caches": state,
+                         "compile_seconds": result["pipeline_compile_seconds"],
+                         "first_frame_seconds": result["ms_per_frame"] / 1000})
+    return rows
 
 
 def main() -> int:
@@ -92,20 +100,22 @@ def main() -> int:
     for _ in range(repeats):
         for backend in backends:
             for variant in VARIANTS:
-                rows.append(measure(svdag, backend, variant, args.out))
+                rows.extend(measure(svdag, backend, variant, args.out))
     with open(args.out / "compile.csv", "w", newline="") as f:
         writer = csv.DictWriter(f, fieldnames=list(rows[0]))
         writer.writeheader()
         writer.writerows(rows)
-    print(f"{'backend':8} {'variant':8} {'creation s':>10} {'first frame s':>14} {'/ sun':>6}")
+    print(f"{'backend':8} {'variant':8} {'caches':6} {'creation s':>10} {'first frame s':>14} "
+          f"{'/ sun':>6}")
     for backend in backends:
-        def median(key, variant):
-            return statistics.median(r[key] for r in rows
-                                     if r["backend"] == backend and r["variant"] == variant)
-        for variant in VARIANTS:
-            first = median("first_frame_seconds", variant)
-            print(f"{backend:8} {variant:8} {median('compile_seconds', variant):10.3f} "
-                  f"{first:14.3f} {first / median('first_frame_seconds', 'sun'):6.2f}")
+        for state in CACHES:
+            def median(key, variant):
+                return statistics.median(r[key] for r in rows if r["backend"] == backend and
+                                         r["variant"] == variant and r["caches"] == state)
+            for variant in VARIANTS:
+                first = median("first_frame_seconds", variant)
+                print(f"{backend:8} {variant:8} {state:6} {median('compile_seconds', variant):10.3f} "
+                      f"{first:14.3f} {first / median('first_frame_seconds', 'sun'):6.2f}")
     return 0
 
 

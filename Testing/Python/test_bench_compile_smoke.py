@@ -1,5 +1,5 @@
-"""Smoke test of `bench/compile.py --quick`: one cold-cache run of every variant on the compute
-backend, the CSV and the table. It asserts structure and that the preview was the frame traced
+"""Smoke test of `bench/compile.py --quick`: one cold-cache and one warm-cache run of every variant
+on the compute backend, the CSV and the table. It asserts structure and that the preview was the frame traced
 where asked (the script checks each run's `previewed`), never timings."""
 import csv
 import os
@@ -17,6 +17,7 @@ def test_compile_quick(tmp_path):
     assert completed.returncode == 0, completed.stdout[-3000:] + completed.stderr[-3000:]
     with open(tmp_path / "compile.csv", newline="") as f:
         rows = list(csv.DictReader(f))
-    assert sorted(r["variant"] for r in rows) == ["no-nee", "preview", "sky", "sun"]
+    assert sorted((r["variant"], r["caches"]) for r in rows) == [
+        (v, c) for v in ["no-nee", "preview", "sky", "sun"] for c in ["cold", "warm"]]
     assert all(float(r["compile_seconds"]) > 0 for r in rows)
     assert "preview" in completed.stdout and "/ sun" in completed.stdout
