@@ -16,6 +16,10 @@ first image is written (Python's start-up and imports included: what a user wait
                         a pyvista scene: off-screen Plotter of --size x --size, then
                         `add_segmentation(plotter, VOLUME_FILE, spp=1, backend=...)` and
                         `plotter.screenshot()` (reading and compressing the file included).
+  pyvista-compute-pipelines
+                        pyvista-compute with SVDAG_VK_NO_SHADER_OBJECTS=1: compute pipelines
+                        instead of shader objects, so warm caches hold no compiled shader of ours
+                        on lavapipe (what the shader binaries save)
   gpu-raycast           the same file into the same Plotter through vtkGPUVolumeRayCastMapper
                         (labels read with vtksvdag.read and decoded, as bench/vtk.py does:
                         Debian's VTK cannot read gzip NRRD; nearest interpolation, a categorical
@@ -49,7 +53,8 @@ REPO = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 import _scenes  # noqa: E402
 SHARED_DATA = pathlib.Path(os.environ.get("VTKSVDAG_SHARED_DATA") or REPO.parent / "shared" / "data")
-ROUTES = ["cli-compute", "cli-rt", "pyvista-compute", "pyvista-rt", "gpu-raycast"]
+ROUTES = ["cli-compute", "cli-rt", "pyvista-compute", "pyvista-rt", "gpu-raycast",
+          "pyvista-compute-pipelines"]
 CACHES = ["cold", "warm"]
 FIELDS = ["route", "cache", "repeat", "first_image_s", "process_s"]
 
@@ -64,7 +69,7 @@ import vtksvdag
 import _scenes
 plotter = pv.Plotter(off_screen=True, window_size=(size, size))
 if route.startswith("pyvista-"):
-    vtksvdag.add_segmentation(plotter, path, spp=1, backend=route.split("-", 1)[1])
+    vtksvdag.add_segmentation(plotter, path, spp=1, backend=route.split("-")[1])
 else:
     actor, _ = _scenes.gpu_raycast_volume(vtksvdag.read(path))
     plotter.add_actor(actor, reset_camera=True)
@@ -94,6 +99,9 @@ def run_once(route, volume, svdag, size, caches, out_png):
     env.pop("VTKSVDAG_PIPELINE_CACHE", None)
     env["MESA_SHADER_CACHE_DIR"] = str(caches / "mesa")
     env["XDG_CACHE_HOME"] = str(caches / "xdg")
+    env.pop("SVDAG_VK_NO_SHADER_OBJECTS", None)
+    if route.endswith("-pipelines"):
+        env["SVDAG_VK_NO_SHADER_OBJECTS"] = "1"
     if route.startswith("cli-"):
         command = [str(pathlib.Path(sys.executable).parent / "vtksvdag"), "render", str(svdag),
                    "-o", str(out_png), "--sun", "0", "-20", "--backend", route.split("-", 1)[1]]

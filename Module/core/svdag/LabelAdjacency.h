@@ -1,6 +1,9 @@
 // Which labels touch: the pairs of labels with at least one pair of face-adjacent voxels
-// (6-neighbourhood), computed from the compressed form one 16-voxel layer of cells at a time, so
-// memory stays at a few z-slices whatever the depth of the volume (no dense decode).
+// (6-neighbourhood), computed from the compressed form one layer of cells at a time without a
+// dense decode: each block's occupancy as 256 rows of 16 bits (from its leaves), the blocks of a
+// cell tested pairwise and against those across the cell's -x, -y and -z faces, where their
+// bounds allow a contact. The work grows with the blocks, not the voxels (fib_ts2's 15.6 million
+// voxels: 13,330 blocks), and memory with two layers' blocks.
 #pragma once
 
 #include "svdag/Parallel.h"
@@ -15,8 +18,8 @@ namespace svdag
 
 using LabelPair = std::array<uint32_t, 2>;
 
-// Bytes of working memory labelAdjacency needs besides its result: 17 z-slices of 32-bit label
-// indices (the cell layer being scanned and the last slice of the previous one).
+// Bytes of working memory labelAdjacency needs besides its result: the block records and rows
+// (512 bytes a block) of the two adjacent cell layers with the most blocks.
 uint64_t labelAdjacencyBytes(const Volume& volume);
 
 // Every pair {a, b} of label indices (into volume.labels) with a < b whose labels hold two voxels
