@@ -141,6 +141,15 @@ Candidate inspect(VkPhysicalDevice device)
   vkGetPhysicalDeviceFeatures2(device, &features.base);
   if (!features.v12.bufferDeviceAddress)
     c.missing.push_back("bufferDeviceAddress feature");
+  // The compute backend's edge coverage shares rays across a subgroup (PathTrace.glsl).
+  VkPhysicalDeviceSubgroupProperties subgroup{ VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES };
+  VkPhysicalDeviceProperties2 properties{ VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2 };
+  properties.pNext = &subgroup;
+  vkGetPhysicalDeviceProperties2(device, &properties);
+  const VkSubgroupFeatureFlags wanted = VK_SUBGROUP_FEATURE_BALLOT_BIT | VK_SUBGROUP_FEATURE_SHUFFLE_BIT;
+  if (!(subgroup.supportedStages & VK_SHADER_STAGE_COMPUTE_BIT) ||
+    (subgroup.supportedOperations & wanted) != wanted)
+    c.missing.push_back("subgroup ballot and shuffle in compute shaders");
   c.float64 = features.base.features.shaderFloat64 == VK_TRUE;
   if (hasExtension(extensions, VK_EXT_SHADER_OBJECT_EXTENSION_NAME) &&
     !envFlag(NoShaderObjectsVariable))

@@ -78,18 +78,6 @@ struct Modules
 };
 } // namespace
 
-ShaderFeatures coverageFeatures(const ShaderFeatures& trace, Backend backend)
-{
-  if (backend == Backend::RayTracing)
-    return trace;
-  // First hits depend on the geometry and on which labels let rays through, not on the light.
-  ShaderFeatures f;
-  f.nextEventEstimation = false;
-  f.transmission = trace.transmission;
-  f.coverage = true;
-  return f;
-}
-
 PipelineLibrary::PipelineLibrary(Context& context, Backend backend)
   : Ctx(context)
   , Kind(backend)
@@ -294,7 +282,6 @@ void PipelineLibrary::compile(Program& program)
   constants[SVDAG_CONSTANT_TRANSMISSION] = f.transmission;
   constants[SVDAG_CONSTANT_PREVIEW] = f.preview;
   constants[SVDAG_CONSTANT_STEP_STATISTICS] = f.stepStatistics;
-  constants[SVDAG_CONSTANT_COVERAGE] = f.coverage;
   VkSpecializationMapEntry entries[SVDAG_CONSTANT_COUNT];
   for (uint32_t i = 0; i < SVDAG_CONSTANT_COUNT; ++i)
     entries[i] = { i, uint32_t(i * sizeof(VkBool32)), sizeof(VkBool32) };
@@ -414,17 +401,15 @@ void Pipeline::updateDescriptors(VkBuffer uniforms, VkAccelerationStructureKHR t
   vkUpdateDescriptorSets(this->Ctx.device(), uint32_t(writes.size()), writes.data(), 0, nullptr);
 }
 
-void Pipeline::record(VkCommandBuffer cmd, uint32_t width, uint32_t height,
-  const PipelineLibrary::Program* program) const
+void Pipeline::record(VkCommandBuffer cmd, uint32_t width, uint32_t height) const
 {
-  const PipelineLibrary::Program& p = program ? *program : *this->Current;
   const bool compute = this->backend() == Backend::Compute;
   const VkPipelineBindPoint bind =
     compute ? VK_PIPELINE_BIND_POINT_COMPUTE : VK_PIPELINE_BIND_POINT_RAY_TRACING_KHR;
-  if (p.compute)
-    p.compute->bind(cmd);
+  if (this->Current->compute)
+    this->Current->compute->bind(cmd);
   else
-    vkCmdBindPipeline(cmd, bind, p.handle);
+    vkCmdBindPipeline(cmd, bind, this->Current->handle);
   vkCmdBindDescriptorSets(cmd, bind, this->layout(), 0, 1, &this->Set, 0, nullptr);
   if (compute)
   {
@@ -433,6 +418,7 @@ void Pipeline::record(VkCommandBuffer cmd, uint32_t width, uint32_t height,
   }
   else
   {
+    const PipelineLibrary::Program& p = *this->Current;
     this->Ctx.fn().cmdTraceRays(cmd, &p.raygen, &p.miss, &p.hit, &p.callable, width, height, 1);
   }
   // Makes the shader writes visible to the host reads after the pass.

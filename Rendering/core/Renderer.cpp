@@ -1077,11 +1077,6 @@ const Image& Renderer::render(PassUse use)
     limitsParams.depth = addresses(g.sceneDepth[d.slot]->address(), set.rayLimits.address());
     return limitsParams;
   };
-  // A denoised accumulation's coverage program compiles beside the frame's (lavapipe compiles
-  // each on one core).
-  const ShaderFeatures coverage = coverageFeatures(traceFeatures, backend);
-  if (settings.denoise && !preview && coverage != traceFeatures)
-    g.context.shared().pipelines(backend).compiledProgram(coverage);
   Pipeline& pipeline = g.pipeline(backend, traceFeatures);
   this->Previewed = false;
 
@@ -1189,7 +1184,7 @@ const Image& Renderer::render(PassUse use)
   // A new accumulation's edges get their coverage traced once, for every later pass; not in a
   // reduced trace, whose edges the upsampler places from the full-resolution guides (and whose
   // frames keep to a time budget).
-  // Nor in a preview, which is there because programs are still compiling.
+  // Nor in a preview, which stands in while the path tracer compiles.
   const bool traceCoverage = settings.denoise && u.sampling.x == 0 && r == 1 && !preview;
   if (u.sampling.x == 0)
     traced.coverageCurrent = traceCoverage;
@@ -1227,17 +1222,15 @@ const Image& Renderer::render(PassUse use)
   });
   if (traceCoverage)
   {
-    // The coverage program (coverageFeatures) over the same image: the uniform block differs,
-    // so it is a submission of its own (submitAndWait's opening barrier makes the labels and
-    // faces it reads visible). Its rays are not the frame's: the step counters stay the trace's.
+    // The same pipeline again, in its coverage mode: the uniform block differs, so it is a
+    // submission of its own (submitAndWait's opening barrier makes the labels and faces it reads
+    // visible). Its rays are not the frame's: the step counters stay the trace's.
     gpu::FrameUniforms c = u;
     c.coverage = glm::uvec4(uint32_t(denoised.coverage), uint32_t(denoised.coverage >> 32), 1u, 0u);
     c.stepStatistics = glm::uvec4(0u);
     std::memcpy(g.uniforms.mapped(), &c, sizeof(c));
-    const PipelineLibrary::Program& coverageProgram =
-      pipeline.library().program(coverage);
     g.context.submitAndWait([&](VkCommandBuffer cmd) {
-      pipeline.record(cmd, tracedWidth, tracedHeight, &coverageProgram);
+      pipeline.record(cmd, tracedWidth, tracedHeight);
       recordAfterTrace(cmd);
     });
   }

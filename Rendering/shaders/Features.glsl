@@ -11,14 +11,11 @@ layout(constant_id = SVDAG_CONSTANT_SUN) const bool featureSun = false;
 layout(constant_id = SVDAG_CONSTANT_EMISSION) const bool featureEmission = false;
 layout(constant_id = SVDAG_CONSTANT_TRANSMISSION) const bool featureTransmission = false;
 layout(constant_id = SVDAG_CONSTANT_PREVIEW) const bool featurePreview = false;
-// The compute backend's coverage program (GpuLayout.h); the ray tracing backend's is always off.
-layout(constant_id = SVDAG_CONSTANT_COVERAGE) const bool featureCoverage = false;
 #define SVDAG_FEATURE_NEE featureNee
 #define SVDAG_FEATURE_ENV_MAP featureEnvMap
 #define SVDAG_FEATURE_SUN featureSun
 #define SVDAG_FEATURE_EMISSION featureEmission
 #define SVDAG_FEATURE_TRANSMISSION featureTransmission
 #define SVDAG_FEATURE_PREVIEW featurePreview
-#define SVDAG_FEATURE_FIRST_HIT featureCoverage
 
 #endif

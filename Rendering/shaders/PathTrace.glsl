@@ -237,33 +237,44 @@ void countCoverage(inout uvec4 labels, inout uvec4 keys, uint label, uint faceBi
   }
 }
 
-#ifdef SVDAG_COVERAGE_WORKGROUP_SIZE
-// The compute backend shares out a workgroup's coverage rays (SVDAG_COVERAGE_WORKGROUP_SIZE
-// invocations, all calling svdagRenderPixel): its edge pixels are listed, and every invocation
-// traces an equal share of their rays, where one invocation per edge pixel would keep its SIMD
-// neighbours idle through all of them. Then each edge pixel counts its rays' hits.
-shared uint sCoverageEdges;
-shared uint sCoveragePixels[SVDAG_COVERAGE_WORKGROUP_SIZE];
-shared uint sCoverageLabels[SVDAG_COVERAGE_WORKGROUP_SIZE * SVDAG_COVERAGE_GRID * SVDAG_COVERAGE_GRID];
-shared uint sCoverageFaces[SVDAG_COVERAGE_WORKGROUP_SIZE * SVDAG_COVERAGE_GRID * SVDAG_COVERAGE_GRID];
+#ifdef SVDAG_COVERAGE_SUBGROUP
+// The compute backend shares out a subgroup's coverage rays: its edge pixels are ranked (a
+// ballot), every invocation traces rays of the list in turn (ray `slot`: edge pixel slot / G,
+// sub-pixel position slot % G, G = SVDAG_COVERAGE_GRID^2), where one invocation per edge pixel
+// would keep its SIMD neighbours idle through all of them; after each round every edge pixel
+// takes its own rays' hits from the lanes that traced them (shuffles). The rays and the order in
+// which each pixel counts them are those of the per-pixel loop, so the records are the same.
+
+// The lane of the subgroup holding the `rank`-th set bit of `ballot` (rank < its bit count).
+uint svdagBallotLane(uvec4 ballot, uint rank)
+{
+  for (uint w = 0u; w < 4u; ++w)
+  {
+    uint bits = ballot[w];
+    uint count = uint(bitCount(bits));
+    if (rank < count)
+    {
+      for (uint k = 0u; k < rank; ++k)
+        bits &= bits - 1u;
+      return 32u * w + uint(findLSB(bits));
+    }
+    rank -= count;
+  }
+  return 0u;
+}
 #endif
 
 // One pixel of the frame: its primary outputs (on the first pass of an accumulation) and
 // frame.sampling.y camera paths added to its sums; or, in the coverage dispatch
-// (GpuLayout.h: frame.coverage.z; the compute backend's coverage program), the first hits of its
-// sub-pixel rays if it is on an edge.
+// (frame.coverage.z, GpuLayout.h), the first hits of its sub-pixel rays if it is on an edge.
 // Both go through the path tracer's one trace site: a coverage ray is a path that ends at its
-// first hit (no bounces, no next-event estimation). With SVDAG_COVERAGE_WORKGROUP_SIZE every
-// invocation of the workgroup must call this (it has barriers in the coverage dispatch).
+// first hit (no bounces, no next-event estimation). With SVDAG_COVERAGE_SUBGROUP every invocation
+// of the subgroup must call this (the coverage dispatch shares rays across it).
 void svdagRenderPixel(uvec2 pixel)
 {
   uint width = frame.image.x;
   uint height = frame.image.y;
-#ifdef SVDAG_COVERAGE_WORKGROUP_SIZE
-  const bool coverage = featureCoverage;
-#else
-  const bool coverage = frame.coverage.z != 0u;
-#endif
+  bool coverage = frame.coverage.z != 0u;
   bool inImage = pixel.x < width && pixel.y < height;
   if (!inImage && !coverage)
     return;
@@ -273,23 +284,16 @@ void svdagRenderPixel(uvec2 pixel)
   const uint coverageRays = SVDAG_COVERAGE_GRID * SVDAG_COVERAGE_GRID;
   bool edge = coverage && inImage && surfaceEdge(pixel, width, height);
   uvec4 coveredLabels = uvec4(0u), coveredKeys = uvec4(0u);
-#ifdef SVDAG_COVERAGE_WORKGROUP_SIZE
-  const uint group = SVDAG_COVERAGE_WORKGROUP_SIZE;
-  uint lane = gl_LocalInvocationIndex;
-  uint edgeSlot = 0u;
+#ifdef SVDAG_COVERAGE_SUBGROUP
+  uvec4 edges = uvec4(0u);
+  uint rays = 0u, edgeRank = 0u;
   if (coverage)
   {
-    if (lane == 0u)
-      sCoverageEdges = 0u;
-    barrier();
-    if (edge)
-    {
-      edgeSlot = atomicAdd(sCoverageEdges, 1u);
-      sCoveragePixels[edgeSlot] = index;
-    }
-    barrier();
-    uint rays = sCoverageEdges * coverageRays;
-    samples = lane < rays ? (rays - lane + group - 1u) / group : 0u;
+    // Subgroup-uniform from here: every lane runs the same rounds.
+    edges = subgroupBallot(edge);
+    rays = subgroupBallotBitCount(edges) * coverageRays;
+    edgeRank = subgroupBallotExclusiveBitCount(edges);
+    samples = (rays + gl_SubgroupSize - 1u) / gl_SubgroupSize;
   }
 #else
   if (coverage)
@@ -315,14 +319,16 @@ void svdagRenderPixel(uvec2 pixel)
     uint rng = pcgHash(index ^ pcgHash((before + s) ^ pcgHash(frame.sampling.z)));
     vec2 jitter = vec2(random01(rng), random01(rng));
     // The pixel the ray goes through: this one, or in the shared coverage, the edge pixel whose
-    // ray number `slot` of the workgroup's list this is.
+    // ray number `slot` of the subgroup's list this is.
     uint rayIndex = index;
     uint slot = s;
-#ifdef SVDAG_COVERAGE_WORKGROUP_SIZE
+    bool traces = true;
+#ifdef SVDAG_COVERAGE_SUBGROUP
     if (coverage)
     {
-      slot = lane + s * group;
-      rayIndex = sCoveragePixels[slot / coverageRays];
+      slot = s * gl_SubgroupSize + gl_SubgroupInvocationID;
+      traces = slot < rays;
+      rayIndex = subgroupShuffle(index, svdagBallotLane(edges, traces ? slot / coverageRays : 0u));
     }
 #endif
     if (coverage)
@@ -348,16 +354,23 @@ void svdagRenderPixel(uvec2 pixel)
     gFirstQuery = true;
     gCameraRayHit = false;
     // Bounded so that sums of absurd emissions stay finite (tracePath never returns NaN/Inf).
-    vec3 radiance = ray.tmax > 0.0
+    vec3 radiance = ray.tmax > 0.0 && traces
       ? min(tracePath(params, ray.origin, ray.direction, ray.tmax, rng), vec3(1.0e30))
       : vec3(0.0);
     gCapturePrimary = false;
     if (coverage)
     {
       uint faceBits = coverageFaceBits(gPrimaryPayload.label, gPrimaryPayload.normal);
-#ifdef SVDAG_COVERAGE_WORKGROUP_SIZE
-      sCoverageLabels[slot] = gPrimaryPayload.label;
-      sCoverageFaces[slot] = faceBits;
+#ifdef SVDAG_COVERAGE_SUBGROUP
+      // This round's rays, in slot order: each edge pixel counts those of its own.
+      for (uint l = 0u; l < gl_SubgroupSize; ++l)
+      {
+        uint label = subgroupShuffle(gPrimaryPayload.label, l);
+        uint face = subgroupShuffle(faceBits, l);
+        uint traced = s * gl_SubgroupSize + l;
+        if (edge && traced < rays && traced / coverageRays == edgeRank)
+          countCoverage(coveredLabels, coveredKeys, label, face);
+      }
 #else
       countCoverage(coveredLabels, coveredKeys, gPrimaryPayload.label, faceBits);
 #endif
@@ -372,14 +385,6 @@ void svdagRenderPixel(uvec2 pixel)
   }
   if (coverage)
   {
-#ifdef SVDAG_COVERAGE_WORKGROUP_SIZE
-    barrier();
-    if (edge)
-    {
-      for (uint r = edgeSlot * coverageRays; r < (edgeSlot + 1u) * coverageRays; ++r)
-        countCoverage(coveredLabels, coveredKeys, sCoverageLabels[r], sCoverageFaces[r]);
-    }
-#endif
     if (!inImage)
       return;
     SvdagUvec4Output records = SvdagUvec4Output(frame.coverage.xy);

@@ -4,6 +4,8 @@
 // each cell's blocks intersected by Traversal.h. No acceleration structure: the cell grid is a
 // table of each cell's first block (blocks are sorted by cell), and hidden labels are bits.
 #extension GL_GOOGLE_include_directive : require
+#extension GL_KHR_shader_subgroup_ballot : require
+#extension GL_KHR_shader_subgroup_shuffle : require
 #include "Common.glsl"
 #include "Features.glsl"
 
@@ -110,10 +112,10 @@ void svdagTraceInterval(vec3 origin, vec3 direction, float tmin, float tmax, uin
     h.lod == SVDAG_LOD_VOXEL ? h.block : SVDAG_NO_BLOCK, local, d, worldToIndex);
 }
 
-// The coverage dispatch shares a workgroup's sub-pixel rays among its invocations (PathTrace.glsl).
-// It is a program of its own (featureCoverage): the frames' program has none of its barriers
-// and shared memory, which cost lavapipe's frames 6-10% when they were only skipped at run time.
-#define SVDAG_COVERAGE_WORKGROUP_SIZE (SVDAG_COMPUTE_GROUP_SIZE * SVDAG_COMPUTE_GROUP_SIZE)
+// The coverage dispatch shares a subgroup's sub-pixel rays among its invocations (PathTrace.glsl):
+// subgroup operations, not workgroup barriers and shared memory, whose mere presence in the
+// program cost lavapipe's frames 6-10%.
+#define SVDAG_COVERAGE_SUBGROUP 1
 #include "PathTrace.glsl"
 
 void main()

@@ -123,9 +123,8 @@ TEST(DeviceSharing, RenderersShareOneDeviceAndRenderWhatTheyRenderAlone)
   }
   // Every byte on the device is one renderer's or the shared pipelines' (none is counted twice).
   EXPECT_EQ(together[0]->deviceAllocatedBytes(), sum + together[0]->sharedDeviceBytes());
-  // One pipeline per backend for all four renderers, and the compute backend's coverage program
-  // for the denoiser's edges.
-  EXPECT_EQ(together[0]->pipelineCompilations(), 3u);
+  // One pipeline per backend for all four renderers.
+  EXPECT_EQ(together[0]->pipelineCompilations(), 2u);
 
   // The device goes with its last user; the next one creates a new device.
   together.clear();
@@ -311,9 +310,9 @@ TEST(DeviceSharing, ShaderBinariesAreReusedAndABadOneIgnored)
       fs::remove_all(home);
       GTEST_SKIP() << "this device has no VK_EXT_shader_object";
     }
-    // The path tracer, its coverage program and the denoiser at least.
+    // The path tracer and the denoiser at least.
     shaders = status.shadersCompiled;
-    EXPECT_GE(shaders, 3u);
+    EXPECT_GE(shaders, 2u);
     EXPECT_EQ(status.shaderBinariesLoaded, 0u);
     EXPECT_EQ(status.shaderBinaryProblem, "");
   }

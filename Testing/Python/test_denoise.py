@@ -232,3 +232,22 @@ def test_denoiser_switched_on_mid_accumulation(two_boxes):
     assert np.array_equal(got[edges], expected[edges])
     # Inside the labels the filter did run.
     assert not np.array_equal(got[~edges & (label != 0)], expected[~edges & (label != 0)])
+
+
+def test_edge_coverage_alike_on_both_backends(two_boxes):
+    """The compute backend shares a subgroup's coverage rays among its lanes; the ray tracing
+    backend traces each edge pixel's own. Both must count the same rays for the same pixels: the
+    denoised one-sample images agree (a ray handed to the wrong pixel would swap red and blue)."""
+    images = {}
+    for backend in ("compute", "rt"):
+        r = renderer(two_boxes, True)
+        r.GetSettings().SetBackend(backend)
+        images[backend] = render_to(r, 1)
+        assert r.GetBackendInUse() == backend
+        labels = output(r, "Label")
+    edges = ~inside(labels, 1) & ~inside(labels, 2) & ~inside(labels, 0)
+    assert edges.sum() > 100
+    np.testing.assert_allclose(images["compute"], images["rt"], atol=1e-4)
+    # The edges are blends, not one label's color: coverage was traced.
+    blended = (images["compute"][edges, 0] > 0.01) & (images["compute"][edges, 2] > 0.01)
+    assert blended.sum() > 20

@@ -95,10 +95,7 @@ typedef uint32_t uint;
 #define SVDAG_CONSTANT_PREVIEW 5
 /* The compute backend's step statistics (camera.comp; the ray tracing shaders have none). */
 #define SVDAG_CONSTANT_STEP_STATISTICS 6
-/* The compute backend's edge coverage dispatch (camera.comp; the ray tracing backend traces
- * coverage with its frames' program, by coverage.z). */
-#define SVDAG_CONSTANT_COVERAGE 7
-#define SVDAG_CONSTANT_COUNT 8
+#define SVDAG_CONSTANT_COUNT 7
 
 /* The compute backend's workgroup: SVDAG_COMPUTE_GROUP_SIZE^2 pixels (camera.comp). */
 #define SVDAG_COMPUTE_GROUP_SIZE 8

@@ -33,17 +33,11 @@
  * SVDAG_FEATURE_EMISSION, SVDAG_FEATURE_TRANSMISSION (booleans), and SVDAG_FEATURE_PREVIEW: no
  * path at all, the camera ray's first hit shaded by its base color under a headlight (what a
  * window shows while the full pipeline compiles; the rest of the integrator is compiled out).
- * SVDAG_FEATURE_FIRST_HIT (false where not defined): the path ends at the camera ray's first
- * hit, unshaded; the denoiser's coverage rays want only that hit (what SVDAG_TRACE reports).
  */
 #ifndef SVDAG_RENDER_PATHTRACER_H
 #define SVDAG_RENDER_PATHTRACER_H
 
 #include "svdag_render/Shading.h"
-
-#ifndef SVDAG_FEATURE_FIRST_HIT
-#define SVDAG_FEATURE_FIRST_HIT false
-#endif
 
 // SVDAG_TRACE is expanded at one place only: an includer may inline its trace (the compute
 // backend inlines the whole grid walk), so every further site would be another copy of it.
@@ -172,8 +166,6 @@ SHADING_FN vec3 tracePath(
     }
     shadows = 0u;
     traced = 0u;
-    if (SVDAG_FEATURE_FIRST_HIT)
-      break;
     if (!h.hit)
     {
       bool weighted = nee && !previousDelta;

@@ -64,22 +64,14 @@ struct ShaderFeatures
   // The compute backend's per-pixel step counters (Renderer::setStepStatistics); the ray
   // tracing backend ignores it.
   bool stepStatistics = false;
-  // The compute backend's edge coverage dispatch (coverageFeatures()): a program of its own,
-  // so that the frames' program has none of its workgroup barriers and shared memory.
-  bool coverage = false;
   bool operator==(const ShaderFeatures& o) const
   {
     return nextEventEstimation == o.nextEventEstimation && environmentMap == o.environmentMap &&
       sun == o.sun && emission == o.emission && transmission == o.transmission &&
-      preview == o.preview && stepStatistics == o.stepStatistics && coverage == o.coverage;
+      preview == o.preview && stepStatistics == o.stepStatistics;
   }
   bool operator!=(const ShaderFeatures& o) const { return !(*this == o); }
 };
-
-// The program that traces the edge coverage of a frame traced with `trace` (GpuLayout.h): on
-// the compute backend a variant of its own that keeps only what decides first hits (not the
-// lighting), on the ray tracing backend the frame's own program (coverage.z switches it).
-ShaderFeatures coverageFeatures(const ShaderFeatures& trace, Backend backend);
 
 // The pipelines of one backend on one device, shared by every renderer (Device::pipelines):
 // the descriptor set and pipeline layouts, and one compiled pipeline (with its shader binding
@@ -192,11 +184,8 @@ public:
   // Points this renderer's descriptor set 0 at its frame uniforms and (ray tracing) its TLAS.
   void updateDescriptors(VkBuffer uniforms, VkAccelerationStructureKHR tlas);
   // Records one pass over a width x height image: bind, trace or dispatch, and a barrier that
-  // makes the shader writes visible to the host. program: the current one, or another of the
-  // library's (the coverage dispatch's), with this renderer's descriptor set.
-  void record(VkCommandBuffer cmd, uint32_t width, uint32_t height,
-    const PipelineLibrary::Program* program = nullptr) const;
-  PipelineLibrary& library() const { return this->Library; }
+  // makes the shader writes visible to the host.
+  void record(VkCommandBuffer cmd, uint32_t width, uint32_t height) const;
   // Shader binding table regions for vkCmdTraceRaysKHR.
   const VkStridedDeviceAddressRegionKHR& raygenRegion() const { return this->Current->raygen; }
   const VkStridedDeviceAddressRegionKHR& missRegion() const { return this->Current->miss; }
