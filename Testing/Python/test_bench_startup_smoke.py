@@ -1,5 +1,6 @@
 """Smoke test of `bench/startup.py --quick`: every route (the CLI main job on both backends, the
-pyvista scene on both backends, vtkGPUVolumeRayCastMapper) runs in its own process with empty and
+pyvista scene on both backends and with compute pipelines instead of shader objects,
+vtkGPUVolumeRayCastMapper) runs in its own process with empty and
 then warm cache folders, and the CSV has one row per run. It asserts structure, never timings."""
 import csv
 import os
@@ -18,7 +19,8 @@ def test_startup_quick(tmp_path):
     assert "ratio to gpu-raycast" in completed.stdout
     with open(tmp_path / "startup.csv", newline="") as f:
         rows = list(csv.DictReader(f))
-    routes = ["cli-compute", "cli-rt", "pyvista-compute", "pyvista-rt", "gpu-raycast"]
+    routes = ["cli-compute", "cli-rt", "pyvista-compute", "pyvista-rt", "gpu-raycast",
+              "pyvista-compute-pipelines"]
     assert sorted((r["route"], r["cache"]) for r in rows) == sorted(
         (route, cache) for route in routes for cache in ("cold", "warm"))
     for r in rows:
