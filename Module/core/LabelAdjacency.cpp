@@ -120,7 +120,7 @@ std::pair<uint64_t, uint64_t> layerBlocks(const Volume& v, int32_t cz)
 // One decoded layer: its blocks' records and rows.
 struct Layer
 {
-  uint64_t first = 0, last = 0;
+  uint64_t first = 0;
   std::vector<Block> blocks;
   std::vector<uint16_t> rows;
   const uint16_t* rowsOf(uint64_t b) const { return rows.data() + (b - first) * RowCount; }
@@ -131,7 +131,6 @@ void decodeLayer(const Volume& v, int32_t cz, Layer& layer, const ParallelFor& p
 {
   const auto range = layerBlocks(v, cz);
   layer.first = range.first;
-  layer.last = range.second;
   const size_t count = size_t(range.second - range.first);
   layer.blocks.resize(count);
   layer.rows.resize(count * RowCount);
@@ -212,9 +211,9 @@ std::vector<LabelPair> labelAdjacency(const Volume& v, const ParallelFor& parall
           continue;
         for (uint64_t a = range.first; a < range.second; ++a)
         {
+          const Block& A = current.blockOf(a);
           for (uint64_t b = a + 1; b < range.second; ++b)
           {
-            const Block& A = current.blockOf(a);
             const Block& B = current.blockOf(b);
             if (A.label != B.label && boundsMeet(A, B))
               see(A, B, touchWithin(current.rowsOf(a), current.rowsOf(b)));

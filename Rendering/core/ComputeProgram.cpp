@@ -65,7 +65,6 @@ void ComputeProgram::createShaderObject(const uint32_t* code, size_t bytes,
     const VkResult result = fn.createShaders(this->Ctx.device(), 1, &info, nullptr, &this->Shader);
     if (result == VK_SUCCESS)
     {
-      this->FromBinary = true;
       device.noteShaderCreated(true, "");
       return;
     }

@@ -1183,8 +1183,8 @@ const Image& Renderer::render(PassUse use)
   }
   // A new accumulation's edges get their coverage traced once, for every later pass; not in a
   // reduced trace, whose edges the upsampler places from the full-resolution guides (and whose
-  // frames keep to a time budget).
-  // Nor in a preview, which stands in while the path tracer compiles.
+  // frames keep to a time budget), nor in a preview, which stands in while the path tracer
+  // compiles.
   const bool traceCoverage = settings.denoise && u.sampling.x == 0 && r == 1 && !preview;
   if (u.sampling.x == 0)
     traced.coverageCurrent = traceCoverage;

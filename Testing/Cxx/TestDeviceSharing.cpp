@@ -198,16 +198,34 @@ TEST(DeviceSharing, AFailedDeviceIsReportedToEveryUserAndNotKept)
   EXPECT_EQ(svdag::render::Renderer::deviceUsers(), 2u);
 }
 
+// An empty XDG_CACHE_HOME of this test's own for as long as it lives (the pipeline cache and the
+// shader binaries go there), with VTKSVDAG_PIPELINE_CACHE unset; removed again on every way out.
+struct TemporaryCacheHome
+{
+  std::filesystem::path path;
+  explicit TemporaryCacheHome(const std::string& name)
+    : path(std::filesystem::temp_directory_path() / (name + "-" + std::to_string(::getpid())))
+  {
+    std::filesystem::remove_all(this->path);
+    setenv("XDG_CACHE_HOME", this->path.c_str(), 1);
+    unsetenv("VTKSVDAG_PIPELINE_CACHE");
+  }
+  ~TemporaryCacheHome()
+  {
+    unsetenv("VTKSVDAG_PIPELINE_CACHE");
+    unsetenv("XDG_CACHE_HOME");
+    std::filesystem::remove_all(this->path);
+  }
+};
+
 // The device's pipeline cache outlives it on disk (PipelineCacheFile.h): the next device starts
 // from the file, a corrupt file is ignored (same image, a reason given) and replaced by the next
 // compilation, and VTKSVDAG_PIPELINE_CACHE=0 keeps it in memory only.
 TEST(DeviceSharing, PipelineCacheFileIsReusedAndABadOneIgnored)
 {
   namespace fs = std::filesystem;
-  const fs::path home = fs::temp_directory_path() / ("svdag-xdg-" + std::to_string(::getpid()));
-  fs::remove_all(home);
-  setenv("XDG_CACHE_HOME", home.c_str(), 1);
-  unsetenv("VTKSVDAG_PIPELINE_CACHE");
+  const TemporaryCacheHome cache("svdag-xdg");
+  const fs::path& home = cache.path;
   const auto volume = randomVolume(7);
   ASSERT_EQ(svdag::render::Renderer::deviceUsers(), 0u);
 
@@ -269,9 +287,6 @@ TEST(DeviceSharing, PipelineCacheFileIsReusedAndABadOneIgnored)
     EXPECT_EQ(r->pipelineCache().file, "");
     expectSameImage(renderTwice(*r).image, reference.image, 0);
   }
-  unsetenv("VTKSVDAG_PIPELINE_CACHE");
-  unsetenv("XDG_CACHE_HOME");
-  fs::remove_all(home);
 }
 
 // Compute shaders as shader objects (ComputeProgram.h) keep their binaries on disk: the next
@@ -281,10 +296,8 @@ TEST(DeviceSharing, PipelineCacheFileIsReusedAndABadOneIgnored)
 TEST(DeviceSharing, ShaderBinariesAreReusedAndABadOneIgnored)
 {
   namespace fs = std::filesystem;
-  const fs::path home = fs::temp_directory_path() / ("svdag-xdg-so-" + std::to_string(::getpid()));
-  fs::remove_all(home);
-  setenv("XDG_CACHE_HOME", home.c_str(), 1);
-  unsetenv("VTKSVDAG_PIPELINE_CACHE");
+  const TemporaryCacheHome cache("svdag-xdg-so");
+  const fs::path& home = cache.path;
   unsetenv("SVDAG_VK_NO_SHADER_OBJECTS");
   const auto volume = randomVolume(9);
   ASSERT_EQ(svdag::render::Renderer::deviceUsers(), 0u);
@@ -305,11 +318,7 @@ TEST(DeviceSharing, ShaderBinariesAreReusedAndABadOneIgnored)
     reference = renderTwice(*r);
     const auto status = r->pipelineCache();
     if (!status.shaderObjects)
-    {
-      unsetenv("XDG_CACHE_HOME");
-      fs::remove_all(home);
       GTEST_SKIP() << "this device has no VK_EXT_shader_object";
-    }
     // The path tracer and the denoiser at least.
     shaders = status.shadersCompiled;
     EXPECT_GE(shaders, 2u);
@@ -372,8 +381,6 @@ TEST(DeviceSharing, ShaderBinariesAreReusedAndABadOneIgnored)
     EXPECT_EQ(r->pipelineCache().shadersCompiled, 0u);
   }
   unsetenv("SVDAG_VK_NO_SHADER_OBJECTS");
-  unsetenv("XDG_CACHE_HOME");
-  fs::remove_all(home);
 }
 
 // Previews while compiling: on a new device (nothing compiled) the first pass is the preview,

@@ -50,7 +50,7 @@ void decodeCellLabels(const Volume& volume, uint64_t cell, uint32_t empty, uint3
 // The label indices (`empty` where no block is) of the z-slices of cell layer `cz` (voxel z in
 // [16 cz, 16 cz + 16), clipped to the volume): dims[0] * dims[1] * slices values, x fastest, in
 // `out` (resized). The cells of the layer decode in parallel. The streaming passes over the
-// compressed form (label statistics, adjacency) walk the volume one layer at a time with it.
+// compressed form (label statistics) walk the volume one layer at a time with it.
 void decodeLayerLabels(const Volume& volume, int32_t cz, uint32_t empty, std::vector<uint32_t>& out,
   const ParallelFor& parallel = sequentialFor);
 // Bytes of `slices` full z-slices of such 32-bit label indices: what a pass holding that many

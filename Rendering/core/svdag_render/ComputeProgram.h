@@ -39,8 +39,6 @@ public:
   ComputeProgram& operator=(const ComputeProgram&) = delete;
 
   void bind(VkCommandBuffer cmd) const;
-  // Whether it was created from a binary kept on disk (a shader object not compiled here).
-  bool fromBinary() const { return this->FromBinary; }
 
   // The key of a shader's binary: its SPIR-V and specialization (Device::shaderBinaryKey adds
   // the device's).
@@ -55,7 +53,6 @@ private:
   Context& Ctx;
   VkPipeline Pipeline = VK_NULL_HANDLE;
   VkShaderEXT Shader = VK_NULL_HANDLE;
-  bool FromBinary = false;
 };
 
 } // namespace render
