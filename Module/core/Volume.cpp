@@ -462,6 +462,38 @@ inline uint32_t leafLanes(uint64_t m)
   return px | (py << 8) | (pz << 16);
 }
 
+// leafLanes of a child read under leaf symmetry s, from the stored leaf's lanes: stored axis j
+// lands on child axis p_j (the permutation of s), reversed when s mirrors it (Layout.h). A few
+// shifts per reference instead of expanding the child's mask.
+class LaneSymmetries
+{
+public:
+  LaneSymmetries()
+  {
+    for (uint32_t s = 0; s < layout::LEAF_SYMMETRY_COUNT; ++s)
+      for (uint32_t j = 0; j < 3; ++j)
+        this->Shift[s][j] = uint8_t(8 * layout::leafSymmetryCoordinate(s & ~7u, j, 0, 1, 2));
+    for (uint32_t v = 0; v < 16; ++v)
+      this->Reversed[v] = uint8_t(((v & 1u) << 3) | ((v & 2u) << 1) | ((v & 4u) >> 1) | (v >> 3));
+  }
+  uint32_t apply(uint32_t s, uint32_t lanes) const
+  {
+    uint32_t out = 0;
+    for (uint32_t j = 0; j < 3; ++j)
+    {
+      uint32_t lane = (lanes >> (8 * j)) & 0xFu;
+      if ((s >> j) & 1u)
+        lane = this->Reversed[lane];
+      out |= lane << this->Shift[s][j];
+    }
+    return out;
+  }
+
+private:
+  uint8_t Shift[layout::LEAF_SYMMETRY_COUNT][3];
+  uint8_t Reversed[16];
+};
+
 // The full mask of a node read with polarity p (complemented: empty and full children swap).
 inline uint32_t fullAs(uint32_t header, bool p)
 {
@@ -625,16 +657,24 @@ NodePool walkNodeStream(const std::vector<uint32_t>& stream, uint64_t count, uin
 // voxels from bit 32.
 NodePool checkMidPool(const Volume& v)
 {
+  // Each stored leaf's summary in both polarities, once; a reference moves its lanes.
+  static const LaneSymmetries symmetries;
+  std::vector<uint32_t> stored(2 * v.leaves.size());
+  for (size_t l = 0; l < v.leaves.size(); ++l)
+  {
+    stored[2 * l] = leafSummary(v.leaves[l]);
+    stored[2 * l + 1] = leafSummary(~v.leaves[l]);
+  }
   return walkNodeStream(v.mids, v.midCount, v.widths.leafRefBits, "mid",
     uint64_t(0x0F0F0Fu | (64u << 24)),
     [&](uint32_t ref, uint64_t& a0, uint64_t& a1) {
-      if (layout::leafRefIndex(ref) >= v.leaves.size() ||
-        layout::leafRefSymmetry(ref) >= layout::LEAF_SYMMETRY_COUNT)
+      const uint32_t leaf = layout::leafRefIndex(ref), s = layout::leafRefSymmetry(ref);
+      if (leaf >= v.leaves.size() || s >= layout::LEAF_SYMMETRY_COUNT)
         return false;
-      const uint64_t leaf = v.leafMask(ref);
-      const uint64_t mask = layout::refComplement(ref) ? ~leaf : leaf;
-      a0 = leafSummary(mask);
-      a1 = leafSummary(~mask);
+      const uint32_t m = stored[2 * size_t(leaf) + (ref & 1u)];
+      const uint32_t c = stored[(2 * size_t(leaf) + (ref & 1u)) ^ 1u];
+      a0 = symmetries.apply(s, m) | (m & 0xFF000000u);
+      a1 = symmetries.apply(s, c) | (c & 0xFF000000u);
       return true;
     },
     [](const uint64_t* a) {

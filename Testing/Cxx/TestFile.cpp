@@ -11,6 +11,8 @@
 #include <gtest/gtest.h>
 #include <zlib.h>
 
+#include <algorithm>
+#include <array>
 #include <atomic>
 #include <cstdio>
 #include <cstdlib>
@@ -739,6 +741,45 @@ TEST(FileContent, ImpossibleBlocksAreRefusedNamingTheRule)
     setBlockRoot(bad, i + 2, a.root);
     expectRefused(bad, "overlap (a voxel has one label)");
   }
+}
+
+// Tight bounds validate and any one side moved in by a voxel does not: the check bounds each
+// block from its leaves' projections moved by their references' symmetries, so a projection
+// moved the wrong way would let a voxel outside the bounds through (or refuse tight ones).
+TEST(FileContent, EveryBoundMovedInIsRefused)
+{
+  const svdag::Volume v = spheres(ScalarType::UInt16, 45);
+  ASSERT_NO_THROW(v.validate());
+  std::array<bool, svdag::layout::LEAF_SYMMETRY_COUNT> symmetrySeen{};
+  uint64_t offset = 0;
+  for (uint64_t n = 0; n < v.midCount; ++n)
+  {
+    const uint32_t mixed = svdag::layout::nodeMixedMask(svdag::Volume::nodeHeader(v.mids, offset));
+    for (uint32_t k = 0; k < uint32_t(__builtin_popcount(mixed)); ++k)
+      symmetrySeen[svdag::layout::leafRefSymmetry(
+        svdag::Volume::nodeChildRef(v.mids, offset, k, v.widths.leafRefBits))] = true;
+    offset += svdag::Volume::nodeBits(v.mids, offset, v.widths.leafRefBits);
+  }
+  EXPECT_GE(std::count(symmetrySeen.begin(), symmetrySeen.end(), true), 24)
+    << "the volume should reach leaves under most symmetries";
+  int refused = 0;
+  for (uint64_t i = 0; i < v.blockCount; ++i)
+    for (int side = 0; side < 6; ++side)
+    {
+      svdag::Block b = v.block(i);
+      const int a = side / 2;
+      if (b.lo[a] == b.hi[a])
+        continue;
+      if (side % 2)
+        --b.hi[a];
+      else
+        ++b.lo[a];
+      svdag::Volume bad = v;
+      setBlockBox(bad, i, b);
+      EXPECT_THROW(bad.validate(), std::runtime_error) << "block " << i << " side " << side;
+      ++refused;
+    }
+  EXPECT_GT(refused, 100);
 }
 
 TEST(FileContent, EmptyBlockOccupancyIsRefused)
