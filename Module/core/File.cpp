@@ -3,6 +3,7 @@
 
 #include "Bits.h"
 #include "CodedVolume.h"
+#include "DagStreams.h"
 #include "FileVersion1.h"
 
 #include <zlib.h>
@@ -32,18 +33,21 @@ enum SectionId : uint32_t
   RootsSection = 3,
   MidsSection = 4,
   LeavesSection = 5,
-  CodedSection = 6 // format 3: the whole volume, coded (CodedVolume.h)
+  CodedSection = 6,     // format 3: the whole volume, coded (CodedVolume.h)
+  DagStreamsSection = 7 // format 4: the DAG as byte streams under zstd (DagStreams.h)
 };
-constexpr uint32_t FirstSection = LabelsSection, LastSection = CodedSection;
+constexpr uint32_t FirstSection = LabelsSection, LastSection = DagStreamsSection;
 const char* sectionName(uint32_t id)
 {
-  static const char* names[] = { "labels", "blocks", "roots", "mids", "leaves", "coded volume" };
+  static const char* names[] = { "labels", "blocks", "roots", "mids", "leaves", "coded volume",
+    "DAG streams" };
   return names[id - FirstSection];
 }
-// The sections a file of a major version must hold: 1-5 up to 2.x, 6 from 3.0 on.
+// The sections a file of a major version must hold: 1-5 up to 2.x, 6 in 3.x, 7 from 4.0 on.
 bool requiredSection(uint16_t major, uint32_t id)
 {
-  return major >= 3 ? id == CodedSection : id <= LeavesSection;
+  return major >= 4 ? id == DagStreamsSection
+                    : major == 3 ? id == CodedSection : id <= LeavesSection;
 }
 
 enum Codec : uint32_t
@@ -129,6 +133,7 @@ public:
     Pos += n;
   }
 
+  uint8_t u8() { return uint8_t(get(1)); }
   uint16_t u16() { return uint16_t(get(2)); }
   uint32_t u32() { return uint32_t(get(4)); }
   uint64_t u64() { return get(8); }
@@ -358,10 +363,74 @@ StoredSection storeCoded(const Volume& v, Volume& rebuilt, const ParallelFor& pa
   return s;
 }
 
+void putVarint(std::vector<uint8_t>& out, uint64_t v)
+{
+  for (; v >= 0x80u; v >>= 7)
+    out.push_back(uint8_t(v | 0x80u));
+  out.push_back(uint8_t(v));
+}
+
+// Format 4's zstd level: fixed, as what the format promises in bytes depends on it (level 3 gives
+// files about 5% larger); its streams are small, so writing stays within a few builds' time.
+constexpr int DagStreamsZstdLevel = 19;
+
+// Format 4's one section: each of the DAG's streams as a zstd frame (as it is where the frame
+// would not be smaller), after a table of their stored and raw sizes (varints). Checked by
+// decoding it again; the header describes the decoded volume (its pools in first-use order).
+StoredSection storeDagStreams(const Volume& v, Volume& rebuilt)
+{
+  const int level = DagStreamsZstdLevel;
+  dagstreams::Encoded encoded = dagstreams::encode(v);
+  std::vector<uint8_t> table, frames;
+  std::unique_ptr<ZSTD_CCtx, size_t (*)(ZSTD_CCtx*)> ctx(ZSTD_createCCtx(), ZSTD_freeCCtx);
+  if (!ctx)
+    throw FileError("cannot create a zstd compression context");
+  for (const std::vector<uint8_t>& stream : encoded.streams)
+  {
+    std::vector<uint8_t> frame(ZSTD_compressBound(stream.size()));
+    size_t size = level > 0 && !stream.empty()
+      ? ZSTD_compressCCtx(ctx.get(), frame.data(), frame.size(), stream.data(), stream.size(), level)
+      : stream.size();
+    if (ZSTD_isError(size))
+      throw FileError(std::string("zstd compression failed: ") + ZSTD_getErrorName(size));
+    if (level <= 0 || size >= stream.size())
+    {
+      frame = stream;
+      size = stream.size();
+    }
+    putVarint(table, size);
+    putVarint(table, stream.size());
+    frames.insert(frames.end(), frame.begin(), frame.begin() + std::ptrdiff_t(size));
+  }
+  std::string difference;
+  try
+  {
+    rebuilt = dagstreams::decode(encoded.streams, encoded.shape);
+    rebuilt.deriveBoundsAndValidate();
+    difference = coded::compareOccupancy(v, rebuilt);
+  }
+  catch (const std::exception& e)
+  {
+    difference = e.what();
+  }
+  if (!difference.empty())
+    throw FileError("internal error: the DAG streams do not decode to the volume written (" +
+      difference + ")");
+  table.insert(table.end(), frames.begin(), frames.end());
+  StoredSection s;
+  s.entry.id = DagStreamsSection;
+  s.entry.codec = CodecNone;
+  s.entry.raw = s.entry.stored = table.size();
+  s.entry.crc = crc32Of(table.data(), table.size());
+  s.packed.reset(new uint8_t[table.size()]);
+  std::copy(table.begin(), table.end(), s.packed.get());
+  return s;
+}
+
 EncodedFile encode(const Volume& volume, const WriteOptions& options, const ParallelFor& parallel)
 {
-  if (options.formatVersion != 2 && options.formatVersion != 3)
-    throw FileError("format version must be 2 or 3 (got " + std::to_string(options.formatVersion) + ")");
+  if (options.formatVersion < 2 || options.formatVersion > 4)
+    throw FileError("format version must be 2, 3 or 4 (got " + std::to_string(options.formatVersion) + ")");
   if (options.zstdLevel < 0 || options.zstdLevel > MaxZstdLevel)
     throw FileError("zstd level must be in 0..22 (got " + std::to_string(options.zstdLevel) + ")");
   try
@@ -376,8 +445,10 @@ EncodedFile encode(const Volume& volume, const WriteOptions& options, const Para
   // Sections are prepared first, so that the table can be written before them.
   EncodedFile file;
   Volume rebuilt;
-  const Volume& v = options.formatVersion == 3 ? rebuilt : volume;
-  if (options.formatVersion == 3)
+  const Volume& v = options.formatVersion >= 3 ? rebuilt : volume;
+  if (options.formatVersion == 4)
+    file.sections.push_back(storeDagStreams(volume, rebuilt));
+  else if (options.formatVersion == 3)
     file.sections.push_back(storeCoded(volume, rebuilt, parallel));
   else
   {
@@ -461,18 +532,25 @@ bool readAll(std::FILE* f, uint8_t* data, size_t size)
 // zero elements. The output grows with what the frame actually produces, so a false raw size
 // cannot make us reserve memory up front; decompressing into the elements themselves costs a
 // section its size once, not twice.
+using DecompressionContext = std::unique_ptr<ZSTD_DCtx, size_t (*)(ZSTD_DCtx*)>;
+DecompressionContext decompressionContext()
+{
+  DecompressionContext ctx(ZSTD_createDCtx(), ZSTD_freeDCtx);
+  if (!ctx)
+    throw FileError("cannot create a zstd decompression context");
+  return ctx;
+}
+
 template <typename T>
-void inflate(const uint8_t* src, size_t stored, uint64_t raw, const std::string& part,
-  std::vector<T>& out, size_t padding)
+void inflate(const DecompressionContext& ctx, const uint8_t* src, size_t stored, uint64_t raw,
+  const std::string& part, std::vector<T>& out, size_t padding)
 {
   const unsigned long long declared = ZSTD_getFrameContentSize(src, stored);
   if (declared == ZSTD_CONTENTSIZE_ERROR)
     fail(part + " is not a valid zstd frame");
   if (declared == ZSTD_CONTENTSIZE_UNKNOWN || declared != raw)
     fail(part + ": the zstd frame's size does not match the declared raw size");
-  std::unique_ptr<ZSTD_DCtx, size_t (*)(ZSTD_DCtx*)> ctx(ZSTD_createDCtx(), ZSTD_freeDCtx);
-  if (!ctx)
-    throw FileError("cannot create a zstd decompression context");
+  ZSTD_DCtx_reset(ctx.get(), ZSTD_reset_session_only);
 
   const uint64_t rawElements = raw / sizeof(T);
   // Reserving the padding with each step makes the last step's allocation the final one.
@@ -526,7 +604,7 @@ std::vector<T> sectionElements(
   const uint8_t* raw = stored;
   if (e.codec == CodecZstd)
   {
-    inflate(stored, size_t(e.stored), e.raw, name, out, padding);
+    inflate(decompressionContext(), stored, size_t(e.stored), e.raw, name, out, padding);
     raw = reinterpret_cast<const uint8_t*>(out.data());
   }
   if (crc32Of(raw, size_t(e.raw)) != e.crc)
@@ -604,6 +682,81 @@ Volume readCoded(const SectionEntry& e, const uint8_t* data, uint64_t labelCount
     v.midCount != header.midCount || v.leaves.size() != leafCount)
     fail("the header's field widths or node counts do not match the coded volume");
   return v;
+}
+// A format 4 file's volume from its DAG streams section; `header` holds what the file's header
+// says (geometry, type, background, widths and counts).
+Volume readDagStreams(const SectionEntry& e, const uint8_t* data, uint64_t labelCount,
+  uint64_t leafCount, const Volume& header)
+{
+  const uint8_t* stored = data + e.offset;
+  if (crc32Of(stored, size_t(e.stored)) != e.crc)
+    fail("DAG streams section checksum mismatch (the data is corrupt)");
+  dagstreams::Shape shape;
+  shape.frame.geometry = header.geometry;
+  shape.frame.scalarType = header.scalarType;
+  shape.frame.background = header.background;
+  shape.frame.widths = header.widths;
+  shape.frame.blockCount = header.blockCount;
+  shape.frame.rootCount = header.rootCount;
+  shape.frame.midCount = header.midCount;
+  shape.labelCount = labelCount;
+  shape.leafCount = leafCount;
+  ByteReader table(stored, size_t(e.stored), "DAG streams section");
+  auto varint = [&table]() {
+    uint64_t v = 0;
+    for (uint32_t shift = 0; shift < 64; shift += 7)
+    {
+      const uint8_t b = table.u8();
+      v |= uint64_t(b & 0x7Fu) << shift;
+      if (!(b & 0x80u))
+        return v;
+    }
+    fail("DAG streams section: a size above 64 bits");
+  };
+  uint64_t storedSizes[dagstreams::StreamCount], rawSizes[dagstreams::StreamCount];
+  uint64_t total = 0;
+  for (uint32_t i = 0; i < dagstreams::StreamCount; ++i)
+  {
+    storedSizes[i] = varint();
+    rawSizes[i] = varint();
+    const std::string name = std::string(dagstreams::streamName(i)) + " stream";
+    if (rawSizes[i] > dagstreams::maxStreamBytes(i, shape))
+      fail(name + ": larger than its volume's counts allow");
+    if (storedSizes[i] > e.stored || (storedSizes[i] != rawSizes[i] &&
+          (storedSizes[i] == 0 || rawSizes[i] / ZstdMaxExpansion > storedSizes[i])))
+      fail(name + ": declared raw size impossible for its compressed size");
+    total += storedSizes[i];
+    if (total > e.stored - table.position())
+      fail(name + " lies outside its section (the file may be truncated)");
+  }
+  if (total != e.stored - table.position())
+    fail("DAG streams section: bytes after its last stream");
+  dagstreams::Streams streams;
+  const DecompressionContext ctx = decompressionContext();
+  const uint8_t* at = stored + table.position();
+  for (uint32_t i = 0; i < dagstreams::StreamCount; ++i)
+  {
+    if (storedSizes[i] == rawSizes[i])
+      streams[i].assign(at, at + storedSizes[i]);
+    else
+      inflate(ctx, at, size_t(storedSizes[i]), rawSizes[i],
+        std::string(dagstreams::streamName(i)) + " stream", streams[i], 0);
+    at += storedSizes[i];
+  }
+  try
+  {
+    Volume v = dagstreams::decode(streams, shape);
+    v.deriveBoundsAndValidate();
+    return v;
+  }
+  catch (const std::bad_alloc&)
+  {
+    throw;
+  }
+  catch (const std::exception& error)
+  {
+    fail(std::string("DAG streams section: ") + error.what());
+  }
 }
 } // namespace
 
@@ -750,10 +903,10 @@ Volume deserialize(const uint8_t* data, size_t size, const ParallelFor& parallel
     if (!known[id])
       fail(std::string(sectionName(id)) + " section missing");
     const uint64_t raw = known[id]->raw;
-    if (id == CodedSection)
+    if (id == CodedSection || id == DagStreamsSection)
     {
       if (known[id]->codec != CodecNone)
-        fail("coded volume section: compressed, but it is coded already");
+        fail(std::string(sectionName(id)) + " section: compressed, but it is coded already");
       continue;
     }
     if (id == RootsSection)
@@ -771,6 +924,8 @@ Volume deserialize(const uint8_t* data, size_t size, const ParallelFor& parallel
       fail("sections overlap");
   }
 
+  if (major >= 4)
+    return readDagStreams(*known[DagStreamsSection], data, labelCount, leafCount, v);
   if (major >= 3)
     return readCoded(*known[CodedSection], data, labelCount, leafCount, v, parallel);
 

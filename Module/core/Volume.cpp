@@ -866,6 +866,11 @@ private:
     const uint32_t refBits = this->V.widths.leafRefBits;
     uint64_t acc[8] = {};
     size_t owner[8] = {};
+    // The first leaf of each child as a reference (read as complemented or not) until a second
+    // one needs its voxels: two blocks splitting a leaf refer to it with opposite polarity, and
+    // together fill it without expanding either.
+    uint32_t firstRef[8] = {};
+    bool firstInverted[8] = {}, pending[8] = {};
     for (const MidEntry& me : list)
     {
       if (!(me.mixed & midShared))
@@ -878,8 +883,32 @@ private:
         if (midShared & (1u << c))
         {
           const uint32_t leafRef = fieldAt(midWords, refAt, refBits);
+          const bool inverted = me.inverted != layout::refComplement(leafRef);
+          const uint32_t stored = leafRef & ~1u;
+          if (!acc[c] && !pending[c])
+          {
+            pending[c] = true;
+            firstRef[c] = stored;
+            firstInverted[c] = inverted;
+            owner[c] = me.entry;
+            refAt += refBits;
+            continue;
+          }
+          if (pending[c])
+          {
+            pending[c] = false;
+            if (firstRef[c] == stored && firstInverted[c] != inverted)
+            {
+              acc[c] = ~uint64_t(0);
+              owner[c] = me.entry;
+              refAt += refBits;
+              continue;
+            }
+            const uint64_t first = this->V.leafMask(firstRef[c]);
+            acc[c] = firstInverted[c] ? ~first : first;
+          }
           uint64_t m = this->V.leafMask(leafRef);
-          if (me.inverted != layout::refComplement(leafRef))
+          if (inverted)
             m = ~m;
           if (acc[c] & m)
             this->overlap(owner[c], me.entry, cell);
@@ -1006,6 +1035,50 @@ void Volume::validate() const
   NodePool roots = checkRootPool(*this, mids);
   mids.checkAllUsed("mid");
   checkLabelTotals(*this, checkBlocks(*this, roots));
+  roots.checkAllUsed("root");
+}
+
+void Volume::deriveBoundsAndValidate()
+{
+  checkHeader(*this);
+  NodePool mids = checkMidPool(*this);
+  NodePool roots = checkRootPool(*this, mids);
+  mids.checkAllUsed("mid");
+  const uint64_t recordBits = this->widths.blockBits();
+  const uint32_t boundsAt = layout::blockBoundsOffset(this->widths.cellBits);
+  const uint32_t rootAt = layout::blockRootOffset(this->widths.cellBits, this->widths.labelBits);
+  for (uint64_t i = 0; i < this->blockCount; ++i)
+  {
+    const uint32_t rootRef = fieldAt(this->blocks.data(), i * recordBits + rootAt,
+      this->widths.rootRefBits);
+    const int64_t root = roots.index.find(layout::refTarget(rootRef));
+    if (root < 0)
+      fail("block " + str(i) + ": root reference does not point at a root node");
+    const uint64_t summary = roots.summaries[2 * size_t(root) + (rootRef & 1u)];
+    uint32_t box = 0; // an empty occupancy keeps 0 (checkBlocks refuses it)
+    for (uint32_t a = 0; a < 3 && (summary >> 48) != 0; ++a)
+    {
+      const uint32_t lane = uint32_t(summary >> (16 * a)) & 0xFFFFu;
+      box |= (uint32_t(__builtin_ctz(lane)) << (4 * a)) |
+        (uint32_t(31 - __builtin_clz(lane)) << (12 + 4 * a));
+    }
+    for (uint32_t b = 0; b < layout::BLOCK_BOUNDS_BITS; ++b)
+    {
+      const uint64_t at = i * recordBits + boundsAt + b;
+      const uint32_t bit = uint32_t(1) << (at & 31);
+      uint32_t& word = this->blocks[size_t(at >> 5)];
+      word = ((box >> b) & 1u) ? (word | bit) : (word & ~bit);
+    }
+  }
+  const LabelTotals totals = checkBlocks(*this, roots);
+  for (size_t l = 0; l < this->labels.size(); ++l)
+  {
+    if (totals.voxels[l] == 0)
+      fail("label " + str(l) + " is in no block");
+    this->labels[l].voxels = totals.voxels[l];
+    this->labels[l].bounds = totals.bounds[l];
+  }
+  checkLabelTable(*this);
   roots.checkAllUsed("root");
 }
 

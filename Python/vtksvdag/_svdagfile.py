@@ -16,10 +16,12 @@ from ._vtkrun import run_algorithm
 #: zstd levels the writer takes (vtkSegmentationSVDAGWriter would clamp others silently).
 COMPRESSION_LEVELS = range(0, 23)
 
-#: .svdag format versions the writer writes: 3, the coded volume (the smallest file, the
-#: default), or 2, the in-memory sections under zstd (loads fastest, read by older readers too).
-FORMAT_VERSIONS = (2, 3)
-DEFAULT_FORMAT_VERSION = 3
+#: .svdag format versions the writer writes: 4, the DAG as byte streams (smaller than CSGV's
+#: files, loads in a fraction of a build; the default), 3, the coded volume (the smallest file,
+#: loads in about a build's time), or 2, the in-memory sections under zstd (read by readers older
+#: than 3.0 too).
+FORMAT_VERSIONS = (2, 3, 4)
+DEFAULT_FORMAT_VERSION = 4
 
 
 def _integer(value, name):
@@ -45,8 +47,8 @@ def check_format_version(version):
     version = _integer(version, "format_version")
     if version not in FORMAT_VERSIONS:
         raise ValueError(
-            f"format_version must be 3 (the coded volume, the smallest file) or 2 (the in-memory "
-            f"sections, the fastest to load), not {version}"
+            f"format_version must be 4 (the DAG streams, the default), 3 (the coded volume, the "
+            f"smallest file) or 2 (the in-memory sections, read by older readers), not {version}"
         )
     return version
 

@@ -2,6 +2,7 @@
 // random corruptions, absurd header values) that must give FileError, never a crash, an
 // out-of-bounds read or a huge allocation.
 #include "CodedVolume.h"
+#include "DagStreams.h"
 #include "RangeCoder.h"
 #include "svdag/Builder.h"
 #include "svdag/Decoder.h"
@@ -368,15 +369,15 @@ TEST(File, RejectsWrongMagicAndUnknownMajorVersion)
   bad[6] = '\n'; // CR LF conversion
   EXPECT_THROW(svdag::deserialize(bad), FileError);
   bad = good;
-  putLE(bad, 8, 4, 2);
+  putLE(bad, 8, 5, 2);
   try
   {
     svdag::deserialize(bad);
-    ADD_FAILURE() << "version 4 accepted";
+    ADD_FAILURE() << "version 5 accepted";
   }
   catch (const FileError& e)
   {
-    EXPECT_NE(std::string(e.what()).find("version 4.0"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("version 5.0"), std::string::npos) << e.what();
   }
   bad = good;
   putLE(bad, 10, 7, 2); // a newer minor version is readable (checksum re-sealed)
@@ -942,7 +943,7 @@ TEST(File, Format1FilesLoadAndTheirCorruptionFailsCleanly)
     const Bytes again = svdag::serialize(v, { 3, 2 });
     EXPECT_EQ(again[8], 2u);
     EXPECT_TRUE(svdag::deserialize(again) == v) << name;
-    // Format 3 rebuilds the DAG in a build's order: the same blocks and voxels.
+    // The default format (4) lays the DAG out in first-use order: the same blocks and voxels.
     const Bytes coded = svdag::serialize(v);
     EXPECT_EQ(coded[8], svdag::FileMajorVersion);
     EXPECT_EQ(svdag::coded::compareOccupancy(svdag::deserialize(coded), v), "") << name;
@@ -1005,9 +1006,13 @@ std::vector<Named> codedVolumes()
 }
 
 // Replaces the coded section's bytes (a same-size edit) and reseals its crc and the header.
-void resealCoded(Bytes& b)
+// Format 3 written explicitly (4 is the default).
+const svdag::WriteOptions Coded{ 3, 3 };
+
+// Re-seals the checksums of section `id` (6: format 3's coded volume) after a test edits it.
+void resealCoded(Bytes& b, uint32_t id = 6)
 {
-  const size_t e = entryOf(b, 6);
+  const size_t e = entryOf(b, id);
   const size_t at = size_t(getLE(b, e + Offset, 8)), n = size_t(getLE(b, e + Stored, 8));
   putLE(b, e + Crc, crc32(0, b.data() + at, uInt(n)), 4);
   resealHeader(b);
@@ -1020,13 +1025,13 @@ TEST(CodedFile, RoundTripIsExactDeterministicAndSmaller)
   {
     SCOPED_TRACE(n.name);
     ASSERT_NO_THROW(n.volume.validate());
-    const Bytes bytes = svdag::serialize(n.volume);
+    const Bytes bytes = svdag::serialize(n.volume, Coded);
     EXPECT_EQ(getLE(bytes, 8, 2), 3u);
     ASSERT_EQ(sectionCount(bytes), 1u);
     const svdag::Volume back = svdag::deserialize(bytes);
     // A built volume's DAG is in first-use order, so the rebuild is bit-identical.
     EXPECT_TRUE(back == n.volume);
-    EXPECT_EQ(svdag::serialize(back), bytes);
+    EXPECT_EQ(svdag::serialize(back, Coded), bytes);
     EXPECT_LE(bytes.size(), svdag::serialize(n.volume, { 19, 2 }).size() + 64);
   }
 }
@@ -1064,11 +1069,11 @@ TEST(CodedFile, AVolumeInAnotherLayoutIsWrittenAsItsBuild)
   ASSERT_NO_THROW(v.validate());
   const svdag::Volume built = spheres(ScalarType::UInt16, 40);
   ASSERT_FALSE(v == built);
-  const Bytes bytes = svdag::serialize(v);
+  const Bytes bytes = svdag::serialize(v, Coded);
   const svdag::Volume back = svdag::deserialize(bytes);
   EXPECT_EQ(svdag::coded::compareOccupancy(back, v), "");
   EXPECT_TRUE(back == built);
-  EXPECT_EQ(bytes, svdag::serialize(built));
+  EXPECT_EQ(bytes, svdag::serialize(built, Coded));
 }
 
 // Chunks are coded and decoded apart (in parallel where the caller runs them so) and one builder
@@ -1119,7 +1124,7 @@ TEST(CodedFile, ChunksDecodeToTheOneVolume)
 
 TEST(CodedFile, EveryTruncationFails)
 {
-  const Bytes bytes = svdag::serialize(spheres(ScalarType::UInt16, 20));
+  const Bytes bytes = svdag::serialize(spheres(ScalarType::UInt16, 20), Coded);
   for (size_t n = 0; n < bytes.size(); ++n)
     EXPECT_THROW(svdag::deserialize(bytes.data(), n), FileError) << "prefix of " << n << " bytes";
 }
@@ -1134,7 +1139,7 @@ TEST(CodedFile, CorruptionFailsCleanly)
   for (const Named& n : { Named{ "spheres", spheres(ScalarType::UInt32, 30) }, all[all.size() - 4] })
   {
     SCOPED_TRACE(n.name);
-    const Bytes good = svdag::serialize(n.volume);
+    const Bytes good = svdag::serialize(n.volume, Coded);
     const size_t e = entryOf(good, 6);
     const size_t at = size_t(getLE(good, e + Offset, 8)), size = size_t(getLE(good, e + Stored, 8));
     size_t failed = 0, loaded = 0;
@@ -1156,7 +1161,7 @@ TEST(CodedFile, CorruptionFailsCleanly)
 
 TEST(CodedFile, HeaderValuesThatDisagreeWithTheCodedVolumeFail)
 {
-  const Bytes good = svdag::serialize(spheres(ScalarType::UInt32, 30));
+  const Bytes good = svdag::serialize(spheres(ScalarType::UInt32, 30), Coded);
   const svdag::Volume v = svdag::deserialize(good);
   struct Edit
   {
@@ -1197,7 +1202,7 @@ TEST(CodedFile, HeaderValuesThatDisagreeWithTheCodedVolumeFail)
   putLE(noCoded, entryOf(good, 6) + Id, 2, 4);
   resealHeader(noCoded);
   EXPECT_THROW(svdag::deserialize(noCoded), FileError);
-  EXPECT_THROW(svdag::serialize(v, { 3, 4 }), FileError);
+  EXPECT_THROW(svdag::serialize(v, { 3, 5 }), FileError);
   EXPECT_THROW(svdag::serialize(v, { 3, 1 }), FileError);
 }
 
@@ -1221,7 +1226,7 @@ TEST(CodedFile, HugeSparseVolumeStaysSmallAndFast)
   builder.addBlock(uint32_t(g.cellCount() - 1), b);
   const svdag::Volume v = builder.finish();
   ASSERT_NO_THROW(v.validate());
-  const Bytes bytes = svdag::serialize(v);
+  const Bytes bytes = svdag::serialize(v, Coded);
   EXPECT_EQ(svdag::coded::chunkCount(g), svdag::coded::MaxChunks);
   EXPECT_LT(bytes.size(), 2000u);
   const svdag::Volume back = svdag::deserialize(bytes);
@@ -1260,4 +1265,210 @@ TEST(CodedFile, BuilderTakesBlocksOnlyInOrderAndAlone)
     b.addSlab(0, 16, slab.data());
     EXPECT_THROW(b.addBlock(0, block), std::logic_error);
   }
+}
+
+// ---- format 4: the DAG streams (DagStreams.h) ----
+
+TEST(StreamsFile, RoundTripIsExactDeterministicAndSmallerThanFormat2)
+{
+  for (const Named& n : codedVolumes())
+  {
+    SCOPED_TRACE(n.name);
+    const Bytes bytes = svdag::serialize(n.volume);
+    EXPECT_EQ(getLE(bytes, 8, 2), 4u);
+    ASSERT_EQ(sectionCount(bytes), 1u);
+    EXPECT_EQ(getLE(bytes, TableAt, 4), 7u);
+    const svdag::Volume back = svdag::deserialize(bytes);
+    // A built volume's DAG is in first-use order: decoded, with its bounds and label totals
+    // derived, it is the same volume bit for bit.
+    EXPECT_TRUE(back == n.volume);
+    EXPECT_EQ(svdag::serialize(back), bytes);
+    EXPECT_LE(bytes.size(), svdag::serialize(n.volume, { 19, 2 }).size() + 64);
+  }
+}
+
+// A volume laid out otherwise is written in first-use order: the build's layout here.
+TEST(StreamsFile, AVolumeInAnotherLayoutIsWrittenInFirstUseOrder)
+{
+  const svdag::Volume built = spheres(ScalarType::UInt16, 40);
+  const svdag::Volume v = svdag::deserialize(svdag::serialize(built, Coded));
+  ASSERT_TRUE(v == built);
+  // The format 3 test above swaps two leaves by hand; here the root pool is reversed, which
+  // also moves every offset a block refers to.
+  svdag::Volume reversed = built;
+  std::vector<uint64_t> starts;
+  for (uint64_t offset = 0, n = 0; n < built.rootCount; ++n)
+  {
+    starts.push_back(offset);
+    offset += svdag::Volume::nodeBits(built.roots, offset, built.widths.midRefBits);
+  }
+  ASSERT_GE(starts.size(), 2u);
+  std::fill(reversed.roots.begin(), reversed.roots.end(), 0u);
+  std::vector<uint64_t> moved(starts.size());
+  uint64_t at = 0;
+  for (size_t k = starts.size(); k-- > 0;)
+  {
+    moved[k] = at;
+    const uint64_t bits = svdag::Volume::nodeBits(built.roots, starts[k], built.widths.midRefBits);
+    for (uint64_t b = 0; b < bits; ++b)
+      if ((built.roots[size_t((starts[k] + b) >> 5)] >> ((starts[k] + b) & 31)) & 1u)
+        reversed.roots[size_t((at + b) >> 5)] |= 1u << ((at + b) & 31);
+    at += bits;
+  }
+  reversed.widths.rootRefBits = 32;
+  const uint64_t blockBits = reversed.blockCount * reversed.widths.blockBits();
+  reversed.blocks.assign(size_t((blockBits + 31) / 32 + 1), 0u);
+  for (uint64_t i = 0; i < built.blockCount; ++i)
+  {
+    svdag::Block b = built.block(i);
+    const size_t k = size_t(std::lower_bound(starts.begin(), starts.end(),
+      uint64_t(svdag::layout::refTarget(b.root))) - starts.begin());
+    b.root = uint32_t((moved[k] << 1) | (b.root & 1u));
+    setBlockCell(reversed, i, b.cell);
+    setBlockBox(reversed, i, b);
+    setBlockLabel(reversed, i, b.label);
+    setBlockRoot(reversed, i, b.root);
+  }
+  ASSERT_NO_THROW(reversed.validate());
+  ASSERT_FALSE(reversed == built);
+  const Bytes bytes = svdag::serialize(reversed);
+  const svdag::Volume back = svdag::deserialize(bytes);
+  EXPECT_EQ(svdag::coded::compareOccupancy(back, reversed), "");
+  EXPECT_EQ(back.roots, built.roots);
+  EXPECT_EQ(back.mids, built.mids);
+  EXPECT_EQ(back.leaves, built.leaves);
+  EXPECT_EQ(back.widths.rootRefBits, 32u); // as wide as the volume written
+  EXPECT_EQ(svdag::serialize(back), bytes);
+}
+
+TEST(StreamsFile, EveryTruncationFails)
+{
+  const Bytes bytes = svdag::serialize(spheres(ScalarType::UInt16, 20));
+  for (size_t n = 0; n < bytes.size(); ++n)
+    EXPECT_THROW(svdag::deserialize(bytes.data(), n), FileError) << "prefix of " << n << " bytes";
+}
+
+// Corruption anywhere fails on a checksum; behind resealed checksums (a buggy or hostile
+// writer), corrupt streams fail cleanly or load a valid volume, never a crash, a hang or a huge
+// allocation. The streams' raw bytes are reached through a file of uncompressed streams.
+TEST(StreamsFile, CorruptionFailsCleanly)
+{
+  std::mt19937_64 rng(23);
+  const std::vector<Named> all = codedVolumes();
+  for (const Named& n : { Named{ "spheres", spheres(ScalarType::UInt32, 30) }, all[all.size() - 4],
+         all[all.size() - 2] })
+  {
+    SCOPED_TRACE(n.name);
+    const Bytes good = svdag::serialize(n.volume);
+    const size_t e = entryOf(good, 7);
+    const size_t at = size_t(getLE(good, e + Offset, 8)), size = size_t(getLE(good, e + Stored, 8));
+    size_t failed = 0, loaded = 0;
+    for (int i = 0; i < 400; ++i)
+    {
+      Bytes bad = good;
+      bad[at + rng() % size] ^= uint8_t(1u << (rng() % 8));
+      EXPECT_THROW(svdag::deserialize(bad), FileError);
+      if (i % 3 == 0)
+        bad[at + rng() % size] = uint8_t(rng()); // and a second change
+      resealCoded(bad, 7);
+      largestAllocation = 0;
+      expectFailsOrValid(bad, failed, loaded);
+      EXPECT_LT(largestAllocation.load(), size_t(64) << 20);
+    }
+    EXPECT_GT(failed, 300u);
+  }
+}
+
+// The streams' bytes themselves, edited one at a time: every decision the decoder reads is
+// checked (a wrong flag, index, symmetry, cell or label fails or gives a valid volume).
+TEST(StreamsFile, CorruptStreamsFailCleanly)
+{
+  const svdag::Volume v = spheres(ScalarType::UInt16, 30);
+  const svdag::dagstreams::Encoded encoded = svdag::dagstreams::encode(v);
+  std::mt19937_64 rng(29);
+  size_t failed = 0, decoded = 0;
+  for (uint32_t s = 0; s < svdag::dagstreams::StreamCount; ++s)
+  {
+    SCOPED_TRACE(svdag::dagstreams::streamName(s));
+    ASSERT_FALSE(encoded.streams[s].empty() && s != svdag::dagstreams::RootIndices);
+    for (int i = 0; i < 60 && !encoded.streams[s].empty(); ++i)
+    {
+      svdag::dagstreams::Streams bad = encoded.streams;
+      std::vector<uint8_t>& stream = bad[s];
+      switch (i % 4)
+      {
+        case 0: stream[rng() % stream.size()] ^= uint8_t(1u << (rng() % 8)); break;
+        case 1: stream[rng() % stream.size()] = uint8_t(rng()); break;
+        case 2: stream.pop_back(); break;
+        default: stream.push_back(uint8_t(rng()));
+      }
+      try
+      {
+        svdag::Volume back = svdag::dagstreams::decode(bad, encoded.shape);
+        back.deriveBoundsAndValidate();
+        std::vector<uint8_t> out(size_t(back.geometry.voxelCount()) * 2);
+        svdag::decode(back, out.data());
+        ++decoded;
+      }
+      catch (const std::runtime_error&)
+      {
+        ++failed;
+      }
+    }
+  }
+  EXPECT_GT(failed, 4 * decoded);
+  // Unchanged, they decode to the volume.
+  svdag::Volume back = svdag::dagstreams::decode(encoded.streams, encoded.shape);
+  back.deriveBoundsAndValidate();
+  EXPECT_TRUE(back == v);
+}
+
+TEST(StreamsFile, HeaderValuesThatDisagreeWithTheStreamsFail)
+{
+  const Bytes good = svdag::serialize(spheres(ScalarType::UInt32, 30));
+  const svdag::Volume v = svdag::deserialize(good);
+  struct Edit
+  {
+    const char* name;
+    size_t at;
+    uint64_t value;
+    int bytes;
+  };
+  const std::vector<Edit> edits = {
+    { "label count + 1", CountsAt + 8 * Labels, v.labels.size() + 1, 8 },
+    { "label count - 1", CountsAt + 8 * Labels, v.labels.size() - 1, 8 },
+    { "block count + 1", CountsAt + 8 * Blocks, v.blockCount + 1, 8 },
+    { "block count - 1", CountsAt + 8 * Blocks, v.blockCount - 1, 8 },
+    { "block count 2^40", CountsAt + 8 * Blocks, uint64_t(1) << 40, 8 },
+    { "root count", CountsAt + 8 * Roots, v.rootCount + 1, 8 },
+    { "mid count", CountsAt + 8 * Mids, v.midCount - 1, 8 },
+    { "mid count 2^40", CountsAt + 8 * Mids, uint64_t(1) << 40, 8 },
+    { "leaf count", CountsAt + 8 * Leaves, v.leaves.size() + 3, 8 },
+    { "leaf width - 1", WidthsAt + 16, v.widths.leafRefBits - 1, 4 },
+    { "root width 1", WidthsAt + 8, 1, 4 },
+    { "dims x", DimsAt, 200, 4 },
+    { "dims z", DimsAt + 8, 5, 4 },
+    { "scalar type int8", TypeAt, 0, 4 },
+    { "background", TypeAt + 4, 7, 8 },
+    { "streams section compressed", entryOf(good, 7) + Codec, 1, 4 },
+  };
+  for (const Edit& e : edits)
+  {
+    SCOPED_TRACE(e.name);
+    Bytes bad = good;
+    putLE(bad, e.at, e.value, e.bytes);
+    resealHeader(bad);
+    largestAllocation = 0;
+    EXPECT_THROW(svdag::deserialize(bad), FileError);
+    EXPECT_LT(largestAllocation.load(), size_t(16) << 20);
+  }
+  // A 4.0 file needs its streams; a coded volume does not stand in for them, nor they for it.
+  Bytes other = good;
+  putLE(other, entryOf(good, 7) + Id, 6, 4);
+  resealHeader(other);
+  EXPECT_THROW(svdag::deserialize(other), FileError);
+  other = good;
+  putLE(other, 8, 3, 2);
+  resealHeader(other);
+  EXPECT_THROW(svdag::deserialize(other), FileError);
 }

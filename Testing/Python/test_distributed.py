@@ -106,7 +106,7 @@ def test_bytes_and_pickle_round_trip():
     assert copy.to_bytes() == data and copy.build_seconds == volume.build_seconds
     # Format 2, stored uncompressed: other bytes, the same volume (pickling travels this way).
     stored = volume.to_bytes(0, format_version=2)
-    assert stored != data and stored[8] == 2 and data[8] == 3
+    assert stored != data and stored[8] == 2 and data[8] == 4
     assert vtksvdag.from_bytes(stored).to_bytes() == data
     # A background other than 0 (and a negative one) is kept, not re-encoded.
     for dtype, background in ((np.uint8, 7), (np.int32, -5)):

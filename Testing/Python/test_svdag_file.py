@@ -23,7 +23,12 @@ from vtksvdag._svdagfile import DEFAULT_FORMAT_VERSION
 from vtksvdag.vtkSVDAGIO import vtkSegmentationSVDAGWriter, vtkSegmentationVolumeReader
 
 MAGIC = b"\x89SVDAG\r\n"
-SECTIONS = {1: "labels", 2: "blocks", 3: "roots", 4: "mids", 5: "leaves", 6: "coded volume"}
+SECTIONS = {1: "labels", 2: "blocks", 3: "roots", 4: "mids", 5: "leaves", 6: "coded volume",
+            7: "DAG streams"}
+#: The DAG streams of a 4.0 file, in their order (IO/README.md).
+DAG_STREAMS = ("label values", "block cells", "block labels", "block roots", "root indices",
+               "root headers", "root references", "mid indices", "mid headers", "mid references",
+               "leaf indices", "leaves")
 
 
 def compress_real_volume(path, spacing=(0.5, 0.75, 2.0), origin=(-4.0, 3.5, 10.0)):
@@ -137,8 +142,7 @@ def test_format_3_holds_one_coded_section_and_the_rebuilt_counts(shared_data, tm
     labels, build = compress_real_volume(shared_data / "dvid_fib19_64.nrrd")
     svdag = build.GetOutput()
     writer = vtkSegmentationSVDAGWriter()
-    assert writer.GetFormatVersion() == 3  # the default, the Python layer's too
-    assert DEFAULT_FORMAT_VERSION == writer.GetFormatVersion()
+    writer.SetFormatVersion(3)
     writer.SetInputData(svdag)
     writer.SetFileName(str(tmp_path / "v3.svdag"))
     assert writer.Write() == 1
@@ -171,10 +175,76 @@ def test_format_3_holds_one_coded_section_and_the_rebuilt_counts(shared_data, tm
     assert (tmp_path / "v3.svdag").stat().st_size < 0.6 * len(v2)
 
     writer.SetFormatVersion(7)
-    assert writer.GetFormatVersion() == 3
+    assert writer.GetFormatVersion() == 4
     writer.SetFormatVersion(1)
     assert writer.GetFormatVersion() == 2
     assert "FormatVersion: 2" in str(writer)  # PrintSelf
+
+
+def varints(data, at, n):
+    """n unsigned LEB128 numbers of data from offset at, and the offset after them."""
+    out = []
+    for _ in range(n):
+        value, shift = 0, 0
+        while True:
+            byte = data[at]
+            at += 1
+            value |= (byte & 0x7F) << shift
+            shift += 7
+            if not byte & 0x80:
+                break
+        out.append(value)
+    return out, at
+
+
+def test_format_4_holds_the_dag_streams_and_the_decoded_counts(shared_data, tmp_path):
+    labels, build = compress_real_volume(shared_data / "dvid_fib19_64.nrrd")
+    svdag = build.GetOutput()
+    writer = vtkSegmentationSVDAGWriter()
+    assert writer.GetFormatVersion() == 4  # the default, the Python layer's too
+    assert DEFAULT_FORMAT_VERSION == writer.GetFormatVersion()
+    writer.SetInputData(svdag)
+    writer.SetFileName(str(tmp_path / "v4.svdag"))
+    assert writer.Write() == 1
+    data = (tmp_path / "v4.svdag").read_bytes()
+    header, sections = parse(data)
+    assert header["version"] == (4, 0)
+    assert list(sections) == ["DAG streams"]
+    codec, payload = sections["DAG streams"]
+    assert codec == 0
+    sizes, at = varints(payload, 0, 2 * len(DAG_STREAMS))
+    stored, raw = sizes[0::2], sizes[1::2]
+    assert at + sum(stored) == len(payload)  # the frames fill the section
+    streams = {}
+    for name, n, r in zip(DAG_STREAMS, stored, raw):
+        frame = payload[at:at + n]
+        at += n
+        streams[name] = frame if n == r else zstandard.ZstdDecompressor().decompress(frame)
+        assert len(streams[name]) == r, name
+    counts = header["counts"]
+    assert counts["blocks"] == svdag.GetNumberOfBlocks() == len(streams["block roots"])
+    assert counts["roots"] == svdag.GetNumberOfRootNodes() == len(streams["root headers"]) // 2
+    assert counts["mids"] == svdag.GetNumberOfMidNodes() == len(streams["mid headers"]) // 2
+    assert counts["leaves"] == svdag.GetNumberOfLeaves() == len(streams["leaves"]) // 8
+    assert counts["labels"] == len(np.unique(labels[labels != 0]))
+    # One reference byte per mixed child; a reference to a node not referenced before costs no
+    # index, so every node of a pool is reached first by a reference without the shared flag.
+    root_mixed = np.frombuffer(streams["root headers"], np.uint8)[0::2]
+    mid_mixed = np.frombuffer(streams["mid headers"], np.uint8)[0::2]
+    popcount = np.unpackbits(root_mixed[:, None], axis=1).sum()
+    assert len(streams["root references"]) == popcount
+    assert len(streams["mid references"]) == np.unpackbits(mid_mixed[:, None], axis=1).sum()
+    block_roots = np.frombuffer(streams["block roots"], np.uint8)
+    assert np.count_nonzero(block_roots & 2 == 0) == counts["roots"]
+    mid_refs = np.frombuffer(streams["mid references"], np.uint8)
+    assert np.count_nonzero(mid_refs & 0x80 == 0) == counts["leaves"]
+    assert np.all((mid_refs & 0x7F) >> 1 < 48)  # one of the cube's 48 symmetries
+    leaves = np.frombuffer(streams["leaves"], "<u8")
+    assert not np.any(leaves & 1)  # canonical leaves
+    # Between the coded volume and format 2 at zstd's strongest level in size.
+    v2 = write(svdag, tmp_path / "v2.svdag", level=19, version=2)
+    v3 = write(svdag, tmp_path / "v3.svdag", version=3)
+    assert len(v3) < len(data) < 0.8 * len(v2)
 
 
 def write(svdag, path, level=3, version=3):
@@ -195,7 +265,7 @@ def read(path):
     return reader, errors
 
 
-@pytest.mark.parametrize("version", [2, 3])
+@pytest.mark.parametrize("version", [2, 3, 4])
 @pytest.mark.parametrize("name", ["totalseg_ct", "gala_train_gt", "fib25_64"])
 def test_round_trip_through_the_reader_is_bit_identical(shared_data, tmp_path, name, version):
     labels, build = compress_real_volume(shared_data / f"{name}.nrrd")
@@ -223,7 +293,7 @@ def test_round_trip_through_the_reader_is_bit_identical(shared_data, tmp_path, n
     np.testing.assert_array_equal(decoded, labels)
 
 
-@pytest.mark.parametrize("version", [2, 3])
+@pytest.mark.parametrize("version", [2, 3, 4])
 def test_reader_reports_damaged_files(shared_data, tmp_path, version):
     _, build = compress_real_volume(shared_data / "fib25_64.nrrd")
     data = write(build.GetOutput(), tmp_path / "good.svdag", version=version)
@@ -505,7 +575,7 @@ DTYPES = ["int8", "uint8", "int16", "uint16", "int32", "uint32", "int64", "uint6
 
 
 @pytest.mark.parametrize("dtype", DTYPES)
-@pytest.mark.parametrize("level, version", [(0, 2), (3, 2), (3, 3)])
+@pytest.mark.parametrize("level, version", [(0, 2), (3, 2), (3, 3), (3, 4)])
 def test_every_dtype_round_trips_bit_exactly(tmp_path, rng, dtype, level, version):
     import vtksvdag
 

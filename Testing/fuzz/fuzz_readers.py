@@ -487,12 +487,22 @@ def _seeds_svdag2_fixcrc(v):
     return [Seed(svdag_stored(_svdag_bytes(z, version=2)), z) for z in v.values()]
 
 
+def _seeds_svdag4(v):
+    return [Seed(_svdag_bytes(z, version=4), z, exact=True) for z in v.values()]
+
+
+def _seeds_svdag4_fixcrc(v):
+    return [Seed(_svdag_bytes(z, version=4), z) for z in v.values()]
+
+
 # target -> (seed maker, file name of the input, transform applied before writing)
 TARGETS = {
     "svdag": (_seeds_svdag, "in.svdag", None),
     "svdag_fixcrc": (_seeds_svdag_fixcrc, "in.svdag", svdag_fix_crcs),
     "svdag2": (_seeds_svdag2, "in.svdag", None),
     "svdag2_fixcrc": (_seeds_svdag2_fixcrc, "in.svdag", svdag_fix_crcs),
+    "svdag4": (_seeds_svdag4, "in.svdag", None),
+    "svdag4_fixcrc": (_seeds_svdag4_fixcrc, "in.svdag", svdag_fix_crcs),
     "nrrd_raw": (_seeds_nrrd_raw, "in.nrrd", None),
     "nrrd_gzip": (_seeds_nrrd_gzip, "in.nrrd", None),
     "nhdr": (_seeds_nhdr, "in.nhdr", None),

@@ -1,18 +1,21 @@
 // The .svdag file format: a Volume on disk, checked on load so that a truncated or corrupt file
 // gives a FileError, never a crash, an out-of-bounds read or a huge allocation.
 //
-// Format versions 3.0 (the default) and 2.0 share the header and section table below; 1.0 files
-// are read too (see FileMajorVersion). A 3.0 file holds one section, the coded volume
+// Format versions 4.0 (the default), 3.0 and 2.0 share the header and section table below; 1.0
+// files are read too (see FileMajorVersion). A 4.0 file holds one section, the DAG as byte
+// streams (DagStreams.h: node headers, reference flags, shared nodes' indices, leaf masks, block
+// cells and labels, label values, each under zstd), from which loading lays the volume out again
+// and derives the block bounds and label totals; a 3.0 file holds the coded volume
 // (CodedVolume.h: label values, and per cell its labels and their occupancy, arithmetic-coded),
 // from which loading rebuilds the volume as a build of the same voxels lays it out; a 2.0 file
 // holds the Volume's own parts (sections 1-5), which load as they are. IO/README.md documents
-// both. Every integer is little-endian, every real an IEEE-754 binary64 stored as its 64-bit
+// them. Every integer is little-endian, every real an IEEE-754 binary64 stored as its 64-bit
 // pattern, little-endian; fields are written one by one, never as memory images.
 //
 //   offset size  field
 //   0      8     magic  89 53 56 44 41 47 0D 0A  ("\x89SVDAG\r\n": the high byte catches 7-bit
 //                       transfers, CR LF catches line-ending conversion, a short file fails here)
-//   8      2     major version (3 or 2): a reader rejects a major version it does not know
+//   8      2     major version (4, 3 or 2): a reader rejects a major version it does not know
 //   10     2     minor version (0): additions a reader can ignore (more sections)
 //   12     12    dims: 3 x int32, each >= 1
 //   24     24    spacing[3] (float64), finite and > 0
@@ -22,7 +25,8 @@
 //   148    8     background label (uint64 pattern, sign-extended for signed types)
 //   156    20    field widths (5 x uint32, each <= 32): cell, label, root ref, mid ref, leaf ref
 //   176    40    counts (5 x uint64): labels, blocks, root nodes, mid nodes, leaves (3.0: the
-//                rebuilt volume's widths and counts, which loading checks)
+//                rebuilt volume's widths and counts, which loading checks; 4.0: the decoded
+//                volume's, its pools in first-use order)
 //   216    4     number of sections S (uint32, at most 64)
 //   220    36*S  section table, one entry per section:
 //                  id (uint32), codec (uint32: 0 none, 1 zstd), offset (uint64, from the start of
@@ -38,8 +42,11 @@
 //   4 mids    the mid node stream as uint32 words, without the padding word
 //   5 leaves  the 4^3 leaf masks, uint64 each
 //   6 coded   (3.0) the coded volume, stored as the range coder wrote it (codec 0)
-// 2.0 requires sections 1-5 and 3.0 section 6, once each; sections with other ids are skipped
-// (minor additions).
+//   7 streams (4.0) per DAG stream (DagStreams.h, in its order) its stored and raw sizes as
+//             varints, then the streams, each a zstd frame (level 19) or, where that is not
+//             smaller, its raw bytes (stored size == raw size); the section itself codec 0
+// 2.0 requires sections 1-5, 3.0 section 6 and 4.0 section 7, once each; sections with other
+// ids are skipped (minor additions).
 // The raw size of sections 1, 2 and 5 must be what the counts imply; the node streams must hold
 // between 16 and 16 + 8 * refBits bits per node. The reader re-adds the padding words.
 //
@@ -55,7 +62,7 @@
 // counts against the header's. A loaded file may still describe a volume too large to decode
 // densely: see checkDecodeMemory in svdag/Decoder.h.
 //
-// Writing a 3.0 file decodes the coded bytes again and compares every block's cell, label and
+// Writing a 3.0 or 4.0 file decodes its section again and compares every block's cell, label and
 // occupancy with the volume's before anything is written.
 #pragma once
 
@@ -87,9 +94,10 @@ struct FileWriteError : FileError
   using FileError::FileError;
 };
 
-// 2.0: leaf references carry a symmetry (Layout.h). 1.0 files (leaf references without one) are
+// The newest version written (4.0: the DAG streams). 2.0: leaf references carry a symmetry
+// (Layout.h). 1.0 files (leaf references without one) are
 // read and re-laid out on load (FileVersion1.h).
-constexpr uint16_t FileMajorVersion = 3;
+constexpr uint16_t FileMajorVersion = 4;
 constexpr uint16_t FileMinorVersion = 0;
 constexpr size_t FileMagicSize = 8;
 extern const uint8_t FileMagic[FileMagicSize];
@@ -97,10 +105,11 @@ extern const uint8_t FileMagic[FileMagicSize];
 struct WriteOptions
 {
   int zstdLevel = 3; // format 2: 1..22; 0 stores the sections uncompressed
-  // 3: the coded volume, the smallest file; loading rebuilds the DAG from it (a fraction of a
-  // build's time). 2: the layout's sections (zstd at zstdLevel), read by older readers too and
-  // loaded without a rebuild.
-  int formatVersion = 3;
+  // 4: the DAG's byte streams under zstd, smaller than CSGV's files and loaded in a fraction of
+  // a build's time. 3: the coded volume, the smallest file (about half of 4's); loading rebuilds
+  // the DAG from it, about a build's time. 2: the layout's sections (zstd at zstdLevel), read by
+  // readers older than 3.0 too.
+  int formatVersion = 4;
 };
 
 // `parallel` runs format 3's chunks (CodedVolume.h) side by side; the bytes and volumes do not

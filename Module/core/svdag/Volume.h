@@ -155,6 +155,11 @@ public:
   // voxel count and bounds exactly what its blocks hold. Linear in the size of the volume:
   // occupancy is summarised once per distinct node, never expanded per block.
   void validate() const;
+  // Sets each block's bounds to the tight box of its occupancy and each label's voxel count and
+  // bounds to what its blocks hold, then checks the rest as validate() does (a .svdag 4.0 file
+  // stores neither: they are derived from the same once-per-node summaries that validate() uses).
+  // Throws std::runtime_error as validate() does, and for a label no block holds.
+  void deriveBoundsAndValidate();
   bool operator==(const Volume& o) const;
 };
 

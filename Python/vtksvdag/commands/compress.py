@@ -30,8 +30,9 @@ def add_arguments(parser):
     )
     parser.add_argument(
         "--format-version", type=int, choices=FORMAT_VERSIONS, default=DEFAULT_FORMAT_VERSION,
-        metavar="V", help="3: the smallest file (default); 2: the in-memory sections under zstd, "
-        "larger but several times faster to load, and read by vtksvdag before format 3",
+        metavar="V", help="4: the DAG as byte streams, smaller than CSGV's files and fast to load "
+        "(default); 3: the smallest file, about a build's time to load; 2: the in-memory "
+        "sections under zstd, read by vtksvdag before format 3",
     )
     parser.add_argument(
         "--dask", metavar="CLUSTER",

@@ -1,0 +1,457 @@
+// The DAG as byte streams (DagStreams.h).
+#include "DagStreams.h"
+
+#include "Bits.h"
+
+#include <algorithm>
+#include <stdexcept>
+#include <string>
+
+namespace svdag
+{
+namespace dagstreams
+{
+namespace
+{
+using layout::bitCount;
+
+[[noreturn]] void fail(const std::string& what)
+{
+  throw std::runtime_error(what);
+}
+
+constexpr uint8_t ComplementFlag = 1u, SharedNodeFlag = 2u, SharedLeafFlag = 0x80u;
+
+void putVarint(std::vector<uint8_t>& out, uint64_t v)
+{
+  while (v >= 0x80u)
+  {
+    out.push_back(uint8_t(v | 0x80u));
+    v >>= 7;
+  }
+  out.push_back(uint8_t(v));
+}
+
+// Label values as unsigned keys in the type's order: flipping the sign bit of a sign-extended
+// pattern orders signed values as unsigned ones.
+uint64_t keyOf(ScalarType t, uint64_t pattern)
+{
+  return scalarSigned(t) ? pattern ^ (uint64_t(1) << 63) : pattern;
+}
+uint64_t patternOf(ScalarType t, uint64_t key)
+{
+  return keyOf(t, key); // the flip undoes itself
+}
+
+// Start offsets of a node stream's nodes, in order, and the ordinal of a node at an offset.
+std::vector<uint64_t> nodeStarts(const std::vector<uint32_t>& stream, uint64_t count, uint32_t refBits)
+{
+  std::vector<uint64_t> starts(static_cast<size_t>(count));
+  uint64_t offset = 0;
+  for (uint64_t n = 0; n < count; ++n)
+  {
+    starts[size_t(n)] = offset;
+    offset += Volume::nodeBits(stream, offset, refBits);
+  }
+  return starts;
+}
+size_t ordinalAt(const std::vector<uint64_t>& starts, uint64_t offset)
+{
+  return size_t(std::lower_bound(starts.begin(), starts.end(), offset) - starts.begin());
+}
+
+// First-use numbering of one pool: a reference to a node not numbered yet numbers it next.
+struct Renumbering
+{
+  std::vector<int64_t> newIndex; // by old index, -1 until referenced
+  std::vector<uint64_t> oldIndex; // by new index
+  explicit Renumbering(uint64_t count)
+    : newIndex(size_t(count), -1)
+  {
+  }
+  // Appends the reference's flag bits to `flags` and, for a shared node, its index.
+  uint8_t refer(uint64_t old, uint8_t sharedFlag, std::vector<uint8_t>& indices)
+  {
+    int64_t& n = newIndex[size_t(old)];
+    if (n >= 0)
+    {
+      putVarint(indices, uint64_t(n));
+      return sharedFlag;
+    }
+    n = int64_t(oldIndex.size());
+    oldIndex.push_back(old);
+    return 0;
+  }
+};
+
+// Node n's bits in a stream.
+uint64_t nodeEnd(const std::vector<uint32_t>& stream, uint64_t start, uint32_t refBits)
+{
+  return start + Volume::nodeBits(stream, start, refBits);
+}
+
+// Reads a stream front to back; every read is checked against its end.
+class Reader
+{
+public:
+  Reader(const std::vector<uint8_t>& bytes, uint32_t stream)
+    : At(bytes.data())
+    , End(bytes.data() + bytes.size())
+    , Stream(stream)
+  {
+  }
+  uint8_t byte()
+  {
+    if (this->At == this->End)
+      fail(std::string(streamName(this->Stream)) + " stream ends early");
+    return *this->At++;
+  }
+  uint64_t varint()
+  {
+    uint64_t v = 0;
+    for (uint32_t shift = 0;; shift += 7)
+    {
+      const uint8_t b = this->byte();
+      if (shift == 63 && b > 1u)
+        fail(std::string(streamName(this->Stream)) + " stream: a number above 64 bits");
+      v |= uint64_t(b & 0x7Fu) << shift;
+      if (!(b & 0x80u))
+        return v;
+    }
+  }
+  uint64_t u64le()
+  {
+    if (this->End - this->At < 8)
+      fail(std::string(streamName(this->Stream)) + " stream ends early");
+    const uint64_t v = bits::loadLE(this->At, 8);
+    this->At += 8;
+    return v;
+  }
+  void finish() const
+  {
+    if (this->At != this->End)
+      fail(std::string(streamName(this->Stream)) + " stream holds more than its volume");
+  }
+
+private:
+  const uint8_t* At;
+  const uint8_t* End;
+  uint32_t Stream;
+};
+
+// One pool as it is decoded: the nodes' start offsets (known once their headers are read) and
+// how many of them references reached so far.
+struct DecodedPool
+{
+  std::vector<uint64_t> starts;
+  uint64_t referenced = 0;
+  // The node a reference names: the next new one, or a shared one by index.
+  uint64_t take(bool shared, Reader& indices, const char* what)
+  {
+    if (shared)
+    {
+      const uint64_t i = indices.varint();
+      if (i >= this->referenced)
+        fail(std::string(what) + " reference to a node not referenced before");
+      return i;
+    }
+    if (this->referenced >= this->starts.size())
+      fail(std::string("more ") + what + " references than " + what + " nodes");
+    return this->referenced++;
+  }
+  void checkAllReferenced(const char* what) const
+  {
+    if (this->referenced != this->starts.size())
+      fail(std::string(what) + " nodes that no reference reaches");
+  }
+};
+
+void writeField(std::vector<uint32_t>& words, uint64_t offset, uint32_t width, uint64_t value,
+  const char* what)
+{
+  if (width < 64 && (value >> width) != 0)
+    fail(std::string(what) + " wider than its field");
+  bits::writeBits(words, offset, width, uint32_t(value));
+}
+
+// Reads `count` nodes' headers into a word stream (references left zero) and their starts.
+std::vector<uint32_t> readHeaders(Reader& headers, uint64_t count, uint32_t refBits,
+  DecodedPool& pool, uint64_t& mixedChildren, const char* what)
+{
+  std::vector<uint32_t> words(1, 0u);
+  uint64_t offset = 0;
+  mixedChildren = 0;
+  for (uint64_t n = 0; n < count; ++n)
+  {
+    const uint32_t mixed = headers.byte(), full = headers.byte();
+    if (mixed & full)
+      fail(std::string(what) + " node with a child both mixed and full");
+    pool.starts.push_back(offset);
+    const uint64_t end = offset + layout::NODE_HEADER_BITS + uint64_t(bitCount(mixed)) * refBits;
+    words.resize(size_t(end / 32 + 2), 0u);
+    bits::writeBits(words, offset, layout::NODE_HEADER_BITS, mixed | (full << 8));
+    mixedChildren += bitCount(mixed);
+    offset = end;
+  }
+  headers.finish();
+  words.resize(size_t((offset + 31) / 32 + 1));
+  return words;
+}
+} // namespace
+
+const char* streamName(uint32_t stream)
+{
+  static const char* const names[StreamCount] = { "label values", "block cells", "block labels",
+    "block roots", "root indices", "root headers", "root references", "mid indices",
+    "mid headers", "mid references", "leaf indices", "leaves" };
+  return stream < StreamCount ? names[stream] : "unknown";
+}
+
+Encoded encode(const Volume& v)
+{
+  Encoded out;
+  Streams& s = out.streams;
+  const ScalarType type = v.scalarType;
+
+  uint64_t previous = keyOf(type, scalarMin(type));
+  for (size_t l = 0; l < v.labels.size(); ++l)
+  {
+    const uint64_t key = keyOf(type, v.labels[l].value);
+    putVarint(s[LabelValues], key - previous - (l > 0 ? 1 : 0));
+    previous = key;
+  }
+
+  const std::vector<uint64_t> rootStarts = nodeStarts(v.roots, v.rootCount, v.widths.midRefBits);
+  const std::vector<uint64_t> midStarts = nodeStarts(v.mids, v.midCount, v.widths.leafRefBits);
+  Renumbering roots(v.rootCount), mids(v.midCount), leaves(v.leaves.size());
+  uint32_t previousCell = 0;
+  for (uint64_t i = 0; i < v.blockCount; ++i)
+  {
+    const Block b = v.block(i);
+    putVarint(s[BlockCells], b.cell - previousCell);
+    previousCell = b.cell;
+    putVarint(s[BlockLabels], b.label);
+    const size_t old = ordinalAt(rootStarts, layout::refTarget(b.root));
+    s[BlockRoots].push_back(
+      uint8_t((b.root & ComplementFlag) | roots.refer(old, SharedNodeFlag, s[RootIndices])));
+  }
+
+  // Each pool in its new order; the bits a reference of the next level needs, renumbered.
+  uint64_t midBits = 0, leafRefMax = 0, rootBits = 0;
+  for (uint64_t n = 0; n < roots.oldIndex.size(); ++n)
+  {
+    const uint64_t start = rootStarts[size_t(roots.oldIndex[size_t(n)])];
+    const uint32_t header = Volume::nodeHeader(v.roots, start);
+    s[RootHeaders].push_back(uint8_t(layout::nodeMixedMask(header)));
+    s[RootHeaders].push_back(uint8_t(layout::nodeFullMask(header)));
+    for (uint32_t k = 0; k < bitCount(layout::nodeMixedMask(header)); ++k)
+    {
+      const uint32_t ref = Volume::nodeChildRef(v.roots, start, k, v.widths.midRefBits);
+      const size_t old = ordinalAt(midStarts, layout::refTarget(ref));
+      s[RootRefs].push_back(
+        uint8_t((ref & ComplementFlag) | mids.refer(old, SharedNodeFlag, s[MidIndices])));
+    }
+  }
+  uint64_t lastRootStart = 0;
+  for (uint64_t n = 0; n < roots.oldIndex.size(); ++n)
+  {
+    const uint64_t start = rootStarts[size_t(roots.oldIndex[size_t(n)])];
+    lastRootStart = rootBits;
+    rootBits += nodeEnd(v.roots, start, v.widths.midRefBits) - start;
+  }
+  uint64_t lastMidStart = 0;
+  for (uint64_t n = 0; n < mids.oldIndex.size(); ++n)
+  {
+    const uint64_t start = midStarts[size_t(mids.oldIndex[size_t(n)])];
+    const uint32_t header = Volume::nodeHeader(v.mids, start);
+    s[MidHeaders].push_back(uint8_t(layout::nodeMixedMask(header)));
+    s[MidHeaders].push_back(uint8_t(layout::nodeFullMask(header)));
+    for (uint32_t k = 0; k < bitCount(layout::nodeMixedMask(header)); ++k)
+    {
+      const uint32_t ref = Volume::nodeChildRef(v.mids, start, k, v.widths.leafRefBits);
+      const uint8_t shared =
+        leaves.refer(layout::leafRefIndex(ref), SharedLeafFlag, s[LeafIndices]);
+      s[MidRefs].push_back(uint8_t((ref & 0x7Fu) | shared));
+      leafRefMax = std::max<uint64_t>(leafRefMax,
+        layout::leafRef(uint32_t(leaves.newIndex[layout::leafRefIndex(ref)]),
+          layout::leafRefSymmetry(ref), ref & 1u));
+    }
+    lastMidStart = midBits;
+    midBits += nodeEnd(v.mids, start, v.widths.leafRefBits) - start;
+  }
+  for (uint64_t old : leaves.oldIndex)
+  {
+    const size_t at = s[Leaves].size();
+    s[Leaves].resize(at + 8);
+    bits::storeLE(s[Leaves].data() + at, v.leaves[size_t(old)], 8);
+  }
+
+  Shape& shape = out.shape;
+  Volume& f = shape.frame;
+  f.geometry = v.geometry;
+  f.scalarType = v.scalarType;
+  f.background = v.background;
+  f.blockCount = v.blockCount;
+  f.rootCount = roots.oldIndex.size();
+  f.midCount = mids.oldIndex.size();
+  f.widths = v.widths;
+  f.widths.rootRefBits = std::max(f.widths.rootRefBits, bits::bitWidth((lastRootStart << 1) | 1u));
+  f.widths.midRefBits = std::max(f.widths.midRefBits, bits::bitWidth((lastMidStart << 1) | 1u));
+  f.widths.leafRefBits = std::max(f.widths.leafRefBits, bits::bitWidth(leafRefMax));
+  shape.labelCount = v.labels.size();
+  shape.leafCount = leaves.oldIndex.size();
+  return out;
+}
+
+uint64_t maxStreamBytes(uint32_t stream, const Shape& shape)
+{
+  const Volume& f = shape.frame;
+  constexpr uint64_t MaxVarint = 10;
+  // Counts are at most the voxels (2^44, checkGeometry), so these products do not overflow.
+  switch (stream)
+  {
+    case LabelValues: return MaxVarint * shape.labelCount;
+    case BlockCells:
+    case BlockLabels: return MaxVarint * f.blockCount;
+    case BlockRoots: return f.blockCount;
+    case RootIndices: return MaxVarint * f.blockCount;
+    case RootHeaders: return 2 * f.rootCount;
+    case RootRefs: return 8 * f.rootCount;
+    case MidIndices: return MaxVarint * 8 * f.rootCount;
+    case MidHeaders: return 2 * f.midCount;
+    case MidRefs: return 8 * f.midCount;
+    case LeafIndices: return MaxVarint * 8 * f.midCount;
+    case Leaves: return 8 * shape.leafCount;
+    default: return 0;
+  }
+}
+
+Volume decode(const Streams& s, const Shape& shape)
+{
+  const Volume& f = shape.frame;
+  Volume v;
+  v.geometry = f.geometry;
+  v.scalarType = f.scalarType;
+  v.background = f.background;
+  v.widths = f.widths;
+  v.blockCount = f.blockCount;
+  v.rootCount = f.rootCount;
+  v.midCount = f.midCount;
+  const ScalarType type = v.scalarType;
+
+  { // labels: values only (counts and bounds are derived)
+    Reader r(s[LabelValues], LabelValues);
+    const uint64_t lowest = keyOf(type, scalarMin(type)), highest = keyOf(type, scalarMax(type));
+    uint64_t key = lowest;
+    for (uint64_t l = 0; l < shape.labelCount; ++l)
+    {
+      const uint64_t distance = r.varint();
+      if (distance > highest - key || (l > 0 && distance == highest - key))
+        fail("label value outside the range of " + std::string(scalarName(type)));
+      key += distance + (l > 0 ? 1 : 0);
+      LabelInfo info;
+      info.value = patternOf(type, key);
+      v.labels.push_back(info);
+    }
+    r.finish();
+  }
+
+  { // leaves
+    Reader r(s[Leaves], Leaves);
+    for (uint64_t l = 0; l < shape.leafCount; ++l)
+      v.leaves.push_back(r.u64le());
+    r.finish();
+  }
+
+  DecodedPool leaves, mids, roots;
+  leaves.starts.resize(v.leaves.size()); // leaves are numbered, not placed
+  uint64_t midChildren = 0, rootChildren = 0;
+  { // mids: headers, then each mixed child's leaf reference
+    Reader headers(s[MidHeaders], MidHeaders);
+    v.mids = readHeaders(headers, v.midCount, v.widths.leafRefBits, mids, midChildren, "mid");
+    Reader refs(s[MidRefs], MidRefs), indices(s[LeafIndices], LeafIndices);
+    for (uint64_t n = 0; n < v.midCount; ++n)
+    {
+      const uint64_t start = mids.starts[size_t(n)];
+      const uint32_t mixed = layout::nodeMixedMask(Volume::nodeHeader(v.mids, start));
+      for (uint32_t k = 0; k < bitCount(mixed); ++k)
+      {
+        const uint8_t flags = refs.byte();
+        const uint32_t symmetry = (flags >> 1) & 0x3Fu;
+        if (symmetry >= layout::LEAF_SYMMETRY_COUNT)
+          fail("leaf reference with an unknown symmetry");
+        const uint64_t leaf = leaves.take((flags & SharedLeafFlag) != 0, indices, "leaf");
+        const uint64_t ref = (leaf << (layout::LEAF_SYMMETRY_BITS + 1)) | (symmetry << 1) |
+          (flags & ComplementFlag);
+        writeField(v.mids, start + layout::NODE_HEADER_BITS + uint64_t(k) * v.widths.leafRefBits,
+          v.widths.leafRefBits, ref, "a leaf reference");
+      }
+    }
+    refs.finish();
+    indices.finish();
+    leaves.checkAllReferenced("leaf");
+  }
+  { // roots
+    Reader headers(s[RootHeaders], RootHeaders);
+    v.roots = readHeaders(headers, v.rootCount, v.widths.midRefBits, roots, rootChildren, "root");
+    Reader refs(s[RootRefs], RootRefs), indices(s[MidIndices], MidIndices);
+    for (uint64_t n = 0; n < v.rootCount; ++n)
+    {
+      const uint64_t start = roots.starts[size_t(n)];
+      const uint32_t mixed = layout::nodeMixedMask(Volume::nodeHeader(v.roots, start));
+      for (uint32_t k = 0; k < bitCount(mixed); ++k)
+      {
+        const uint8_t flags = refs.byte();
+        if (flags & ~(ComplementFlag | SharedNodeFlag))
+          fail("root references: unknown flags");
+        const uint64_t mid = mids.take((flags & SharedNodeFlag) != 0, indices, "mid");
+        writeField(v.roots, start + layout::NODE_HEADER_BITS + uint64_t(k) * v.widths.midRefBits,
+          v.widths.midRefBits, (mids.starts[size_t(mid)] << 1) | (flags & ComplementFlag),
+          "a mid reference");
+      }
+    }
+    refs.finish();
+    indices.finish();
+    mids.checkAllReferenced("mid");
+  }
+  { // blocks, their bounds left zero
+    const FieldWidths& w = v.widths;
+    const uint64_t cells = v.geometry.cellCount();
+    const uint64_t recordBits = w.blockBits();
+    Reader cellsIn(s[BlockCells], BlockCells), labels(s[BlockLabels], BlockLabels),
+      refs(s[BlockRoots], BlockRoots), indices(s[RootIndices], RootIndices);
+    uint64_t cell = 0;
+    for (uint64_t i = 0; i < v.blockCount; ++i)
+    {
+      const uint64_t step = cellsIn.varint();
+      if (step >= cells - cell) // cell < cells after the first block
+        fail("block cell outside the grid");
+      cell += step;
+      const uint64_t label = labels.varint();
+      if (label >= v.labels.size())
+        fail("block label index out of range");
+      const uint8_t flags = refs.byte();
+      if (flags & ~(ComplementFlag | SharedNodeFlag))
+        fail("block roots: unknown flags");
+      const uint64_t root = roots.take((flags & SharedNodeFlag) != 0, indices, "root");
+      const uint64_t base = i * recordBits;
+      v.blocks.resize(size_t((base + recordBits) / 32 + 2), 0u);
+      writeField(v.blocks, base, w.cellBits, cell, "a block's cell");
+      writeField(v.blocks, base + layout::blockLabelOffset(w.cellBits), w.labelBits, label,
+        "a block's label");
+      writeField(v.blocks, base + layout::blockRootOffset(w.cellBits, w.labelBits), w.rootRefBits,
+        (roots.starts[size_t(root)] << 1) | (flags & ComplementFlag), "a root reference");
+    }
+    const uint64_t totalBits = v.blockCount * recordBits;
+    v.blocks.resize(size_t(totalBits / 32 + (totalBits % 32 ? 1 : 0) + 1), 0u);
+    cellsIn.finish();
+    labels.finish();
+    refs.finish();
+    indices.finish();
+    roots.checkAllReferenced("root");
+  }
+  return v;
+}
+
+} // namespace dagstreams
+} // namespace svdag
