@@ -99,6 +99,7 @@ COLUMNS = [
     "file2_bytes", "load2_s", "load2_over_build",
     "file3_bytes", "write3_s", "load3_s", "load3_over_build",
     "file3_over_cseg", "file3_over_crackle", "file3_over_zstd19",
+    "file4_bytes", "write4_s", "load4_s", "load4_over_build", "file4_over_cseg",
 ]
 
 
@@ -377,11 +378,12 @@ def measure_volume(name, source, labels, file_path, repeats, baseline_kb) -> dic
                          "values, numpy finds another number")
     row["ours_over_zstd19"] = total / row["zstd19_bytes"]
     row["ours_over_crackle"] = total / row["crackle_bytes"]
-    for version in (2, 3):
+    for version in (2, 3, 4):
         row.update(measure_svdag_file(name, svdag, labels, runs, version))
         row[f"load{version}_over_build"] = row[f"load{version}_s"] / build_s
     for other in ("cseg", "crackle", "zstd19"):
         row[f"file3_over_{other}"] = row["file3_bytes"] / row[f"{other}_bytes"]
+    row["file4_over_cseg"] = row["file4_bytes"] / row["cseg_bytes"]
     # Builds from before encoding_statistics (a baseline build on PYTHONPATH) have no levels.
     if hasattr(SegmentationVolume, "encoding_statistics"):
         row["levels"] = SegmentationVolume(svdag).encoding_statistics()
@@ -410,8 +412,8 @@ def measure_svdag_file(name, svdag, labels, runs, version) -> dict:
         if loaded.dataobject.GetCompressedSize() != svdag.GetCompressedSize():
             raise BenchError(f"{name}: the .svdag {version}.0 file loads to another byte count")
         row = {f"file{version}_bytes": path.stat().st_size, f"load{version}_s": statistics.median(times)}
-        if version == 3:
-            row["write3_s"] = written
+        if version >= 3:
+            row[f"write{version}_s"] = written
         return row
 
 
@@ -465,17 +467,20 @@ def print_files(rows, anchors):
     table = []
     for r in rows:
         csgv = anchor_value(anchors.get(r["volume"], {}), "CSGV file MB")
-        table.append([r["volume"], r["file3_bytes"] / MB, r["file2_bytes"] / MB, csgv,
+        table.append([r["volume"], r["file4_bytes"] / MB, r["file3_bytes"] / MB,
+                      r["file2_bytes"] / MB, csgv,
+                      r["file4_bytes"] / MB / csgv if csgv else None,
                       r["file3_bytes"] / MB / csgv if csgv else None,
                       r["file3_over_crackle"], r["file3_over_zstd19"], r["file3_over_cseg"],
-                      r["file3_bytes"] / r["file2_bytes"], r["build_s"], r["write3_s"],
+                      r["build_s"], r["write4_s"], r["write3_s"], r["load4_over_build"],
                       r["load3_over_build"], r["load2_over_build"]])
     print_table(
-        "The .svdag file, format 3.0 (coded) and 2.0 (zstd level 3), measured; CSGV file MB "
-        "reported in anchors.md, not measured here; crackle, zstd -19 and cseg measured in this "
-        "run; load = vtksvdag.read of the file, median of `runs`",
-        ["volume", "3.0 MB", "2.0 MB", "CSGV file MB", "3.0/CSGV", "3.0/crackle", "3.0/zstd19",
-         "3.0/cseg", "3.0/2.0", "build s", "write 3.0 s", "load 3.0/build", "load 2.0/build"],
+        "The .svdag file, format 4.0 (DAG streams, the default), 3.0 (coded) and 2.0 (zstd level "
+        "3), measured; CSGV file MB reported in anchors.md, not measured here; crackle, zstd -19 "
+        "and cseg measured in this run; load = vtksvdag.read of the file, median of `runs`",
+        ["volume", "4.0 MB", "3.0 MB", "2.0 MB", "CSGV file MB", "4.0/CSGV", "3.0/CSGV",
+         "3.0/crackle", "3.0/zstd19", "3.0/cseg", "build s", "write 4.0 s", "write 3.0 s",
+         "load 4.0/build", "load 3.0/build", "load 2.0/build"],
         table,
     )
 

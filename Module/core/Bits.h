@@ -39,6 +39,22 @@ inline uint32_t readBits(const std::vector<uint32_t>& stream, uint64_t offset, u
   return result;
 }
 
+// Bit counts without a library call (the core is built for any x86-64, without POPCNT, where
+// __builtin_popcount calls libgcc).
+inline uint32_t popcount64(uint64_t x)
+{
+  x = x - ((x >> 1) & 0x5555555555555555ull);
+  x = (x & 0x3333333333333333ull) + ((x >> 2) & 0x3333333333333333ull);
+  x = (x + (x >> 4)) & 0x0F0F0F0F0F0F0F0Full;
+  return uint32_t((x * 0x0101010101010101ull) >> 56);
+}
+inline uint32_t popcount8(uint32_t x)
+{
+  x = x - ((x >> 1) & 0x55u);
+  x = (x & 0x33u) + ((x >> 2) & 0x33u);
+  return (x + (x >> 4)) & 0x0Fu;
+}
+
 // Little-endian fields of a byte buffer, whatever the host's byte order (compilers turn these
 // into plain loads and stores on little-endian hosts): the .svdag file's and its coded volume's.
 inline void storeLE(uint8_t* at, uint64_t v, int n)
@@ -65,6 +81,21 @@ inline void writeBits(std::vector<uint32_t>& stream, uint64_t offset, uint32_t w
   stream[size_t(word)] |= value << shift;
   if (shift + width > 32)
     stream[size_t(word + 1)] |= value >> (32 - shift);
+}
+// Sets a field (whatever it held) to `value` (at most `width` bits, 0..32), as writeBits.
+inline void replaceBits(
+  std::vector<uint32_t>& stream, uint64_t offset, uint32_t width, uint32_t value)
+{
+  const uint64_t word = offset >> 5;
+  const uint32_t shift = uint32_t(offset & 31);
+  const uint64_t mask = uint64_t(layout::lowMask(width)) << shift;
+  uint64_t pair = stream[size_t(word)];
+  if (shift + width > 32)
+    pair |= uint64_t(stream[size_t(word + 1)]) << 32;
+  pair = (pair & ~mask) | (uint64_t(value) << shift);
+  stream[size_t(word)] = uint32_t(pair);
+  if (shift + width > 32)
+    stream[size_t(word + 1)] = uint32_t(pair >> 32);
 }
 } // namespace bits
 } // namespace svdag

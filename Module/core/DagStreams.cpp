@@ -13,7 +13,7 @@ namespace dagstreams
 {
 namespace
 {
-using layout::bitCount;
+using bits::popcount8;
 
 [[noreturn]] void fail(const std::string& what)
 {
@@ -69,7 +69,8 @@ struct Renumbering
     : newIndex(size_t(count), -1)
   {
   }
-  // Appends the reference's flag bits to `flags` and, for a shared node, its index.
+  // The shared flag for a node numbered before (its index appended to `indices`), else 0 (the
+  // node is numbered next).
   uint8_t refer(uint64_t old, uint8_t sharedFlag, std::vector<uint8_t>& indices)
   {
     int64_t& n = newIndex[size_t(old)];
@@ -83,12 +84,6 @@ struct Renumbering
     return 0;
   }
 };
-
-// Node n's bits in a stream.
-uint64_t nodeEnd(const std::vector<uint32_t>& stream, uint64_t start, uint32_t refBits)
-{
-  return start + Volume::nodeBits(stream, start, refBits);
-}
 
 // Reads a stream front to back; every read is checked against its end.
 class Reader
@@ -174,27 +169,27 @@ void writeField(std::vector<uint32_t>& words, uint64_t offset, uint32_t width, u
   bits::writeBits(words, offset, width, uint32_t(value));
 }
 
-// Reads `count` nodes' headers into a word stream (references left zero) and their starts.
-std::vector<uint32_t> readHeaders(Reader& headers, uint64_t count, uint32_t refBits,
-  DecodedPool& pool, uint64_t& mixedChildren, const char* what)
+// A pool's node stream from its headers (2 bytes a node: mixed, full), references left zero, and
+// the nodes' starts; sized once, from the headers, so that only their bytes bound the memory.
+std::vector<uint32_t> readHeaders(const std::vector<uint8_t>& headers, uint32_t stream,
+  uint64_t count, uint32_t refBits, DecodedPool& pool, const char* what)
 {
-  std::vector<uint32_t> words(1, 0u);
-  uint64_t offset = 0;
-  mixedChildren = 0;
+  if (headers.size() / 2 != count || headers.size() % 2 != 0)
+    fail(std::string(streamName(stream)) + " stream does not hold its " + what + " count");
+  uint64_t bits = 0;
+  pool.starts.resize(size_t(count));
   for (uint64_t n = 0; n < count; ++n)
   {
-    const uint32_t mixed = headers.byte(), full = headers.byte();
+    const uint32_t mixed = headers[size_t(2 * n)], full = headers[size_t(2 * n + 1)];
     if (mixed & full)
       fail(std::string(what) + " node with a child both mixed and full");
-    pool.starts.push_back(offset);
-    const uint64_t end = offset + layout::NODE_HEADER_BITS + uint64_t(bitCount(mixed)) * refBits;
-    words.resize(size_t(end / 32 + 2), 0u);
-    bits::writeBits(words, offset, layout::NODE_HEADER_BITS, mixed | (full << 8));
-    mixedChildren += bitCount(mixed);
-    offset = end;
+    pool.starts[size_t(n)] = bits;
+    bits += layout::NODE_HEADER_BITS + uint64_t(popcount8(mixed)) * refBits;
   }
-  headers.finish();
-  words.resize(size_t((offset + 31) / 32 + 1));
+  std::vector<uint32_t> words(size_t((bits + 31) / 32 + 1), 0u);
+  for (uint64_t n = 0; n < count; ++n)
+    bits::writeBits(words, pool.starts[size_t(n)], layout::NODE_HEADER_BITS,
+      headers[size_t(2 * n)] | (uint32_t(headers[size_t(2 * n + 1)]) << 8));
   return words;
 }
 } // namespace
@@ -236,7 +231,7 @@ Encoded encode(const Volume& v)
       uint8_t((b.root & ComplementFlag) | roots.refer(old, SharedNodeFlag, s[RootIndices])));
   }
 
-  // Each pool in its new order; the bits a reference of the next level needs, renumbered.
+  // Each pool in its new order, and the largest reference into it once renumbered.
   uint64_t midBits = 0, leafRefMax = 0, rootBits = 0;
   for (uint64_t n = 0; n < roots.oldIndex.size(); ++n)
   {
@@ -244,7 +239,7 @@ Encoded encode(const Volume& v)
     const uint32_t header = Volume::nodeHeader(v.roots, start);
     s[RootHeaders].push_back(uint8_t(layout::nodeMixedMask(header)));
     s[RootHeaders].push_back(uint8_t(layout::nodeFullMask(header)));
-    for (uint32_t k = 0; k < bitCount(layout::nodeMixedMask(header)); ++k)
+    for (uint32_t k = 0; k < popcount8(layout::nodeMixedMask(header)); ++k)
     {
       const uint32_t ref = Volume::nodeChildRef(v.roots, start, k, v.widths.midRefBits);
       const size_t old = ordinalAt(midStarts, layout::refTarget(ref));
@@ -257,7 +252,7 @@ Encoded encode(const Volume& v)
   {
     const uint64_t start = rootStarts[size_t(roots.oldIndex[size_t(n)])];
     lastRootStart = rootBits;
-    rootBits += nodeEnd(v.roots, start, v.widths.midRefBits) - start;
+    rootBits += Volume::nodeBits(v.roots, start, v.widths.midRefBits);
   }
   uint64_t lastMidStart = 0;
   for (uint64_t n = 0; n < mids.oldIndex.size(); ++n)
@@ -266,7 +261,7 @@ Encoded encode(const Volume& v)
     const uint32_t header = Volume::nodeHeader(v.mids, start);
     s[MidHeaders].push_back(uint8_t(layout::nodeMixedMask(header)));
     s[MidHeaders].push_back(uint8_t(layout::nodeFullMask(header)));
-    for (uint32_t k = 0; k < bitCount(layout::nodeMixedMask(header)); ++k)
+    for (uint32_t k = 0; k < popcount8(layout::nodeMixedMask(header)); ++k)
     {
       const uint32_t ref = Volume::nodeChildRef(v.mids, start, k, v.widths.leafRefBits);
       const uint8_t shared =
@@ -277,7 +272,7 @@ Encoded encode(const Volume& v)
           layout::leafRefSymmetry(ref), ref & 1u));
     }
     lastMidStart = midBits;
-    midBits += nodeEnd(v.mids, start, v.widths.leafRefBits) - start;
+    midBits += Volume::nodeBits(v.mids, start, v.widths.leafRefBits);
   }
   for (uint64_t old : leaves.oldIndex)
   {
@@ -365,16 +360,14 @@ Volume decode(const Streams& s, const Shape& shape)
 
   DecodedPool leaves, mids, roots;
   leaves.starts.resize(v.leaves.size()); // leaves are numbered, not placed
-  uint64_t midChildren = 0, rootChildren = 0;
   { // mids: headers, then each mixed child's leaf reference
-    Reader headers(s[MidHeaders], MidHeaders);
-    v.mids = readHeaders(headers, v.midCount, v.widths.leafRefBits, mids, midChildren, "mid");
+    v.mids = readHeaders(s[MidHeaders], MidHeaders, v.midCount, v.widths.leafRefBits, mids, "mid");
     Reader refs(s[MidRefs], MidRefs), indices(s[LeafIndices], LeafIndices);
     for (uint64_t n = 0; n < v.midCount; ++n)
     {
       const uint64_t start = mids.starts[size_t(n)];
       const uint32_t mixed = layout::nodeMixedMask(Volume::nodeHeader(v.mids, start));
-      for (uint32_t k = 0; k < bitCount(mixed); ++k)
+      for (uint32_t k = 0; k < popcount8(mixed); ++k)
       {
         const uint8_t flags = refs.byte();
         const uint32_t symmetry = (flags >> 1) & 0x3Fu;
@@ -392,14 +385,13 @@ Volume decode(const Streams& s, const Shape& shape)
     leaves.checkAllReferenced("leaf");
   }
   { // roots
-    Reader headers(s[RootHeaders], RootHeaders);
-    v.roots = readHeaders(headers, v.rootCount, v.widths.midRefBits, roots, rootChildren, "root");
+    v.roots = readHeaders(s[RootHeaders], RootHeaders, v.rootCount, v.widths.midRefBits, roots, "root");
     Reader refs(s[RootRefs], RootRefs), indices(s[MidIndices], MidIndices);
     for (uint64_t n = 0; n < v.rootCount; ++n)
     {
       const uint64_t start = roots.starts[size_t(n)];
       const uint32_t mixed = layout::nodeMixedMask(Volume::nodeHeader(v.roots, start));
-      for (uint32_t k = 0; k < bitCount(mixed); ++k)
+      for (uint32_t k = 0; k < popcount8(mixed); ++k)
       {
         const uint8_t flags = refs.byte();
         if (flags & ~(ComplementFlag | SharedNodeFlag))
@@ -420,6 +412,10 @@ Volume decode(const Streams& s, const Shape& shape)
     const uint64_t recordBits = w.blockBits();
     Reader cellsIn(s[BlockCells], BlockCells), labels(s[BlockLabels], BlockLabels),
       refs(s[BlockRoots], BlockRoots), indices(s[RootIndices], RootIndices);
+    if (s[BlockRoots].size() != v.blockCount)
+      fail("block roots stream does not hold the block count");
+    const uint64_t totalBits = v.blockCount * recordBits; // one stream byte a block: no overflow
+    v.blocks.assign(size_t(totalBits / 32 + (totalBits % 32 ? 1 : 0) + 1), 0u);
     uint64_t cell = 0;
     for (uint64_t i = 0; i < v.blockCount; ++i)
     {
@@ -435,15 +431,12 @@ Volume decode(const Streams& s, const Shape& shape)
         fail("block roots: unknown flags");
       const uint64_t root = roots.take((flags & SharedNodeFlag) != 0, indices, "root");
       const uint64_t base = i * recordBits;
-      v.blocks.resize(size_t((base + recordBits) / 32 + 2), 0u);
       writeField(v.blocks, base, w.cellBits, cell, "a block's cell");
       writeField(v.blocks, base + layout::blockLabelOffset(w.cellBits), w.labelBits, label,
         "a block's label");
       writeField(v.blocks, base + layout::blockRootOffset(w.cellBits, w.labelBits), w.rootRefBits,
         (roots.starts[size_t(root)] << 1) | (flags & ComplementFlag), "a root reference");
     }
-    const uint64_t totalBits = v.blockCount * recordBits;
-    v.blocks.resize(size_t(totalBits / 32 + (totalBits % 32 ? 1 : 0) + 1), 0u);
     cellsIn.finish();
     labels.finish();
     refs.finish();

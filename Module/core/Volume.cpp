@@ -364,20 +364,8 @@ MemoryUsage Volume::memory() const
 
 namespace
 {
-// Bit counts without a library call (the core is built for any x86-64, without POPCNT).
-inline uint32_t popcount64(uint64_t x)
-{
-  x = x - ((x >> 1) & 0x5555555555555555ull);
-  x = (x & 0x3333333333333333ull) + ((x >> 2) & 0x3333333333333333ull);
-  x = (x + (x >> 4)) & 0x0F0F0F0F0F0F0F0Full;
-  return uint32_t((x * 0x0101010101010101ull) >> 56);
-}
-inline uint32_t popcount8(uint32_t x)
-{
-  x = x - ((x >> 1) & 0x55u);
-  x = (x & 0x33u) + ((x >> 2) & 0x33u);
-  return (x + (x >> 4)) & 0x0Fu;
-}
+using bits::popcount64;
+using bits::popcount8;
 
 // A field of `width` bits at `offset` of a padded word stream, for offsets already known to lie
 // inside the stream's data (the padding word makes the second word readable).
@@ -1062,13 +1050,7 @@ void Volume::deriveBoundsAndValidate()
       box |= (uint32_t(__builtin_ctz(lane)) << (4 * a)) |
         (uint32_t(31 - __builtin_clz(lane)) << (12 + 4 * a));
     }
-    for (uint32_t b = 0; b < layout::BLOCK_BOUNDS_BITS; ++b)
-    {
-      const uint64_t at = i * recordBits + boundsAt + b;
-      const uint32_t bit = uint32_t(1) << (at & 31);
-      uint32_t& word = this->blocks[size_t(at >> 5)];
-      word = ((box >> b) & 1u) ? (word | bit) : (word & ~bit);
-    }
+    bits::replaceBits(this->blocks, i * recordBits + boundsAt, layout::BLOCK_BOUNDS_BITS, box);
   }
   const LabelTotals totals = checkBlocks(*this, roots);
   for (size_t l = 0; l < this->labels.size(); ++l)

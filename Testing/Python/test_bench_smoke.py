@@ -33,6 +33,7 @@ EXPECTED_COLUMNS = [
     "file2_bytes", "load2_s", "load2_over_build",
     "file3_bytes", "write3_s", "load3_s", "load3_over_build",
     "file3_over_cseg", "file3_over_crackle", "file3_over_zstd19",
+    "file4_bytes", "write4_s", "load4_s", "load4_over_build", "file4_over_cseg",
 ]
 
 
@@ -90,7 +91,11 @@ def test_csv_values_are_consistent(quick_run):
         assert 260 < int(r["file3_bytes"]) <= 1.5 * int(r["file2_bytes"]) + 64
         if r["source"] == "file":
             assert int(r["file3_bytes"]) < 0.6 * int(r["file2_bytes"])
-        for version in (2, 3):
+            # Format 4 codes the DAG itself: between the coded volume and format 2.
+            assert int(r["file3_bytes"]) < int(r["file4_bytes"]) < int(r["file2_bytes"])
+        assert float(r["file4_over_cseg"]) == pytest.approx(
+            int(r["file4_bytes"]) / int(r["cseg_bytes"]), rel=1e-4)
+        for version in (2, 3, 4):
             assert float(r[f"load{version}_over_build"]) == pytest.approx(
                 float(r[f"load{version}_s"]) / float(r["build_s"]), rel=1e-3)
         for other in ("cseg", "crackle", "zstd19"):
@@ -111,7 +116,7 @@ def test_report_and_plot(quick_run):
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert "machine:" in stdout
     assert "REPORTED, NOT MEASURED HERE" in stdout
-    assert "The .svdag file, format 3.0 (coded) and 2.0" in stdout
+    assert "The .svdag file, format 4.0 (DAG streams, the default), 3.0 (coded) and 2.0" in stdout
     for name in EXPECTED_ROWS:
         assert f"{name}: " in stdout and "round trips ok" in stdout
 
