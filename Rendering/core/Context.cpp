@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <stdexcept>
 
 namespace svdag
@@ -745,6 +746,15 @@ std::vector<uint8_t> Device::loadShaderBinary(uint64_t shaderHash)
     this->ShaderBinaryProblem = why;
   }
   return binary;
+}
+
+bool Device::hasShaderBinary(uint64_t shaderHash) const
+{
+  if (this->ShaderBinaryDirectory.empty())
+    return false;
+  std::error_code error;
+  return std::filesystem::is_regular_file(
+    shaderBinaryFileName(this->ShaderBinaryDirectory, this->shaderBinaryKey(shaderHash)), error);
 }
 
 void Device::saveShaderBinary(uint64_t shaderHash, const std::vector<uint8_t>& binary)

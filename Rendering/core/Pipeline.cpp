@@ -232,8 +232,15 @@ const PipelineLibrary::Program& PipelineLibrary::program(const ShaderFeatures& f
 
 const PipelineLibrary::Program* PipelineLibrary::compiledProgram(const ShaderFeatures& features)
 {
+  {
+    std::lock_guard<std::mutex> lock(this->Lock);
+    if (Entry* entry = this->find(features))
+      return entry->ready ? &entry->program : nullptr;
+  }
+  if (this->hasBinary(features))
+    return &this->program(features);
   std::lock_guard<std::mutex> lock(this->Lock);
-  if (Entry* entry = this->find(features))
+  if (Entry* entry = this->find(features)) // another thread began it meanwhile
     return entry->ready ? &entry->program : nullptr;
   std::shared_ptr<std::promise<void>> promise = this->begin(features);
   this->Background.push_back(std::async(std::launch::async,
@@ -270,29 +277,51 @@ void PipelineLibrary::createLayouts()
     "vkCreatePipelineLayout");
 }
 
+namespace
+{
+// The camera shader's feature switches (GpuLayout.h's SVDAG_CONSTANT_* ids) as its
+// specialization.
+struct FeatureConstants
+{
+  VkBool32 values[SVDAG_CONSTANT_COUNT] = {};
+  VkSpecializationMapEntry entries[SVDAG_CONSTANT_COUNT];
+  VkSpecializationInfo info{ SVDAG_CONSTANT_COUNT, entries, sizeof(values), values };
+
+  explicit FeatureConstants(const ShaderFeatures& f)
+  {
+    values[SVDAG_CONSTANT_NEE] = f.nextEventEstimation;
+    values[SVDAG_CONSTANT_ENV_MAP] = f.environmentMap;
+    values[SVDAG_CONSTANT_SUN] = f.sun;
+    values[SVDAG_CONSTANT_EMISSION] = f.emission;
+    values[SVDAG_CONSTANT_TRANSMISSION] = f.transmission;
+    values[SVDAG_CONSTANT_PREVIEW] = f.preview;
+    values[SVDAG_CONSTANT_STEP_STATISTICS] = f.stepStatistics;
+    for (uint32_t i = 0; i < SVDAG_CONSTANT_COUNT; ++i)
+      entries[i] = { i, uint32_t(i * sizeof(VkBool32)), sizeof(VkBool32) };
+  }
+  FeatureConstants(const FeatureConstants&) = delete; // info points into it
+  FeatureConstants& operator=(const FeatureConstants&) = delete;
+};
+} // namespace
+
+bool PipelineLibrary::hasBinary(const ShaderFeatures& features) const
+{
+  if (this->Kind != Backend::Compute || !this->Ctx.shared().hasShaderObjects())
+    return false;
+  const FeatureConstants constants(features);
+  return this->Ctx.shared().hasShaderBinary(ComputeProgram::hash(
+    svdagShader_camera_comp, sizeof(svdagShader_camera_comp), &constants.info));
+}
+
 void PipelineLibrary::compile(Program& program)
 {
-  // The camera shader's feature switches (GpuLayout.h's SVDAG_CONSTANT_* ids).
-  const ShaderFeatures& f = program.features;
-  VkBool32 constants[SVDAG_CONSTANT_COUNT] = {};
-  constants[SVDAG_CONSTANT_NEE] = f.nextEventEstimation;
-  constants[SVDAG_CONSTANT_ENV_MAP] = f.environmentMap;
-  constants[SVDAG_CONSTANT_SUN] = f.sun;
-  constants[SVDAG_CONSTANT_EMISSION] = f.emission;
-  constants[SVDAG_CONSTANT_TRANSMISSION] = f.transmission;
-  constants[SVDAG_CONSTANT_PREVIEW] = f.preview;
-  constants[SVDAG_CONSTANT_STEP_STATISTICS] = f.stepStatistics;
-  VkSpecializationMapEntry entries[SVDAG_CONSTANT_COUNT];
-  for (uint32_t i = 0; i < SVDAG_CONSTANT_COUNT; ++i)
-    entries[i] = { i, uint32_t(i * sizeof(VkBool32)), sizeof(VkBool32) };
-  VkSpecializationInfo specialization{ SVDAG_CONSTANT_COUNT, entries, sizeof(constants),
-    constants };
+  const FeatureConstants constants(program.features);
   try
   {
     if (this->Kind == Backend::Compute)
-      this->createComputePipeline(program, specialization);
+      this->createComputePipeline(program, constants.info);
     else
-      this->createRayTracingPipeline(program, specialization);
+      this->createRayTracingPipeline(program, constants.info);
     this->createShaderBindingTable(program);
   }
   catch (...)

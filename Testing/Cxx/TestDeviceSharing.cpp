@@ -383,14 +383,17 @@ TEST(DeviceSharing, ShaderBinariesAreReusedAndABadOneIgnored)
   unsetenv("SVDAG_VK_NO_SHADER_OBJECTS");
 }
 
-// Previews while compiling: on a new device (nothing compiled) the first pass is the preview,
-// whose hits are exactly the block LOD's and whose color is the hit label's base color under a
-// headlight; it does not accumulate, and once the background compilation is done the path
-// tracer's passes start a new accumulation that equals a renderer's without the preview.
+// Previews while compiling: on a new device with empty caches (nothing compiled) the first pass
+// is the preview, whose hits are exactly the block LOD's and whose color is the hit label's base
+// color under a headlight; it does not accumulate, and once the background compilation is done
+// the path tracer's passes start a new accumulation that equals a renderer's without the
+// preview. With the path tracer's binary on disk, a new device's first pass is the path
+// tracer's (created from the binary at once); the ray tracing pipeline still previews.
 TEST(DeviceSharing, PreviewWhileThePipelineCompiles)
 {
   for (const auto backend : { svdag::render::Backend::Compute, svdag::render::Backend::RayTracing })
   {
+  const TemporaryCacheHome cache("svdag-preview");
   ASSERT_EQ(svdag::render::Renderer::deviceUsers(), 0u); // a new device: nothing compiled
   svdag::Geometry g;
   g.dims = { { 40, 30, 24 } };
@@ -460,5 +463,21 @@ TEST(DeviceSharing, PreviewWhileThePipelineCompiles)
   EXPECT_EQ(previewing->accumulatedSamples(), 1u);
   EXPECT_EQ(after.label, full.label);
   EXPECT_EQ(after.hdr, full.hdr);
+
+  previewing.reset();
+  plain.reset();
+  ASSERT_EQ(svdag::render::Renderer::deviceUsers(), 0u);
+  auto warm = make();
+  warm->setPreviewWhileCompiling(true);
+  const svdag::render::Image first = warm->render();
+  const bool fromBinary =
+    backend == svdag::render::Backend::Compute && warm->pipelineCache().shaderObjects;
+  EXPECT_EQ(warm->previewed(), !fromBinary);
+  if (fromBinary)
+  {
+    EXPECT_EQ(warm->pipelineCache().shadersCompiled, 0u);
+    EXPECT_EQ(first.label, full.label);
+    EXPECT_EQ(first.hdr, full.hdr);
+  }
   }
 }

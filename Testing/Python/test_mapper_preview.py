@@ -2,11 +2,16 @@
 window whose interactor is initialized, the first frame of a new process (nothing compiled) is
 the preview, whose labels are the block boxes' (the CPU ray caster at block LOD through the
 same pixel centres is the reference); the interactor's timer then renders the path tracer's
-frame by itself; a render that must be final (RefineStillRenders' still render) never previews.
-Each case runs in a new process, so that its Vulkan device has compiled nothing."""
+frame by itself; a render that must be final (RefineStillRenders' still render) never previews;
+with the path tracer's binary kept on disk by an earlier process, the first frame is the path
+tracer's. Each case runs in a new process with its own cache directory (XDG_CACHE_HOME), so that
+its Vulkan device has compiled nothing."""
+import os
 import subprocess
 import sys
 import textwrap
+
+import pytest
 
 from conftest import REPO
 
@@ -59,8 +64,9 @@ SCRIPT = textwrap.dedent("""
         renders[0] += 1
         if not mapper.GetLastFramePreviewed() or time.time() - start > 120:
             interactor.TerminateApp()
-    window.AddObserver("EndEvent", ended)
-    interactor.Start()
+    if first:
+        window.AddObserver("EndEvent", ended)
+        interactor.Start()
     print("LATER", int(mapper.GetLastFramePreviewed()), renders[0])
     # The preview's picks against the block LOD's (the path tracer at block LOD, same pixels).
     mapper.GetSettings().SetLODToBlock()
@@ -76,16 +82,18 @@ SCRIPT = textwrap.dedent("""
     """)
 
 
-def run(mode):
+def run(mode, cache_home):
+    env = dict(os.environ, XDG_CACHE_HOME=str(cache_home))
+    env.pop("VTKSVDAG_PIPELINE_CACHE", None)
     result = subprocess.run([sys.executable, "-c", SCRIPT, mode], capture_output=True, text=True,
-                            timeout=300, cwd=str(REPO))
+                            timeout=300, cwd=str(REPO), env=env)
     assert result.returncode == 0, result.stderr[-3000:]
     return {line.split()[0]: [int(v) for v in line.split()[1:]]
             for line in result.stdout.splitlines() if line.split() and line.split()[0].isupper()}
 
 
-def test_preview_then_the_path_tracer_by_the_interactors_timer():
-    out = run("interactive")
+def test_preview_then_the_path_tracer_by_the_interactors_timer(tmp_path):
+    out = run("interactive", tmp_path)
     previewed, converged = out["FIRST"]
     assert previewed == 1 and converged == 0
     still_previewed, renders = out["LATER"]
@@ -95,6 +103,20 @@ def test_preview_then_the_path_tracer_by_the_interactors_timer():
     assert same == total
 
 
-def test_a_final_render_never_previews():
-    out = run("final")
+def test_a_final_render_never_previews(tmp_path):
+    out = run("final", tmp_path)
     assert out["FIRST"][0] == 0
+
+
+@pytest.mark.skipif(bool(os.environ.get("SVDAG_VK_NO_SHADER_OBJECTS")),
+                    reason="compute shaders are pipelines here (SVDAG_VK_NO_SHADER_OBJECTS): no "
+                    "binaries are kept, so every new process previews")
+def test_a_warm_start_shows_the_path_tracer_at_once(tmp_path):
+    """The path tracer's binary, kept by the first process (shader objects, as lavapipe has),
+    is created at once by the next: its first interactive frame is no preview."""
+    cold = run("interactive", tmp_path)
+    assert cold["FIRST"][0] == 1
+    assert list((tmp_path / "vtksvdag").glob("shader-*.bin"))
+    warm = run("interactive", tmp_path)
+    assert warm["FIRST"] == [0, 0] and warm["LATER"] == [0, 0]
+    assert warm["PICKS"][2] > warm["PICKS"][1] // 4  # it hit the volume

@@ -165,6 +165,9 @@ public:
   // gives); and the binary of a shader just compiled, written to disk (a failure noted).
   std::vector<uint8_t> loadShaderBinary(uint64_t shaderHash);
   void saveShaderBinary(uint64_t shaderHash, const std::vector<uint8_t>& binary);
+  // Whether a binary file is kept for a shader of this hash: what makes creating it a matter of
+  // milliseconds (whether the file loads is only known by loading it).
+  bool hasShaderBinary(uint64_t shaderHash) const;
   // Counts over the device's life: shaders created from a binary on disk, and compiled from
   // SPIR-V (a binary the driver refused counts as compiled); why the last binary file was not
   // used or written ("" when all went well).

@@ -104,9 +104,10 @@ public:
   // Thread-safe; throws std::runtime_error where the compilation fails (a later call tries
   // again).
   const Program& program(const ShaderFeatures& features);
-  // The program of these features if it is compiled; else starts compiling it on a thread of
-  // its own (once) and returns nullptr at once. A failed background compilation is reported
-  // by the next program() call for the features.
+  // The program of these features if it is compiled, or created at once where its compute
+  // shader's binary is on disk (milliseconds: a warm start shows no preview); else starts
+  // compiling it on a thread of its own (once) and returns nullptr at once. A failed background
+  // compilation is reported by the next program() call for the features.
   const Program* compiledProgram(const ShaderFeatures& features);
   Backend backend() const { return this->Kind; }
   VkPipelineLayout layout() const { return this->Layout; }
@@ -121,6 +122,8 @@ public:
 private:
   void createLayouts();
   void compile(Program& program);
+  // Whether the program's compute shader would be created from a binary kept on disk.
+  bool hasBinary(const ShaderFeatures& features) const;
   void createRayTracingPipeline(Program& program, const VkSpecializationInfo& specialization);
   void createComputePipeline(Program& program, const VkSpecializationInfo& specialization);
   void createShaderBindingTable(Program& program);
