@@ -12,12 +12,14 @@
 // on, denoiser on, backend auto). --backend picks how rays find the blocks (RenderSettings.h; auto: per device). --restart makes
 // every frame start a new accumulation (what a frame costs while the camera moves). --preview
 // previews while the pipeline compiles (Renderer::setPreviewWhileCompiling: the first frame of
-// a process is the small preview pipeline's, the full one compiles in the background).
+// a process is the small preview pipeline's, the full one compiles in the background, unless
+// the full one's compute shader binary is on disk: then it is created at once).
 // --trace-reduction R (1..8, default 1) traces the paths on 1/R of the pixels per axis and
 // upsamples them guided by every pixel's own label and depth (Renderer::setTraceReduction: what
 // the VTK mapper's interactive frames do); frame times include the guides' trace.
-// The JSON's pipeline_compile_seconds is the compile time of the last frame's pipeline and
-// previewed whether that frame was a preview.
+// The JSON's pipeline_compile_seconds is the compile time of the last frame's pipeline,
+// previewed whether that frame was a preview, and shader_objects whether compute shaders are
+// shader objects whose binaries are kept on disk.
 // Every frame adds --spp path-traced samples per pixel to the accumulated image. --sun places a
 // disk sun (the renderer's default size and irradiance) at azimuth AZ (degrees from +x towards
 // +y) and elevation EL (degrees above the xy plane).
@@ -291,7 +293,7 @@ int main(int argc, char** argv)
                 "\"trace_reduction\": %u, "
                 "\"setup_seconds\": %.6f, \"render_seconds\": %.6f, \"ms_per_frame\": %.3f, "
                 "\"ms_median\": %.3f, \"bytes_blas\": %llu, \"bytes_tlas\": %llu, "
-                "\"pipeline_compile_seconds\": %.6f, \"previewed\": %s, "
+                "\"pipeline_compile_seconds\": %.6f, \"previewed\": %s, \"shader_objects\": %s, "
                 "\"visible_blocks\": %llu, \"bytes_device\": {\"encoding\": %llu, "
                 "\"acceleration\": %llu, \"materials\": %llu, \"neighbours\": %llu, "
                 "\"images\": %llu, \"other\": %llu, \"total\": %llu}}\n",
@@ -301,7 +303,9 @@ int main(int argc, char** argv)
       renderer.traceReduction(), renderer.setupSeconds(),
       renderer.renderSeconds(), msPerFrame, msMedian, u(renderer.blasBytes()),
       u(renderer.tlasBytes()), renderer.pipelineCompileSeconds(),
-      renderer.previewed() ? "true" : "false", u(renderer.visibleBlocks()), u(bytes.encoding),
+      renderer.previewed() ? "true" : "false",
+      renderer.pipelineCache().shaderObjects ? "true" : "false", u(renderer.visibleBlocks()),
+      u(bytes.encoding),
       u(bytes.acceleration), u(bytes.materials), u(bytes.neighbours), u(bytes.images),
       u(bytes.other), u(bytes.total));
     return 0;
