@@ -4,6 +4,7 @@
 
 #include "svdag/Layout.h"
 
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -53,6 +54,35 @@ inline uint32_t popcount8(uint32_t x)
   x = x - ((x >> 1) & 0x55u);
   x = (x & 0x33u) + ((x >> 2) & 0x33u);
   return (x + (x >> 4)) & 0x0Fu;
+}
+
+// Unsigned LEB128 numbers (the .svdag 4.0 file's): 7 bits a byte, the lowest first, the high bit
+// set on every byte but the last.
+inline void putVarint(std::vector<uint8_t>& out, uint64_t v)
+{
+  for (; v >= 0x80u; v >>= 7)
+    out.push_back(uint8_t(v | 0x80u));
+  out.push_back(uint8_t(v));
+}
+// Reads one from [at, end) and moves `at` past it; false (at unchanged) when it runs past `end`
+// or holds more than 64 bits.
+inline bool getVarint(const uint8_t*& at, const uint8_t* end, uint64_t& v)
+{
+  uint64_t value = 0;
+  for (const uint8_t* p = at; p != end; ++p)
+  {
+    const uint32_t shift = uint32_t(7 * (p - at));
+    if (shift > 63 || (shift == 63 && (*p & 0x7Fu) > 1u))
+      return false;
+    value |= uint64_t(*p & 0x7Fu) << shift;
+    if (!(*p & 0x80u))
+    {
+      at = p + 1;
+      v = value;
+      return true;
+    }
+  }
+  return false;
 }
 
 // Little-endian fields of a byte buffer, whatever the host's byte order (compilers turn these

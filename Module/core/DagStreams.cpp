@@ -14,6 +14,7 @@ namespace dagstreams
 namespace
 {
 using bits::popcount8;
+using bits::putVarint;
 
 [[noreturn]] void fail(const std::string& what)
 {
@@ -21,16 +22,6 @@ using bits::popcount8;
 }
 
 constexpr uint8_t ComplementFlag = 1u, SharedNodeFlag = 2u, SharedLeafFlag = 0x80u;
-
-void putVarint(std::vector<uint8_t>& out, uint64_t v)
-{
-  while (v >= 0x80u)
-  {
-    out.push_back(uint8_t(v | 0x80u));
-    v >>= 7;
-  }
-  out.push_back(uint8_t(v));
-}
 
 // Label values as unsigned keys in the type's order: flipping the sign bit of a sign-extended
 // pattern orders signed values as unsigned ones.
@@ -104,15 +95,9 @@ public:
   uint64_t varint()
   {
     uint64_t v = 0;
-    for (uint32_t shift = 0;; shift += 7)
-    {
-      const uint8_t b = this->byte();
-      if (shift == 63 && b > 1u)
-        fail(std::string(streamName(this->Stream)) + " stream: a number above 64 bits");
-      v |= uint64_t(b & 0x7Fu) << shift;
-      if (!(b & 0x80u))
-        return v;
-    }
+    if (!bits::getVarint(this->At, this->End, v))
+      fail(std::string(streamName(this->Stream)) + " stream ends early or holds a number above 64 bits");
+    return v;
   }
   uint64_t u64le()
   {

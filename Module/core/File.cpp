@@ -133,7 +133,6 @@ public:
     Pos += n;
   }
 
-  uint8_t u8() { return uint8_t(get(1)); }
   uint16_t u16() { return uint16_t(get(2)); }
   uint32_t u32() { return uint32_t(get(4)); }
   uint64_t u64() { return get(8); }
@@ -363,13 +362,6 @@ StoredSection storeCoded(const Volume& v, Volume& rebuilt, const ParallelFor& pa
   return s;
 }
 
-void putVarint(std::vector<uint8_t>& out, uint64_t v)
-{
-  for (; v >= 0x80u; v >>= 7)
-    out.push_back(uint8_t(v | 0x80u));
-  out.push_back(uint8_t(v));
-}
-
 // Format 4's zstd level: fixed, as what the format promises in bytes depends on it (level 3 gives
 // files about 5% larger); its streams are small, so writing stays within a few builds' time.
 constexpr int DagStreamsZstdLevel = 19;
@@ -379,7 +371,6 @@ constexpr int DagStreamsZstdLevel = 19;
 // decoding it again; the header describes the decoded volume (its pools in first-use order).
 StoredSection storeDagStreams(const Volume& v, Volume& rebuilt)
 {
-  const int level = DagStreamsZstdLevel;
   dagstreams::Encoded encoded = dagstreams::encode(v);
   std::vector<uint8_t> table, frames;
   std::unique_ptr<ZSTD_CCtx, size_t (*)(ZSTD_CCtx*)> ctx(ZSTD_createCCtx(), ZSTD_freeCCtx);
@@ -388,18 +379,17 @@ StoredSection storeDagStreams(const Volume& v, Volume& rebuilt)
   for (const std::vector<uint8_t>& stream : encoded.streams)
   {
     std::vector<uint8_t> frame(ZSTD_compressBound(stream.size()));
-    size_t size = level > 0 && !stream.empty()
-      ? ZSTD_compressCCtx(ctx.get(), frame.data(), frame.size(), stream.data(), stream.size(), level)
-      : stream.size();
+    size_t size = ZSTD_compressCCtx(ctx.get(), frame.data(), frame.size(), stream.data(),
+      stream.size(), DagStreamsZstdLevel);
     if (ZSTD_isError(size))
       throw FileError(std::string("zstd compression failed: ") + ZSTD_getErrorName(size));
-    if (level <= 0 || size >= stream.size())
+    if (size >= stream.size())
     {
       frame = stream;
       size = stream.size();
     }
-    putVarint(table, size);
-    putVarint(table, stream.size());
+    bits::putVarint(table, size);
+    bits::putVarint(table, stream.size());
     frames.insert(frames.end(), frame.begin(), frame.begin() + std::ptrdiff_t(size));
   }
   std::string difference;
@@ -683,6 +673,7 @@ Volume readCoded(const SectionEntry& e, const uint8_t* data, uint64_t labelCount
     fail("the header's field widths or node counts do not match the coded volume");
   return v;
 }
+
 // A format 4 file's volume from its DAG streams section; `header` holds what the file's header
 // says (geometry, type, background, widths and counts).
 Volume readDagStreams(const SectionEntry& e, const uint8_t* data, uint64_t labelCount,
@@ -701,39 +692,28 @@ Volume readDagStreams(const SectionEntry& e, const uint8_t* data, uint64_t label
   shape.frame.midCount = header.midCount;
   shape.labelCount = labelCount;
   shape.leafCount = leafCount;
-  ByteReader table(stored, size_t(e.stored), "DAG streams section");
-  auto varint = [&table]() {
-    uint64_t v = 0;
-    for (uint32_t shift = 0; shift < 64; shift += 7)
-    {
-      const uint8_t b = table.u8();
-      v |= uint64_t(b & 0x7Fu) << shift;
-      if (!(b & 0x80u))
-        return v;
-    }
-    fail("DAG streams section: a size above 64 bits");
-  };
+  const uint8_t* at = stored;
+  const uint8_t* const end = stored + e.stored;
   uint64_t storedSizes[dagstreams::StreamCount], rawSizes[dagstreams::StreamCount];
   uint64_t total = 0;
   for (uint32_t i = 0; i < dagstreams::StreamCount; ++i)
   {
-    storedSizes[i] = varint();
-    rawSizes[i] = varint();
     const std::string name = std::string(dagstreams::streamName(i)) + " stream";
+    if (!bits::getVarint(at, end, storedSizes[i]) || !bits::getVarint(at, end, rawSizes[i]))
+      fail("DAG streams section: its table of stream sizes is truncated or corrupt");
     if (rawSizes[i] > dagstreams::maxStreamBytes(i, shape))
       fail(name + ": larger than its volume's counts allow");
     if (storedSizes[i] > e.stored || (storedSizes[i] != rawSizes[i] &&
           (storedSizes[i] == 0 || rawSizes[i] / ZstdMaxExpansion > storedSizes[i])))
       fail(name + ": declared raw size impossible for its compressed size");
     total += storedSizes[i];
-    if (total > e.stored - table.position())
+    if (total > uint64_t(end - at))
       fail(name + " lies outside its section (the file may be truncated)");
   }
-  if (total != e.stored - table.position())
+  if (total != uint64_t(end - at))
     fail("DAG streams section: bytes after its last stream");
   dagstreams::Streams streams;
   const DecompressionContext ctx = decompressionContext();
-  const uint8_t* at = stored + table.position();
   for (uint32_t i = 0; i < dagstreams::StreamCount; ++i)
   {
     if (storedSizes[i] == rawSizes[i])

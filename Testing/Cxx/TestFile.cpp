@@ -1,6 +1,7 @@
 // The .svdag file format: exact round trips, and hostile input (every truncation, thousands of
 // random corruptions, absurd header values) that must give FileError, never a crash, an
 // out-of-bounds read or a huge allocation.
+#include "Bits.h"
 #include "CodedVolume.h"
 #include "DagStreams.h"
 #include "RangeCoder.h"
@@ -1471,4 +1472,33 @@ TEST(StreamsFile, HeaderValuesThatDisagreeWithTheStreamsFail)
   putLE(other, 8, 3, 2);
   resealHeader(other);
   EXPECT_THROW(svdag::deserialize(other), FileError);
+}
+
+TEST(StreamsFile, VarintsRoundTripAndRefuseOverlongOrTruncatedNumbers)
+{
+  for (uint64_t v : { uint64_t(0), uint64_t(127), uint64_t(128), uint64_t(300), ~uint64_t(0),
+         uint64_t(1) << 63, (uint64_t(1) << 56) - 1 })
+  {
+    std::vector<uint8_t> bytes;
+    svdag::bits::putVarint(bytes, v);
+    EXPECT_EQ(bytes.size(), size_t(v ? (64 - __builtin_clzll(v) + 6) / 7 : 1)) << v;
+    const uint8_t* at = bytes.data();
+    uint64_t back = 0;
+    ASSERT_TRUE(svdag::bits::getVarint(at, bytes.data() + bytes.size(), back)) << v;
+    EXPECT_EQ(back, v);
+    EXPECT_EQ(at, bytes.data() + bytes.size());
+    at = bytes.data(); // cut short by a byte
+    EXPECT_FALSE(svdag::bits::getVarint(at, bytes.data() + bytes.size() - 1, back)) << v;
+    EXPECT_EQ(at, bytes.data());
+  }
+  // 2^64 (bit 64 set in the tenth byte) and an eleventh byte.
+  const std::vector<uint8_t> above = { 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x80, 0x02 };
+  const std::vector<uint8_t> eleven = { 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0x81,
+    0x00 };
+  for (const auto* bytes : { &above, &eleven })
+  {
+    const uint8_t* at = bytes->data();
+    uint64_t v = 0;
+    EXPECT_FALSE(svdag::bits::getVarint(at, bytes->data() + bytes->size(), v));
+  }
 }
