@@ -146,10 +146,12 @@ struct DecodedPool
   }
 };
 
+// Writes a field of a decoded stream (width at most 32, Volume::validate's rule), refusing a
+// value the header's width cannot hold.
 void writeField(std::vector<uint32_t>& words, uint64_t offset, uint32_t width, uint64_t value,
   const char* what)
 {
-  if (width < 64 && (value >> width) != 0)
+  if ((value >> width) != 0)
     fail(std::string(what) + " wider than its field");
   bits::writeBits(words, offset, width, uint32_t(value));
 }
@@ -161,17 +163,17 @@ std::vector<uint32_t> readHeaders(const std::vector<uint8_t>& headers, uint32_t 
 {
   if (headers.size() / 2 != count || headers.size() % 2 != 0)
     fail(std::string(streamName(stream)) + " stream does not hold its " + what + " count");
-  uint64_t bits = 0;
+  uint64_t total = 0;
   pool.starts.resize(size_t(count));
   for (uint64_t n = 0; n < count; ++n)
   {
     const uint32_t mixed = headers[size_t(2 * n)], full = headers[size_t(2 * n + 1)];
     if (mixed & full)
       fail(std::string(what) + " node with a child both mixed and full");
-    pool.starts[size_t(n)] = bits;
-    bits += layout::NODE_HEADER_BITS + uint64_t(popcount8(mixed)) * refBits;
+    pool.starts[size_t(n)] = total;
+    total += layout::NODE_HEADER_BITS + uint64_t(popcount8(mixed)) * refBits;
   }
-  std::vector<uint32_t> words(size_t((bits + 31) / 32 + 1), 0u);
+  std::vector<uint32_t> words(size_t((total + 31) / 32 + 1), 0u);
   for (uint64_t n = 0; n < count; ++n)
     bits::writeBits(words, pool.starts[size_t(n)], layout::NODE_HEADER_BITS,
       headers[size_t(2 * n)] | (uint32_t(headers[size_t(2 * n + 1)]) << 8));
@@ -216,11 +218,14 @@ Encoded encode(const Volume& v)
       uint8_t((b.root & ComplementFlag) | roots.refer(old, SharedNodeFlag, s[RootIndices])));
   }
 
-  // Each pool in its new order, and the largest reference into it once renumbered.
-  uint64_t midBits = 0, leafRefMax = 0, rootBits = 0;
+  // Each pool in its new order, and the largest reference into it once renumbered (the last
+  // node's start; for leaves, the largest reference).
+  uint64_t rootBits = 0, lastRootStart = 0, midBits = 0, lastMidStart = 0, leafRefMax = 0;
   for (uint64_t n = 0; n < roots.oldIndex.size(); ++n)
   {
     const uint64_t start = rootStarts[size_t(roots.oldIndex[size_t(n)])];
+    lastRootStart = rootBits;
+    rootBits += Volume::nodeBits(v.roots, start, v.widths.midRefBits);
     const uint32_t header = Volume::nodeHeader(v.roots, start);
     s[RootHeaders].push_back(uint8_t(layout::nodeMixedMask(header)));
     s[RootHeaders].push_back(uint8_t(layout::nodeFullMask(header)));
@@ -232,14 +237,6 @@ Encoded encode(const Volume& v)
         uint8_t((ref & ComplementFlag) | mids.refer(old, SharedNodeFlag, s[MidIndices])));
     }
   }
-  uint64_t lastRootStart = 0;
-  for (uint64_t n = 0; n < roots.oldIndex.size(); ++n)
-  {
-    const uint64_t start = rootStarts[size_t(roots.oldIndex[size_t(n)])];
-    lastRootStart = rootBits;
-    rootBits += Volume::nodeBits(v.roots, start, v.widths.midRefBits);
-  }
-  uint64_t lastMidStart = 0;
   for (uint64_t n = 0; n < mids.oldIndex.size(); ++n)
   {
     const uint64_t start = midStarts[size_t(mids.oldIndex[size_t(n)])];
@@ -287,21 +284,25 @@ uint64_t maxStreamBytes(uint32_t stream, const Shape& shape)
 {
   const Volume& f = shape.frame;
   constexpr uint64_t MaxVarint = 10;
-  // Counts are at most the voxels (2^44, checkGeometry), so these products do not overflow.
+  // Saturating: the header's counts are whatever a file says.
+  auto times = [](uint64_t a, uint64_t count) {
+    uint64_t product;
+    return __builtin_mul_overflow(a, count, &product) ? UINT64_MAX : product;
+  };
   switch (stream)
   {
-    case LabelValues: return MaxVarint * shape.labelCount;
+    case LabelValues: return times(MaxVarint, shape.labelCount);
     case BlockCells:
-    case BlockLabels: return MaxVarint * f.blockCount;
+    case BlockLabels: return times(MaxVarint, f.blockCount);
     case BlockRoots: return f.blockCount;
-    case RootIndices: return MaxVarint * f.blockCount;
-    case RootHeaders: return 2 * f.rootCount;
-    case RootRefs: return 8 * f.rootCount;
-    case MidIndices: return MaxVarint * 8 * f.rootCount;
-    case MidHeaders: return 2 * f.midCount;
-    case MidRefs: return 8 * f.midCount;
-    case LeafIndices: return MaxVarint * 8 * f.midCount;
-    case Leaves: return 8 * shape.leafCount;
+    case RootIndices: return times(MaxVarint, f.blockCount);
+    case RootHeaders: return times(2, f.rootCount);
+    case RootRefs: return times(8, f.rootCount);
+    case MidIndices: return times(8 * MaxVarint, f.rootCount);
+    case MidHeaders: return times(2, f.midCount);
+    case MidRefs: return times(8, f.midCount);
+    case LeafIndices: return times(8 * MaxVarint, f.midCount);
+    case Leaves: return times(8, shape.leafCount);
     default: return 0;
   }
 }
