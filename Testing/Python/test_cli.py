@@ -82,6 +82,7 @@ def test_info_on_a_label_volume(small_nrrd):
     assert stats["bytes_total"] == stats["bytes_blocks"] + stats["bytes_dag"] + stats["bytes_labels"]
     assert stats["file_bytes"] == os.path.getsize(path)
     assert stats["build_seconds"] > 0 and stats["load_seconds"] is None
+    assert stats["file_format"] is None  # not a .svdag file
     human = run_cli("info", path)
     assert human.returncode == 0 and human.stderr == ""
     assert "bytes: total" in human.stdout and f"{stats['bytes_total']:,}" in human.stdout
@@ -97,6 +98,11 @@ def test_compress_info_decompress_round_trip(small_nrrd, tmp_path):
 
     info = run_json("info", svdag)
     assert info["load_seconds"] > 0 and info["build_seconds"] is None
+    assert info["file_format"] == "4.0"  # the default
+    assert ".svdag 4.0: the DAG streams" in run_cli("info", svdag).stdout
+    archive = tmp_path / "archive.svdag"
+    run_json("compress", path, "-o", archive, "--format-version", "3")
+    assert run_json("info", archive)["file_format"] == "3.0"
     for key in ("dims", "labels", "blocks", "dag_nodes", "bytes_total", "dtype", "spacing", "origin"):
         assert info[key] == compressed[key], key
 
