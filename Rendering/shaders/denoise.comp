@@ -148,17 +148,15 @@ vec4 resolveEdge(uint x, uint y, uvec4 labels, uvec4 keys, uint ownLabel, vec4 o
   DenoiseGuides guides = DenoiseGuides(p.variances.xy);
   DenoiseFloats normals = DenoiseFloats(p.guides2.xy);
   uint faces = 3u * width * height; // where the entry face normals start (GpuLayout.h)
-  // Per surface k of the record and kind of pixel (the preference order above).
-  vec4 sums[SVDAG_COVERAGE_SLOTS][4];
-  float weights[SVDAG_COVERAGE_SLOTS][4];
+  // Per surface k of the record: the most preferred kind of pixel seen so far (4: none; the
+  // preference order above) and the sum and count of that kind's pixels, in window order. Kept
+  // per surface rather than per surface and kind: a local array indexed by a kind computed per
+  // tap lives in memory on a CPU driver (lavapipe), and the loop over surfaces unrolls.
+  uvec4 bestKinds = uvec4(4u);
+  vec4 sums[SVDAG_COVERAGE_SLOTS];
+  vec4 weights = vec4(0.0);
   for (uint k = 0u; k < SVDAG_COVERAGE_SLOTS; ++k)
-  {
-    for (uint kind = 0u; kind < 4u; ++kind)
-    {
-      sums[k][kind] = vec4(0.0);
-      weights[k][kind] = 0.0;
-    }
-  }
+    sums[k] = vec4(0.0);
   for (int dy = -3; dy <= 3; ++dy)
   {
     for (int dx = -3; dx <= 3; ++dx)
@@ -181,8 +179,17 @@ vec4 resolveEdge(uint x, uint y, uvec4 labels, uvec4 keys, uint ownLabel, vec4 o
         if (labels[k] != gq.x || (keys[k] & 0xFFu) == 0u)
           continue;
         uint kind = gq.x == 0u ? 0u : (faceBits == (keys[k] & 0xFFFF0000u) ? 0u : 2u) + edge;
-        sums[k][kind] += c;
-        weights[k][kind] += 1.0;
+        if (kind < bestKinds[k])
+        {
+          bestKinds[k] = kind;
+          sums[k] = c;
+          weights[k] = 1.0;
+        }
+        else if (kind == bestKinds[k])
+        {
+          sums[k] += c;
+          weights[k] += 1.0;
+        }
       }
     }
   }
@@ -193,16 +200,8 @@ vec4 resolveEdge(uint x, uint y, uvec4 labels, uvec4 keys, uint ownLabel, vec4 o
     float n = float(keys[k] & 0xFFu);
     if (n == 0.0)
       continue;
-    bool found = false;
-    vec4 c = own;
-    for (uint kind = 0u; kind < 4u && !found; ++kind)
-    {
-      if (weights[k][kind] > 0.0)
-      {
-        c = sums[k][kind] / weights[k][kind];
-        found = true;
-      }
-    }
+    bool found = weights[k] > 0.0;
+    vec4 c = found ? sums[k] / weights[k] : own;
     if (found || labels[k] == ownLabel)
     {
       sum += n * c;
