@@ -169,6 +169,55 @@ def svdag_stored(data):
     return head + struct.pack("<I", zlib.crc32(head)) + body
 
 
+def _varint(data, at):
+    value, shift = 0, 0
+    while True:
+        byte = data[at]
+        at += 1
+        value |= (byte & 0x7F) << shift
+        shift += 7
+        if not byte & 0x80:
+            return value, at
+
+
+def _put_varint(value):
+    out = bytearray()
+    while value >= 0x80:
+        out.append((value & 0x7F) | 0x80)
+        value >>= 7
+    out.append(value)
+    return bytes(out)
+
+
+def svdag4_stored(data):
+    """The same .svdag 4.0 file with each DAG stream stored as it is (stored size = raw size,
+    IO/README.md), CRCs fixed: mutations then reach the streams' decoder, not zstd's."""
+    import zstandard
+
+    (count,) = struct.unpack_from("<I", data, 216)
+    assert count == 1
+    sid, codec, off, stored, raw, crc = struct.unpack_from("<IIQQQI", data, 220)
+    section = data[off:off + stored]
+    sizes, at = [], 0
+    for _ in range(12):
+        stored_size, at = _varint(section, at)
+        raw_size, at = _varint(section, at)
+        sizes.append((stored_size, raw_size))
+    table, streams = b"", b""
+    for stored_size, raw_size in sizes:
+        frame = section[at:at + stored_size]
+        at += stored_size
+        stream = frame if stored_size == raw_size else zstandard.ZstdDecompressor().decompress(
+            frame, max_output_size=raw_size)
+        table += _put_varint(len(stream)) * 2
+        streams += stream
+    body = table + streams
+    head = bytearray(data[:220 + 36 + 4])
+    struct.pack_into("<IIQQQI", head, 220, sid, 0, off, len(body), len(body), zlib.crc32(body))
+    struct.pack_into("<I", head, 256, zlib.crc32(bytes(head[:256])))
+    return bytes(head) + data[260:off] + body
+
+
 def svdag_fix_crcs(data):
     """Recompute the section and header CRC-32s of a (mutated) .svdag file, where it parses."""
     if len(data) < 224:
@@ -492,7 +541,7 @@ def _seeds_svdag4(v):
 
 
 def _seeds_svdag4_fixcrc(v):
-    return [Seed(_svdag_bytes(z, version=4), z) for z in v.values()]
+    return [Seed(svdag4_stored(_svdag_bytes(z, version=4)), z) for z in v.values()]
 
 
 # target -> (seed maker, file name of the input, transform applied before writing)
