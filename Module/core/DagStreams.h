@@ -89,7 +89,8 @@ uint64_t maxStreamBytes(uint32_t stream, const Shape& shape);
 // The volume the streams describe, its block bounds and label voxel counts and bounds not yet
 // derived (Volume::deriveBoundsAndValidate does that and checks the rest). Throws
 // std::runtime_error naming the problem for streams that do not fit the shape: every field read
-// is checked, and the memory used is bounded by the streams' and the shape's sizes.
+// is checked, and the memory used is bounded by the streams' sizes (a count the shape gives is
+// allocated only once a stream holds that many entries).
 Volume decode(const Streams& streams, const Shape& shape);
 
 } // namespace dagstreams

@@ -838,8 +838,8 @@ class SegmentationVolume:
             Called with the writing progress in [0, 1]; an exception it raises is raised from
             here (and a file this call created is removed).
         format_version : {4, 3, 2}, default: 4
-            4 writes the shared DAG as byte streams under zstd: a file smaller than CSGV's
-            that loads in a fraction of a build's time. 3 writes the labels and occupancy
+            4 writes the shared DAG as byte streams under zstd: on the shared volumes a file
+            smaller than Volcanite's CSGV files, loaded in a fraction of a build's time. 3 writes the labels and occupancy
             arithmetic-coded, the smallest file (about half of 4's); reading it rebuilds the
             DAG, about a build's time. 2 writes the volume as it is in memory under zstd: a
             larger file, read by vtksvdag versions before format 3 too.
