@@ -139,6 +139,15 @@ struct DecodedPool
       fail(std::string("more ") + what + " references than " + what + " nodes");
     return this->referenced++;
   }
+  // A root or mid reference from its flag byte (complement, shared): the node's start, shifted,
+  // with the complement bit.
+  uint64_t nodeReference(uint8_t flags, Reader& indices, const char* what)
+  {
+    if (flags & ~(ComplementFlag | SharedNodeFlag))
+      fail(std::string(what) + " reference with unknown flags");
+    const uint64_t node = this->take((flags & SharedNodeFlag) != 0, indices, what);
+    return (this->starts[size_t(node)] << 1) | (flags & ComplementFlag);
+  }
   void checkAllReferenced(const char* what) const
   {
     if (this->referenced != this->starts.size())
@@ -154,6 +163,22 @@ void writeField(std::vector<uint32_t>& words, uint64_t offset, uint32_t width, u
   if ((value >> width) != 0)
     fail(std::string(what) + " wider than its field");
   bits::writeBits(words, offset, width, uint32_t(value));
+}
+
+// Fills in the child references of a pool's nodes, whose headers are in place: one flag byte a
+// mixed child, in child order, which reference(flags) turns into the field's value.
+template <typename Reference>
+void readReferences(std::vector<uint32_t>& words, const DecodedPool& pool, uint32_t refBits,
+  Reader& refs, const char* what, const Reference& reference)
+{
+  for (const uint64_t start : pool.starts)
+  {
+    const uint32_t mixed = layout::nodeMixedMask(Volume::nodeHeader(words, start));
+    for (uint32_t k = 0; k < popcount8(mixed); ++k)
+      writeField(words, start + layout::NODE_HEADER_BITS + uint64_t(k) * refBits, refBits,
+        reference(refs.byte()), what);
+  }
+  refs.finish();
 }
 
 // A pool's node stream from its headers (2 bytes a node: mixed, full), references left zero, and
@@ -309,15 +334,7 @@ uint64_t maxStreamBytes(uint32_t stream, const Shape& shape)
 
 Volume decode(const Streams& s, const Shape& shape)
 {
-  const Volume& f = shape.frame;
-  Volume v;
-  v.geometry = f.geometry;
-  v.scalarType = f.scalarType;
-  v.background = f.background;
-  v.widths = f.widths;
-  v.blockCount = f.blockCount;
-  v.rootCount = f.rootCount;
-  v.midCount = f.midCount;
+  Volume v = shape.frame; // labels, blocks and pools filled in below
   const ScalarType type = v.scalarType;
 
   { // labels: values only (counts and bounds are derived)
@@ -349,46 +366,21 @@ Volume decode(const Streams& s, const Shape& shape)
   { // mids: headers, then each mixed child's leaf reference
     v.mids = readHeaders(s[MidHeaders], MidHeaders, v.midCount, v.widths.leafRefBits, mids, "mid");
     Reader refs(s[MidRefs], MidRefs), indices(s[LeafIndices], LeafIndices);
-    for (uint64_t n = 0; n < v.midCount; ++n)
-    {
-      const uint64_t start = mids.starts[size_t(n)];
-      const uint32_t mixed = layout::nodeMixedMask(Volume::nodeHeader(v.mids, start));
-      for (uint32_t k = 0; k < popcount8(mixed); ++k)
-      {
-        const uint8_t flags = refs.byte();
-        const uint32_t symmetry = (flags >> 1) & 0x3Fu;
-        if (symmetry >= layout::LEAF_SYMMETRY_COUNT)
-          fail("leaf reference with an unknown symmetry");
-        const uint64_t leaf = leaves.take((flags & SharedLeafFlag) != 0, indices, "leaf");
-        const uint64_t ref = (leaf << (layout::LEAF_SYMMETRY_BITS + 1)) | (symmetry << 1) |
-          (flags & ComplementFlag);
-        writeField(v.mids, start + layout::NODE_HEADER_BITS + uint64_t(k) * v.widths.leafRefBits,
-          v.widths.leafRefBits, ref, "a leaf reference");
-      }
-    }
-    refs.finish();
+    readReferences(v.mids, mids, v.widths.leafRefBits, refs, "a leaf reference", [&](uint8_t flags) {
+      const uint32_t symmetry = (flags >> 1) & 0x3Fu;
+      if (symmetry >= layout::LEAF_SYMMETRY_COUNT)
+        fail("leaf reference with an unknown symmetry");
+      const uint64_t leaf = leaves.take((flags & SharedLeafFlag) != 0, indices, "leaf");
+      return (leaf << (layout::LEAF_SYMMETRY_BITS + 1)) | (symmetry << 1) | (flags & ComplementFlag);
+    });
     indices.finish();
     leaves.checkAllReferenced("leaf");
   }
   { // roots
     v.roots = readHeaders(s[RootHeaders], RootHeaders, v.rootCount, v.widths.midRefBits, roots, "root");
     Reader refs(s[RootRefs], RootRefs), indices(s[MidIndices], MidIndices);
-    for (uint64_t n = 0; n < v.rootCount; ++n)
-    {
-      const uint64_t start = roots.starts[size_t(n)];
-      const uint32_t mixed = layout::nodeMixedMask(Volume::nodeHeader(v.roots, start));
-      for (uint32_t k = 0; k < popcount8(mixed); ++k)
-      {
-        const uint8_t flags = refs.byte();
-        if (flags & ~(ComplementFlag | SharedNodeFlag))
-          fail("root references: unknown flags");
-        const uint64_t mid = mids.take((flags & SharedNodeFlag) != 0, indices, "mid");
-        writeField(v.roots, start + layout::NODE_HEADER_BITS + uint64_t(k) * v.widths.midRefBits,
-          v.widths.midRefBits, (mids.starts[size_t(mid)] << 1) | (flags & ComplementFlag),
-          "a mid reference");
-      }
-    }
-    refs.finish();
+    readReferences(v.roots, roots, v.widths.midRefBits, refs, "a mid reference",
+      [&](uint8_t flags) { return mids.nodeReference(flags, indices, "mid"); });
     indices.finish();
     mids.checkAllReferenced("mid");
   }
@@ -412,16 +404,13 @@ Volume decode(const Streams& s, const Shape& shape)
       const uint64_t label = labels.varint();
       if (label >= v.labels.size())
         fail("block label index out of range");
-      const uint8_t flags = refs.byte();
-      if (flags & ~(ComplementFlag | SharedNodeFlag))
-        fail("block roots: unknown flags");
-      const uint64_t root = roots.take((flags & SharedNodeFlag) != 0, indices, "root");
+      const uint64_t rootRef = roots.nodeReference(refs.byte(), indices, "root");
       const uint64_t base = i * recordBits;
       writeField(v.blocks, base, w.cellBits, cell, "a block's cell");
       writeField(v.blocks, base + layout::blockLabelOffset(w.cellBits), w.labelBits, label,
         "a block's label");
       writeField(v.blocks, base + layout::blockRootOffset(w.cellBits, w.labelBits), w.rootRefBits,
-        (roots.starts[size_t(root)] << 1) | (flags & ComplementFlag), "a root reference");
+        rootRef, "a root reference");
     }
     cellsIn.finish();
     labels.finish();

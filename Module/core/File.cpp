@@ -333,33 +333,52 @@ void storedChunks(const Volume& v, const StoredSection& s, const ChunkSink& sink
     rawSectionChunks(v, s.entry.id, sink);
 }
 
-// Format 3's one section: the coded volume, checked by decoding it again. A volume read from an
-// older file may have its pools in another order than a build's first-use order, which loading
-// rebuilds, so the header describes the rebuilt volume.
-StoredSection storeCoded(const Volume& v, Volume& rebuilt, const ParallelFor& parallel)
+// The volume a section just made decodes to (decode() returns it), checked against the volume
+// written, block by block, so that a writer's bug never reaches a file; `what` names the section
+// in the error ("the coded volume does").
+template <typename Decode>
+Volume decodedAgain(const Volume& v, const char* what, const Decode& decode)
 {
-  std::vector<uint8_t> bytes = coded::encode(v, parallel);
+  Volume again;
   std::string difference;
   try
   {
-    rebuilt = coded::decode(bytes.data(), bytes.size(), coded::frameOf(v), parallel);
-    difference = coded::compareOccupancy(v, rebuilt);
+    again = decode();
+    difference = coded::compareOccupancy(v, again);
   }
   catch (const std::exception& e)
   {
     difference = e.what();
   }
   if (!difference.empty())
-    throw FileError("internal error: the coded volume does not decode to the volume written (" +
+    throw FileError(std::string("internal error: ") + what + " not decode to the volume written (" +
       difference + ")");
+  return again;
+}
+
+// A section of bytes already coded: stored as they are (codec 0).
+StoredSection storedAsIs(uint32_t id, const std::vector<uint8_t>& bytes)
+{
   StoredSection s;
-  s.entry.id = CodedSection;
+  s.entry.id = id;
   s.entry.codec = CodecNone;
   s.entry.raw = s.entry.stored = bytes.size();
   s.entry.crc = crc32Of(bytes.data(), bytes.size());
   s.packed.reset(new uint8_t[bytes.size()]);
   std::copy(bytes.begin(), bytes.end(), s.packed.get());
   return s;
+}
+
+// Format 3's one section: the coded volume, checked by decoding it again. A volume read from an
+// older file may have its pools in another order than a build's first-use order, which loading
+// rebuilds, so the header describes the rebuilt volume.
+StoredSection storeCoded(const Volume& v, Volume& rebuilt, const ParallelFor& parallel)
+{
+  const std::vector<uint8_t> bytes = coded::encode(v, parallel);
+  rebuilt = decodedAgain(v, "the coded volume does", [&] {
+    return coded::decode(bytes.data(), bytes.size(), coded::frameOf(v), parallel);
+  });
+  return storedAsIs(CodedSection, bytes);
 }
 
 // Format 4's zstd level: fixed, as what the format promises in bytes depends on it (level 3 gives
@@ -392,29 +411,13 @@ StoredSection storeDagStreams(const Volume& v, Volume& rebuilt)
     bits::putVarint(table, stream.size());
     frames.insert(frames.end(), frame.begin(), frame.begin() + std::ptrdiff_t(size));
   }
-  std::string difference;
-  try
-  {
-    rebuilt = dagstreams::decode(encoded.streams, encoded.shape);
-    rebuilt.deriveBoundsAndValidate();
-    difference = coded::compareOccupancy(v, rebuilt);
-  }
-  catch (const std::exception& e)
-  {
-    difference = e.what();
-  }
-  if (!difference.empty())
-    throw FileError("internal error: the DAG streams do not decode to the volume written (" +
-      difference + ")");
+  rebuilt = decodedAgain(v, "the DAG streams do", [&] {
+    Volume decoded = dagstreams::decode(encoded.streams, encoded.shape);
+    decoded.deriveBoundsAndValidate();
+    return decoded;
+  });
   table.insert(table.end(), frames.begin(), frames.end());
-  StoredSection s;
-  s.entry.id = DagStreamsSection;
-  s.entry.codec = CodecNone;
-  s.entry.raw = s.entry.stored = table.size();
-  s.entry.crc = crc32Of(table.data(), table.size());
-  s.packed.reset(new uint8_t[table.size()]);
-  std::copy(table.begin(), table.end(), s.packed.get());
-  return s;
+  return storedAsIs(DagStreamsSection, table);
 }
 
 EncodedFile encode(const Volume& volume, const WriteOptions& options, const ParallelFor& parallel)
@@ -683,13 +686,7 @@ Volume readDagStreams(const SectionEntry& e, const uint8_t* data, uint64_t label
   if (crc32Of(stored, size_t(e.stored)) != e.crc)
     fail("DAG streams section checksum mismatch (the data is corrupt)");
   dagstreams::Shape shape;
-  shape.frame.geometry = header.geometry;
-  shape.frame.scalarType = header.scalarType;
-  shape.frame.background = header.background;
-  shape.frame.widths = header.widths;
-  shape.frame.blockCount = header.blockCount;
-  shape.frame.rootCount = header.rootCount;
-  shape.frame.midCount = header.midCount;
+  shape.frame = header; // its labels, blocks and pools are not read yet
   shape.labelCount = labelCount;
   shape.leafCount = leafCount;
   const uint8_t* at = stored;
