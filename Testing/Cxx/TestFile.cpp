@@ -127,6 +127,32 @@ void resealHeader(Bytes& b)
   const size_t at = headerCrcAt(b);
   putLE(b, at, crc32(0, b.data(), uInt(at)), 4);
 }
+// One edit of a file's bytes: `bytes` little-endian bytes at `at` set to `value`.
+struct HeaderEdit
+{
+  const char* name;
+  size_t at;
+  uint64_t value;
+  int bytes;
+};
+// Each edit of a good file, behind a resealed header checksum (but for the section count, whose
+// edit moves where the checksum is), fails to load, and none makes the reader allocate more
+// than 16 MiB.
+void expectHeaderEditsFail(const Bytes& good, const std::vector<HeaderEdit>& edits)
+{
+  for (const HeaderEdit& e : edits)
+  {
+    SCOPED_TRACE(e.name);
+    Bytes bad = good;
+    putLE(bad, e.at, e.value, e.bytes);
+    if (e.at != SectionCountAt)
+      resealHeader(bad);
+    largestAllocation = 0;
+    EXPECT_THROW(svdag::deserialize(bad), FileError);
+    EXPECT_LT(largestAllocation.load(), size_t(16) << 20);
+  }
+}
+
 size_t entryOf(const Bytes& b, uint32_t id)
 {
   for (size_t i = 0; i < sectionCount(b); ++i)
@@ -428,19 +454,12 @@ TEST(File, UnknownSectionsAreSkippedButChecked)
 TEST(File, AbsurdHeaderValuesFailWithoutHugeAllocations)
 {
   const Bytes good = svdag::serialize(spheres(ScalarType::UInt32, 30), { 3, 2 });
-  struct Edit
-  {
-    const char* name;
-    size_t at;
-    uint64_t value;
-    int bytes;
-  };
   const size_t leaves = entryOf(good, LeavesSection), labels = entryOf(good, LabelsSection);
   const size_t blocks = entryOf(good, BlocksSection);
   largestAllocation = 0; // the tracker sees the library's allocations
   svdag::deserialize(good);
   ASSERT_GT(largestAllocation.load(), size_t(1000));
-  const std::vector<Edit> edits = {
+  const std::vector<HeaderEdit> edits = {
     { "dims x 2^31-1", DimsAt, 0x7FFFFFFF, 4 },
     { "dims y 2^31-1", DimsAt + 4, 0x7FFFFFFF, 4 },
     { "dims z 2^31-1", DimsAt + 8, 0x7FFFFFFF, 4 },
@@ -466,17 +485,7 @@ TEST(File, AbsurdHeaderValuesFailWithoutHugeAllocations)
     { "missing section", leaves + Id, 77, 4 },
     { "section crc", leaves + Crc, 12345, 4 },
   };
-  for (const Edit& e : edits)
-  {
-    SCOPED_TRACE(e.name);
-    Bytes bad = good;
-    putLE(bad, e.at, e.value, e.bytes);
-    if (e.at != SectionCountAt)
-      resealHeader(bad);
-    largestAllocation = 0;
-    EXPECT_THROW(svdag::deserialize(bad), FileError);
-    EXPECT_LT(largestAllocation.load(), size_t(16) << 20);
-  }
+  expectHeaderEditsFail(good, edits);
   // Counts and sizes that agree with each other but not with the data: a leaf count of 2^27
   // (1 GiB of leaves) with the raw size to match must fail on the zstd frame, not allocate 1 GiB.
   Bytes bad = good;
@@ -1006,17 +1015,41 @@ std::vector<Named> codedVolumes()
   return out;
 }
 
-// Replaces the coded section's bytes (a same-size edit) and reseals its crc and the header.
 // Format 3 written explicitly (4 is the default).
 const svdag::WriteOptions Coded{ 3, 3 };
 
-// Re-seals the checksums of section `id` (6: format 3's coded volume) after a test edits it.
+// Re-seals the checksums of section `id` (6: format 3's coded volume) after a test edits its
+// bytes in place.
 void resealCoded(Bytes& b, uint32_t id = 6)
 {
   const size_t e = entryOf(b, id);
   const size_t at = size_t(getLE(b, e + Offset, 8)), n = size_t(getLE(b, e + Stored, 8));
   putLE(b, e + Crc, crc32(0, b.data() + at, uInt(n)), 4);
   resealHeader(b);
+}
+
+// Random damage to section `id` of a good file: a bit flip fails on the section's checksum;
+// resealed (a buggy or hostile writer), with a second change every third round, it fails cleanly
+// or loads a valid volume, without allocating 64 MiB; more than `minFailed` of the rounds fail.
+void expectSectionCorruptionFailsCleanly(
+  const Bytes& good, uint32_t id, std::mt19937_64& rng, int rounds, size_t minFailed)
+{
+  const size_t e = entryOf(good, id);
+  const size_t at = size_t(getLE(good, e + Offset, 8)), size = size_t(getLE(good, e + Stored, 8));
+  size_t failed = 0, loaded = 0;
+  for (int i = 0; i < rounds; ++i)
+  {
+    Bytes bad = good;
+    bad[at + rng() % size] ^= uint8_t(1u << (rng() % 8));
+    EXPECT_THROW(svdag::deserialize(bad), FileError);
+    if (i % 3 == 0)
+      bad[at + rng() % size] = uint8_t(rng()); // and a second change
+    resealCoded(bad, id);
+    largestAllocation = 0;
+    expectFailsOrValid(bad, failed, loaded);
+    EXPECT_LT(largestAllocation.load(), size_t(64) << 20);
+  }
+  EXPECT_GT(failed, minFailed);
 }
 } // namespace
 
@@ -1140,23 +1173,7 @@ TEST(CodedFile, CorruptionFailsCleanly)
   for (const Named& n : { Named{ "spheres", spheres(ScalarType::UInt32, 30) }, all[all.size() - 4] })
   {
     SCOPED_TRACE(n.name);
-    const Bytes good = svdag::serialize(n.volume, Coded);
-    const size_t e = entryOf(good, 6);
-    const size_t at = size_t(getLE(good, e + Offset, 8)), size = size_t(getLE(good, e + Stored, 8));
-    size_t failed = 0, loaded = 0;
-    for (int i = 0; i < 300; ++i)
-    {
-      Bytes bad = good;
-      bad[at + rng() % size] ^= uint8_t(1u << (rng() % 8));
-      EXPECT_THROW(svdag::deserialize(bad), FileError);
-      if (i % 3 == 0)
-        bad[at + rng() % size] = uint8_t(rng()); // and a second change
-      resealCoded(bad);
-      largestAllocation = 0;
-      expectFailsOrValid(bad, failed, loaded);
-      EXPECT_LT(largestAllocation.load(), size_t(64) << 20);
-    }
-    EXPECT_GT(failed, 250u);
+    expectSectionCorruptionFailsCleanly(svdag::serialize(n.volume, Coded), 6, rng, 300, 250);
   }
 }
 
@@ -1164,14 +1181,7 @@ TEST(CodedFile, HeaderValuesThatDisagreeWithTheCodedVolumeFail)
 {
   const Bytes good = svdag::serialize(spheres(ScalarType::UInt32, 30), Coded);
   const svdag::Volume v = svdag::deserialize(good);
-  struct Edit
-  {
-    const char* name;
-    size_t at;
-    uint64_t value;
-    int bytes;
-  };
-  const std::vector<Edit> edits = {
+  const std::vector<HeaderEdit> edits = {
     { "label count + 1", CountsAt + 8 * Labels, v.labels.size() + 1, 8 },
     { "label count - 1", CountsAt + 8 * Labels, v.labels.size() - 1, 8 },
     { "block count + 1", CountsAt + 8 * Blocks, v.blockCount + 1, 8 },
@@ -1188,16 +1198,7 @@ TEST(CodedFile, HeaderValuesThatDisagreeWithTheCodedVolumeFail)
     { "background", TypeAt + 4, 7, 8 },
     { "coded section compressed", entryOf(good, 6) + Codec, 1, 4 },
   };
-  for (const Edit& e : edits)
-  {
-    SCOPED_TRACE(e.name);
-    Bytes bad = good;
-    putLE(bad, e.at, e.value, e.bytes);
-    resealHeader(bad);
-    largestAllocation = 0;
-    EXPECT_THROW(svdag::deserialize(bad), FileError);
-    EXPECT_LT(largestAllocation.load(), size_t(16) << 20);
-  }
+  expectHeaderEditsFail(good, edits);
   // A 3.0 file needs its coded section; format 2's sections do not stand in for it.
   Bytes noCoded = good;
   putLE(noCoded, entryOf(good, 6) + Id, 2, 4);
@@ -1350,8 +1351,9 @@ TEST(StreamsFile, EveryTruncationFails)
 }
 
 // Corruption anywhere fails on a checksum; behind resealed checksums (a buggy or hostile
-// writer), corrupt streams fail cleanly or load a valid volume, never a crash, a hang or a huge
-// allocation. The streams' raw bytes are reached through a file of uncompressed streams.
+// writer), a corrupt section (its size table and zstd frames) fails cleanly or loads a valid
+// volume, never a crash, a hang or a huge allocation. The streams' own bytes are edited in
+// CorruptStreamsFailCleanly below.
 TEST(StreamsFile, CorruptionFailsCleanly)
 {
   std::mt19937_64 rng(23);
@@ -1360,23 +1362,7 @@ TEST(StreamsFile, CorruptionFailsCleanly)
          all[all.size() - 2] })
   {
     SCOPED_TRACE(n.name);
-    const Bytes good = svdag::serialize(n.volume);
-    const size_t e = entryOf(good, 7);
-    const size_t at = size_t(getLE(good, e + Offset, 8)), size = size_t(getLE(good, e + Stored, 8));
-    size_t failed = 0, loaded = 0;
-    for (int i = 0; i < 400; ++i)
-    {
-      Bytes bad = good;
-      bad[at + rng() % size] ^= uint8_t(1u << (rng() % 8));
-      EXPECT_THROW(svdag::deserialize(bad), FileError);
-      if (i % 3 == 0)
-        bad[at + rng() % size] = uint8_t(rng()); // and a second change
-      resealCoded(bad, 7);
-      largestAllocation = 0;
-      expectFailsOrValid(bad, failed, loaded);
-      EXPECT_LT(largestAllocation.load(), size_t(64) << 20);
-    }
-    EXPECT_GT(failed, 300u);
+    expectSectionCorruptionFailsCleanly(svdag::serialize(n.volume), 7, rng, 400, 300);
   }
 }
 
@@ -1428,14 +1414,7 @@ TEST(StreamsFile, HeaderValuesThatDisagreeWithTheStreamsFail)
 {
   const Bytes good = svdag::serialize(spheres(ScalarType::UInt32, 30));
   const svdag::Volume v = svdag::deserialize(good);
-  struct Edit
-  {
-    const char* name;
-    size_t at;
-    uint64_t value;
-    int bytes;
-  };
-  const std::vector<Edit> edits = {
+  const std::vector<HeaderEdit> edits = {
     { "label count + 1", CountsAt + 8 * Labels, v.labels.size() + 1, 8 },
     { "label count - 1", CountsAt + 8 * Labels, v.labels.size() - 1, 8 },
     { "block count + 1", CountsAt + 8 * Blocks, v.blockCount + 1, 8 },
@@ -1453,16 +1432,7 @@ TEST(StreamsFile, HeaderValuesThatDisagreeWithTheStreamsFail)
     { "background", TypeAt + 4, 7, 8 },
     { "streams section compressed", entryOf(good, 7) + Codec, 1, 4 },
   };
-  for (const Edit& e : edits)
-  {
-    SCOPED_TRACE(e.name);
-    Bytes bad = good;
-    putLE(bad, e.at, e.value, e.bytes);
-    resealHeader(bad);
-    largestAllocation = 0;
-    EXPECT_THROW(svdag::deserialize(bad), FileError);
-    EXPECT_LT(largestAllocation.load(), size_t(16) << 20);
-  }
+  expectHeaderEditsFail(good, edits);
   // A 4.0 file needs its streams; a coded volume does not stand in for them, nor they for it.
   Bytes other = good;
   putLE(other, entryOf(good, 7) + Id, 6, 4);

@@ -1,8 +1,10 @@
 """The .svdag writer and reader from Python: a real volume through the VTK pipeline into a file and
-back (bit-identical), in both format versions, the file checked against the format as
-IO/README.md documents it (parsed here independently with struct, zlib and zstandard), and the
-error codes of both on bad input."""
+back (bit-identical), in every format version written, the file checked against the format as
+IO/README.md documents it (parsed independently of the library, with struct, zlib, zstandard and
+the fuzz harness's varint reader), and the error codes of both on bad input."""
+import pathlib
 import struct
+import sys
 import zlib
 
 import nrrd
@@ -21,6 +23,9 @@ from vtksvdag.vtkSVDAGCore import (
 )
 from vtksvdag._svdagfile import DEFAULT_FORMAT_VERSION
 from vtksvdag.vtkSVDAGIO import vtkSegmentationSVDAGWriter, vtkSegmentationVolumeReader
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / "fuzz"))
+from fuzz_readers import read_varint  # noqa: E402
 
 MAGIC = b"\x89SVDAG\r\n"
 SECTIONS = {1: "labels", 2: "blocks", 3: "roots", 4: "mids", 5: "leaves", 6: "coded volume",
@@ -185,14 +190,7 @@ def varints(data, at, n):
     """n unsigned LEB128 numbers of data from offset at, and the offset after them."""
     out = []
     for _ in range(n):
-        value, shift = 0, 0
-        while True:
-            byte = data[at]
-            at += 1
-            value |= (byte & 0x7F) << shift
-            shift += 7
-            if not byte & 0x80:
-                break
+        value, at = read_varint(data, at)
         out.append(value)
     return out, at
 

@@ -169,7 +169,8 @@ def svdag_stored(data):
     return head + struct.pack("<I", zlib.crc32(head)) + body
 
 
-def _varint(data, at):
+def read_varint(data, at):
+    """The unsigned LEB128 number at data[at] (the .svdag 4.0 file's) and the offset after it."""
     value, shift = 0, 0
     while True:
         byte = data[at]
@@ -200,8 +201,8 @@ def svdag4_stored(data):
     section = data[off:off + stored]
     sizes, at = [], 0
     for _ in range(12):
-        stored_size, at = _varint(section, at)
-        raw_size, at = _varint(section, at)
+        stored_size, at = read_varint(section, at)
+        raw_size, at = read_varint(section, at)
         sizes.append((stored_size, raw_size))
     table, streams = b"", b""
     for stored_size, raw_size in sizes:
