@@ -600,6 +600,7 @@ bool vtkSegmentationSVDAG::ComputeEncodingStatistics(vtkTable* table) const
   addColumn("mirror_bits", &L::mirrorBits);
   addColumn("symmetry_classes", &L::symmetryClasses);
   addColumn("symmetry_bits", &L::symmetryBits);
+  addColumn("compact_bytes", &L::compactBytes);
   return true;
 }
 

@@ -77,7 +77,11 @@ public:
   ///@}
 
   ///@{
-  /** Sizes of the parts. Counts of nodes are unique (deduplicated) nodes. */
+  /**
+   * Sizes of the parts, as held in memory (the compact form, svdag/Compact.h). Counts of nodes
+   * are unique (deduplicated) nodes; GetNumberOfLeaves counts the leaves stored apart, those
+   * that several mid nodes share (a leaf used once is inline in its mid node).
+   */
   vtkIdType GetNumberOfBlocks() const;
   vtkIdType GetNumberOfRootNodes() const;
   vtkIdType GetNumberOfMidNodes() const;
@@ -126,7 +130,8 @@ public:
   bool ComputeLabelAdjacency(vtkIdTypeArray* pairs) const;
   /**
    * Where the bytes go (svdag/EncodingAnalysis.h): one row per level ("blocks", "roots",
-   * "mids", "leaves"; column "level") with, in bits or counts: "nodes", "bits", "header_bits",
+   * "mids", "leaves"; column "level") with "compact_bytes" (the level in the compact form held
+   * in memory) and, of the pooled form files store, in bits or counts: "nodes", "bits", "header_bits",
    * "reference_bits", "references", "reference_width" (into the next level); of the references
    * into the level: "incoming_references", "referenced_once", "max_incoming",
    * "top1_percent_share", "top10_percent_share", "reference_entropy_bits"; and what sharing

@@ -100,6 +100,9 @@ COLUMNS = [
     "file3_bytes", "write3_s", "load3_s", "load3_over_build",
     "file3_over_cseg", "file3_over_crackle", "file3_over_zstd19",
     "file4_bytes", "write4_s", "load4_s", "load4_over_build", "file4_over_cseg",
+    "read4_s", "read4_over_build",
+    "frame_compute_ms", "frame_rt_ms", "base_frame_compute_ms", "base_frame_rt_ms",
+    "frame_compute_over_base", "frame_rt_over_base",
 ]
 
 
@@ -314,9 +317,10 @@ def min_width_bytes(distinct_values: int) -> int:
     return 8
 
 
-def measure_volume(name, source, labels, file_path, repeats, baseline_kb) -> dict:
+def measure_volume(name, source, labels, file_path, repeats, baseline_kb, frames=None) -> dict:
     """Measures one volume held both in memory (`labels`) and in a file (`file_path`).
-    baseline_kb None skips the peak memory subprocess."""
+    baseline_kb None skips the peak memory subprocess; `frames` (rounds, baseline tool or None)
+    adds the frame times."""
     labels = np.ascontiguousarray(labels)
     image = to_image(labels)
     voxels = labels.size
@@ -381,9 +385,12 @@ def measure_volume(name, source, labels, file_path, repeats, baseline_kb) -> dic
     for version in (2, 3, 4):
         row.update(measure_svdag_file(name, svdag, labels, runs, version))
         row[f"load{version}_over_build"] = row[f"load{version}_s"] / build_s
+    row["read4_over_build"] = row["read4_s"] / build_s
     for other in ("cseg", "crackle", "zstd19"):
         row[f"file3_over_{other}"] = row["file3_bytes"] / row[f"{other}_bytes"]
     row["file4_over_cseg"] = row["file4_bytes"] / row["cseg_bytes"]
+    if frames is not None:
+        row.update(measure_frames(name, svdag, frames[1], frames[0]))
     # Builds from before encoding_statistics (a baseline build on PYTHONPATH) have no levels.
     if hasattr(SegmentationVolume, "encoding_statistics"):
         row["levels"] = SegmentationVolume(svdag).encoding_statistics()
@@ -392,8 +399,11 @@ def measure_volume(name, source, labels, file_path, repeats, baseline_kb) -> dic
 
 def measure_svdag_file(name, svdag, labels, runs, version) -> dict:
     """Bytes of the .svdag file in a format version (2: zstd level 3, its default) and the
-    seconds to load it (median of `runs`); for version 3 also the seconds to write it (which
-    decodes the coded volume once more to check it)."""
+    seconds to load it: `load` is vtkSegmentationVolumeReader's Update, the VTK algorithm that
+    makes the data object from the file, as build_s times the one that makes it from the array;
+    for the default version 4 also `read`, vtksvdag.read (the same plus Python's checks and
+    wrapper, what a pyvista script waits for). Medians of `runs`. For versions 3 and 4 also the
+    seconds to write the file (which decodes what it wrote once more to check it)."""
     import vtksvdag
 
     with tempfile.TemporaryDirectory(prefix="svdag-bench-file-") as folder:
@@ -403,18 +413,84 @@ def measure_svdag_file(name, svdag, labels, runs, version) -> dict:
         written = time.perf_counter() - start
         if path.read_bytes()[8] != version:
             raise BenchError(f"{name}: the file written is not format version {version}")
-        times = []
+        load_times, read_times = [], []
         for _ in range(runs):
+            reader = vtkSegmentationVolumeReader()
+            reader.SetFileName(str(path))
             start = time.perf_counter()
-            loaded = vtksvdag.read(str(path))
-            times.append(time.perf_counter() - start)
-        check_round_trip(f"{name} (.svdag {version}.0 file)", labels, loaded.dataobject)
-        if loaded.dataobject.GetCompressedSize() != svdag.GetCompressedSize():
+            reader.Update()
+            load_times.append(time.perf_counter() - start)
+            if reader.GetErrorCode() != 0 or reader.GetFileFormat() != "SVDAG":
+                raise BenchError(f"{name}: vtkSegmentationVolumeReader failed on the {version}.0 file")
+            if version == 4:
+                start = time.perf_counter()
+                vtksvdag.read(str(path))
+                read_times.append(time.perf_counter() - start)
+        loaded = reader.GetOutput()
+        check_round_trip(f"{name} (.svdag {version}.0 file)", labels, loaded)
+        if loaded.GetCompressedSize() != svdag.GetCompressedSize():
             raise BenchError(f"{name}: the .svdag {version}.0 file loads to another byte count")
-        row = {f"file{version}_bytes": path.stat().st_size, f"load{version}_s": statistics.median(times)}
+        row = {f"file{version}_bytes": path.stat().st_size,
+               f"load{version}_s": statistics.median(load_times)}
+        if read_times:
+            row[f"read{version}_s"] = statistics.median(read_times)
         if version >= 3:
             row[f"write{version}_s"] = written
         return row
+
+
+# ------------------------------------------------------------------------- frame times
+RENDER_TOOL = REPO / "build" / "bin" / "vtksvdag-render"
+# What issue 23's frame time target is measured with: restarting frames of the primary hit and
+# one bounce at voxel LOD, no denoiser, 256x256 (vtksvdag-render prints the median frame).
+FRAME_OPTIONS = ["--width", "256", "--height", "256", "--lod", "voxel", "--bounces", "1",
+                 "--frames", "12", "--restart", "--no-denoise"]
+BACKENDS = ("compute", "rt")
+
+
+def frame_ms(tool, path, backend: str) -> float:
+    with tempfile.TemporaryDirectory(prefix="svdag-bench-frame-") as folder:
+        done = subprocess.run(
+            [str(tool), str(path), str(pathlib.Path(folder) / "frame.png"), *FRAME_OPTIONS,
+             "--backend", backend], capture_output=True, text=True, timeout=900)
+    if done.returncode != 0:
+        raise BenchError(f"{tool} failed on {path} ({backend}): {done.stderr.strip()[-500:]}")
+    return float(json.loads(done.stdout)["ms_median"])
+
+
+def measure_frames(name, svdag, baseline_tool, rounds: int) -> dict:
+    """Median frame time (ms) of this build's vtksvdag-render on the volume's .svdag file, both
+    backends; with `baseline_tool` (another build's vtksvdag-render, e.g. of the commit before a
+    change of the encoding) the same file through it too, the two interleaved round by round."""
+    tools = {"": RENDER_TOOL}
+    if baseline_tool is not None:
+        tools["base_"] = pathlib.Path(baseline_tool)
+    times = {(prefix, backend): [] for prefix in tools for backend in BACKENDS}
+    with tempfile.TemporaryDirectory(prefix="svdag-bench-frames-") as folder:
+        path = pathlib.Path(folder) / f"{name}.svdag"
+        SegmentationVolume(svdag).save(str(path))
+        for _ in range(rounds):
+            for backend in BACKENDS:
+                for prefix, tool in tools.items():
+                    times[(prefix, backend)].append(frame_ms(tool, path, backend))
+    row = {f"{prefix}frame_{backend}_ms": statistics.median(t) for (prefix, backend), t in times.items()}
+    if baseline_tool is not None:
+        for backend in BACKENDS:
+            row[f"frame_{backend}_over_base"] = (row[f"frame_{backend}_ms"]
+                                                 / row[f"base_frame_{backend}_ms"])
+    return row
+
+
+def print_frames(rows):
+    table = [[r["volume"]] + [r.get(k) for k in (
+        "frame_compute_ms", "base_frame_compute_ms", "frame_compute_over_base",
+        "frame_rt_ms", "base_frame_rt_ms", "frame_rt_over_base")] for r in rows]
+    print_table(
+        "Frame times (vtksvdag-render " + " ".join(FRAME_OPTIONS) + "; ms, medians of the "
+        "rounds; base = --baseline-render, interleaved; issue 23: at most 1.1x)",
+        ["volume", "compute ms", "base ms", "compute/base", "rt ms", "base ms", "rt/base"],
+        table,
+    )
 
 
 # ------------------------------------------------------------------ where the bytes go
@@ -422,23 +498,25 @@ LEVEL_COLUMNS = [
     "volume", "level", "nodes", "bytes", "header_bits", "reference_bits", "references",
     "reference_width", "incoming_references", "referenced_once", "max_incoming",
     "top1_percent_share", "top10_percent_share", "reference_entropy_bits",
-    "mirror_classes", "mirror_bytes", "symmetry_classes", "symmetry_bytes",
+    "mirror_classes", "mirror_bytes", "symmetry_classes", "symmetry_bytes", "compact_bytes",
 ]
 LEAF_SYMMETRY_BITS = 6  # bits naming one of the 48 symmetries in a leaf reference (Layout.h)
 
 
 def remedy_bytes(levels) -> dict:
-    """Bytes of blocks + DAG under each remedy, estimated from the per-level counts.
+    """Bytes of blocks + DAG under each remedy, estimated from the per-level counts of the
+    pooled form ("pooled": every node once in its pool, a reference per mixed child, as files
+    store it), beside the compact form built and held in memory ("compact", measured).
 
     "mirror" and "symmetry" share nodes equal up to a mirror (a cube symmetry) on every level
     (leaves already are, up to the 48 symmetries); "entropy refs" keeps the nodes but spends on each reference the entropy of
     its level's target distribution (a bound for a static code: no random access, a file form);
     "inline leaves" stores each leaf referenced once inside its mid node instead of a reference
     (the unused mixed-and-full child state would mark it), so the leaf pool keeps only shared
-    leaves and the references into it narrow. Leaf references carry their 6 symmetry bits
-    throughout (today's layout).
+    leaves and the references into it narrow (the compact form does that and chains the mids
+    referenced once after their root). Leaf references carry their 6 symmetry bits throughout.
     """
-    today = int(levels["bytes"].sum())
+    pooled = int(levels["bytes"].sum())
     mids, leaves = levels.loc["mids"], levels.loc["leaves"]
     # References into the next level at that level's entropy (the leaves' symmetry field kept).
     entropy_bits = sum(
@@ -455,7 +533,8 @@ def remedy_bytes(levels) -> dict:
     block_bits = levels.loc["blocks", "header_bits"] + levels.loc["blocks", "references"] * width(root_bits)
     inline_bits = block_bits + root_bits + mid_bits + 64 * shared_leaves
     return {
-        "today": today,
+        "pooled": pooled,
+        "compact": int(levels["compact_bytes"].sum()),
         "mirror": int(levels["mirror_bytes"].sum()),
         "symmetry": int(levels["symmetry_bytes"].sum()),
         "entropy refs": int(np.ceil(entropy_bits / 8)),
@@ -473,14 +552,15 @@ def print_files(rows, anchors):
                       r["file3_bytes"] / MB / csgv if csgv else None,
                       r["file3_over_crackle"], r["file3_over_zstd19"], r["file3_over_cseg"],
                       r["build_s"], r["write4_s"], r["write3_s"], r["load4_over_build"],
-                      r["load3_over_build"], r["load2_over_build"]])
+                      r["read4_over_build"], r["load3_over_build"], r["load2_over_build"]])
     print_table(
         "The .svdag file, format 4.0 (DAG streams, the default), 3.0 (coded) and 2.0 (zstd level "
         "3), measured; CSGV file MB reported in anchors.md, not measured here; crackle, zstd -19 "
-        "and cseg measured in this run; load = vtksvdag.read of the file, median of `runs`",
+        "and cseg measured in this run; load = vtkSegmentationVolumeReader.Update() on the file "
+        "(build = the filter's Update() on the array), read = vtksvdag.read, medians of `runs`",
         ["volume", "4.0 MB", "3.0 MB", "2.0 MB", "CSGV file MB", "4.0/CSGV", "3.0/CSGV",
          "3.0/crackle", "3.0/zstd19", "3.0/cseg", "build s", "write 4.0 s", "write 3.0 s",
-         "load 4.0/build", "load 3.0/build", "load 2.0/build"],
+         "load 4.0/build", "read 4.0/build", "load 3.0/build", "load 2.0/build"],
         table,
     )
 
@@ -493,7 +573,7 @@ def print_levels(rows):
         for level, x in levels.iterrows():
             table.append([
                 r["volume"], level, int(x["nodes"]), int(x["bytes"]),
-                100.0 * x["bytes"] / total if total else 0.0,
+                100.0 * x["bytes"] / total if total else 0.0, int(x["compact_bytes"]),
                 int(x["reference_width"]), int(x["references"]),
                 100.0 * x["referenced_once"] / x["nodes"] if level != "blocks" and x["nodes"] else None,
                 x["top10_percent_share"] if level != "blocks" else None,
@@ -502,18 +582,19 @@ def print_levels(rows):
                 100.0 * x["symmetry_classes"] / x["nodes"] if x["nodes"] else None,
             ])
     print_table(
-        "Where the bytes go (measured: SegmentationVolume.encoding_statistics; once% = nodes "
+        "Where the bytes go (measured: SegmentationVolume.encoding_statistics; nodes, bytes and "
+        "the rest: the pooled form; compact: the level's bytes in memory; once% = nodes "
         "referenced once, top10 = share of the references into the level that its most used 10% "
         "of nodes receive, H = entropy bits per reference into the level, mirror%/sym% = distinct "
-        "nodes up to the 8 mirrors / 48 cube symmetries, in % of today's)",
-        ["volume", "level", "nodes", "bytes", "% of DAG+blocks", "ref bits", "refs", "once%",
+        "nodes up to the 8 mirrors / 48 cube symmetries, in % of the pooled nodes)",
+        ["volume", "level", "nodes", "bytes", "% of DAG+blocks", "compact", "ref bits", "refs", "once%",
          "top10", "H bits", "mirror%", "sym%"],
         table,
     )
     remedies = []
     for r in rows:
         est = remedy_bytes(r["levels"])
-        other = r["bytes_total"] - est["today"]  # the label table, unchanged by every remedy
+        other = r["bytes_labels"]  # the label table, unchanged by every remedy
         remedies.append([r["volume"]] + [(v + other) / r["cseg_bytes"] for v in est.values()])
     print_table(
         "Remedies, estimated from the counts above (total bytes / compressed_segmentation's; "
@@ -690,7 +771,8 @@ def run(args) -> int:
                 labels = make()
                 # Written to a file so that it is read and measured like the real volumes.
                 nrrd.write(str(path), labels, index_order="C", compression_level=1)
-            rows.append(measure_volume(name, source, labels, path, args.repeats, baseline_kb))
+            frames = (args.frame_rounds, args.baseline_render) if args.frames else None
+            rows.append(measure_volume(name, source, labels, path, args.repeats, baseline_kb, frames))
             print(f"  {name}: {rows[-1]['bytes_total'] / MB:.3f} MB, round trips ok", flush=True)
 
     anchors = read_anchors(ANCHORS)
@@ -701,6 +783,8 @@ def run(args) -> int:
     if with_levels:
         print_levels(rows)
         write_levels_csv(rows, levels_path)
+    if args.frames:
+        print_frames(rows)
     csv_path, png_path = out / "compression.csv", out / "compression.png"
     with open(csv_path, "w", newline="") as f:
         writer = csv.DictWriter(f, fieldnames=COLUMNS, restval="", extrasaction="ignore")
@@ -719,6 +803,13 @@ def main(argv=None) -> int:
     parser.add_argument("--out", default=str(REPO / "bench" / "out"), help="folder for the CSV and plot")
     parser.add_argument("--repeats", type=int, default=3, help="builds per volume up to 256^3 voxels (median)")
     parser.add_argument("--no-memory", action="store_true", help="skip the peak memory subprocesses")
+    parser.add_argument("--frames", action="store_true",
+                        help="also time frames of each volume with build/bin/vtksvdag-render "
+                             "(both backends; needs Vulkan)")
+    parser.add_argument("--baseline-render", metavar="TOOL",
+                        help="with --frames: another build's vtksvdag-render, timed on the same "
+                             "files, interleaved (the encoding before a change)")
+    parser.add_argument("--frame-rounds", type=int, default=3, help="with --frames: rounds (median)")
     parser.add_argument("--memory-probe", metavar="PATH", help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.memory_probe is not None:
@@ -726,6 +817,12 @@ def main(argv=None) -> int:
         return 0
     if args.repeats < 1:
         parser.error("--repeats must be at least 1")
+    if args.frame_rounds < 1:
+        parser.error("--frame-rounds must be at least 1")
+    if args.baseline_render is not None and not args.frames:
+        parser.error("--baseline-render needs --frames")
+    if args.frames and not RENDER_TOOL.is_file():
+        parser.error(f"--frames needs {RENDER_TOOL} (cmake --build build)")
     try:
         return run(args)
     except BenchError as error:

@@ -1,6 +1,7 @@
 #include "svdag/Builder.h"
 
 #include "BuildPools.h"
+#include "svdag/Compact.h"
 #include "svdag/LeafSymmetry.h"
 
 #include <algorithm>
@@ -316,8 +317,9 @@ struct Builder::Impl
   }
 };
 
-void Builder::addVolume(const Volume& part)
+void Builder::addVolume(const Volume& input)
 {
+  const Volume part = pooled(input);
   Impl& m = *impl;
   if (m.blockMode)
     throw std::logic_error("cannot append a volume to a builder given blocks");
@@ -583,6 +585,11 @@ void Builder::addBlock(uint32_t cell, const CellOccupancy& block)
 }
 
 Volume Builder::finish()
+{
+  return compacted(finishPooled());
+}
+
+Volume Builder::finishPooled()
 {
   Impl& m = *impl;
   if (!m.blockMode && m.nextZ != m.geometry.dims[2])

@@ -818,7 +818,7 @@ Volume decode(const uint8_t* data, size_t size, const Frame& frame, const Parall
     part->addTo(whole, values);
     part.reset();
   }
-  Volume v = whole.finish();
+  Volume v = whole.finishPooled();
   if (v.labels.size() != values.size())
     throw CorruptStream("the coded volume's label table holds a label no block has");
   return v;

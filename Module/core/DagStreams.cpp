@@ -216,6 +216,8 @@ const char* streamName(uint32_t stream)
 
 Encoded encode(const Volume& v)
 {
+  if (v.form != DagForm::Pooled)
+    throw std::logic_error("dagstreams::encode writes the pooled form (svdag::pooled)");
   Encoded out;
   Streams& s = out.streams;
   const ScalarType type = v.scalarType;

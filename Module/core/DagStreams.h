@@ -71,7 +71,8 @@ struct Shape
   uint64_t leafCount = 0;
 };
 
-// The streams of a valid volume and the shape of the volume they decode to: the same voxels in
+// The streams of a valid volume in the pooled form (std::logic_error for a compact one: files
+// store the pooled form, Compact.h) and the shape of the volume they decode to: the same voxels in
 // the same blocks, its pools renumbered in first-use order (for a built volume: the volume
 // itself, bit for bit), each reference field as wide as the volume's or as the renumbered
 // references need, leaves no reference reaches left out.

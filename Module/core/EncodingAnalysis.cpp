@@ -1,4 +1,5 @@
 #include "svdag/EncodingAnalysis.h"
+#include "svdag/Compact.h"
 
 #include "Bits.h"
 #include "svdag/LeafSymmetry.h"
@@ -224,10 +225,22 @@ uint32_t sharedRefWidth(uint64_t targetUnits, uint32_t transformBits)
 }
 } // namespace
 
-EncodingAnalysis analyzeEncoding(const Volume& v, const ParallelFor& parallel)
+EncodingAnalysis analyzeEncoding(const Volume& volume, const ParallelFor& parallel)
 {
+  // The DAG's nodes and references, each node once (the compact form's chained and inline
+  // children are nodes of their pools there).
+  const Volume v = pooled(volume);
   EncodingAnalysis a;
   a.labelTableBytes = v.memory().labels;
+  {
+    const MemoryUsage held =
+      volume.form == DagForm::Compact ? volume.memory() : compacted(volume).memory();
+    a[EncodingLevel::Blocks].compactBytes = held.blocks;
+    a[EncodingLevel::Roots].compactBytes = held.roots;
+    a[EncodingLevel::Mids].compactBytes = held.mids;
+    a[EncodingLevel::Leaves].compactBytes = held.leaves;
+  }
+
   const Symmetries sym;
 
   const uint64_t leafCount = v.leaves.size();

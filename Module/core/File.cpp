@@ -1,5 +1,6 @@
 // The .svdag file format (the layout is documented in svdag/File.h and IO/README.md).
 #include "svdag/File.h"
+#include "svdag/Compact.h"
 
 #include "Bits.h"
 #include "CodedVolume.h"
@@ -737,8 +738,34 @@ Volume readDagStreams(const SectionEntry& e, const uint8_t* data, uint64_t label
 }
 } // namespace
 
-std::vector<uint8_t> serialize(const Volume& v, const WriteOptions& options, const ParallelFor& parallel)
+namespace
 {
+// What a file stores: the pooled form of the volume (Compact.h), made in `holder` when the
+// volume is compact (a pooled one is not copied).
+const Volume& pooledForWriting(const Volume& volume, Volume& holder)
+{
+  if (volume.form == DagForm::Pooled)
+    return volume;
+  try
+  {
+    holder = pooled(volume);
+    return holder;
+  }
+  catch (const std::bad_alloc&)
+  {
+    throw;
+  }
+  catch (const std::exception& e)
+  {
+    throw FileError(std::string("cannot write an inconsistent volume: ") + e.what());
+  }
+}
+} // namespace
+
+std::vector<uint8_t> serialize(const Volume& volume, const WriteOptions& options, const ParallelFor& parallel)
+{
+  Volume holder;
+  const Volume& v = pooledForWriting(volume, holder);
   EncodedFile file = encode(v, options, parallel);
   std::vector<uint8_t> bytes = std::move(file.header);
   size_t total = bytes.size();
@@ -754,7 +781,10 @@ std::vector<uint8_t> serialize(const Volume& v, const WriteOptions& options, con
   return bytes;
 }
 
-Volume deserialize(const uint8_t* data, size_t size, const ParallelFor& parallel)
+namespace
+{
+// The file's volume in the pooled form it stores, validated.
+Volume deserializePooled(const uint8_t* data, size_t size, const ParallelFor& parallel)
 {
   if (size < FileMagicSize || std::memcmp(data, FileMagic, FileMagicSize) != 0)
     throw FileError("not an .svdag file (the file does not start with the .svdag signature)");
@@ -937,10 +967,19 @@ Volume deserialize(const uint8_t* data, size_t size, const ParallelFor& parallel
   }
   return v;
 }
+} // namespace
 
-void writeFile(const Volume& volume, const std::string& path, const WriteOptions& options,
+Volume deserialize(const uint8_t* data, size_t size, const ParallelFor& parallel)
+{
+  // The validated pooled form, in the compact form a volume in memory holds.
+  return compacted(deserializePooled(data, size, parallel));
+}
+
+void writeFile(const Volume& compactOrPooled, const std::string& path, const WriteOptions& options,
   const ParallelFor& parallel)
 {
+  Volume holder;
+  const Volume& volume = pooledForWriting(compactOrPooled, holder);
   const EncodedFile file = encode(volume, options, parallel);
   // A temporary name next to the target: a failed write leaves the old file (if any) intact.
   const std::string temporary = path + ".partial";

@@ -237,7 +237,7 @@ void occupancyInBox(const Volume& v, uint64_t blockIndex, const std::array<uint3
   const uint32_t rootRef = v.block(blockIndex).root;
   const bool rootInv = layout::refComplement(rootRef);
   const uint64_t rootOff = layout::refTarget(rootRef);
-  const uint32_t rootHeader = Volume::nodeHeader(v.roots, rootOff);
+  const uint32_t rootHeader = Volume::nodeHeaderAndFlags(v.roots, rootOff);
   const uint32_t rootMixed = layout::nodeMixedMask(rootHeader);
   for (uint32_t o = 0; o < 8; ++o)
   {
@@ -250,11 +250,9 @@ void occupancyInBox(const Volume& v, uint64_t blockIndex, const std::array<uint3
       fillClipped(out, x0, y0, z0, 8, lo, hi, full ? 1 : 0);
       continue;
     }
-    const uint32_t midRef =
-      Volume::nodeChildRef(v.roots, rootOff, layout::childRank(rootMixed, o), v.widths.midRefBits);
-    const bool midInv = rootInv != layout::refComplement(midRef);
-    const uint64_t midOff = layout::refTarget(midRef);
-    const uint32_t midHeader = Volume::nodeHeader(v.mids, midOff);
+    bool midInv = rootInv;
+    const uint64_t midOff = v.midOfRoot(rootOff, rootHeader, layout::childRank(rootMixed, o), midInv);
+    const uint32_t midHeader = Volume::nodeHeaderAndFlags(v.mids, midOff);
     const uint32_t midMixed = layout::nodeMixedMask(midHeader);
     for (uint32_t c = 0; c < 8; ++c)
     {
@@ -268,10 +266,8 @@ void occupancyInBox(const Volume& v, uint64_t blockIndex, const std::array<uint3
         fillClipped(out, x1, y1, z1, 4, lo, hi, full ? 1 : 0);
         continue;
       }
-      const uint32_t leafRef =
-        Volume::nodeChildRef(v.mids, midOff, layout::childRank(midMixed, c), v.widths.leafRefBits);
-      uint64_t mask = v.leafMask(leafRef);
-      if (midInv != layout::refComplement(leafRef))
+      uint64_t mask = v.leafOfMid(midOff, midHeader, layout::childRank(midMixed, c));
+      if (midInv)
         mask = ~mask;
       const uint32_t xa = std::max(x1, lo[0]), xb = std::min(x1 + 3, hi[0]);
       const uint32_t ya = std::max(y1, lo[1]), yb = std::min(y1 + 3, hi[1]);

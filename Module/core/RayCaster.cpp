@@ -64,6 +64,8 @@ struct UnitRay
 RayCaster::RayCaster(const Volume& v)
   : volume(v)
 {
+  if (v.form != DagForm::Compact)
+    throw std::invalid_argument("RayCaster reads the compact form of a volume (svdag::compacted)");
 }
 
 RayHit RayCaster::cast(const Ray& input, Lod lod) const

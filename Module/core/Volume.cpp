@@ -1,5 +1,7 @@
 #include "svdag/Volume.h"
+#include "svdag/Compact.h"
 #include "svdag/LeafSymmetry.h"
+#include "svdag/Traversal.h"
 
 #include "Bits.h"
 
@@ -195,33 +197,61 @@ uint64_t Volume::nodeBits(const std::vector<uint32_t>& stream, uint64_t offset, 
   return layout::NODE_HEADER_BITS + uint64_t(layout::bitCount(mixed)) * refBits;
 }
 
+uint32_t Volume::nodeHeaderAndFlags(const std::vector<uint32_t>& stream, uint64_t offset)
+{
+  return readBits(stream, offset, layout::COMPACT_HEADER_BITS);
+}
+
+uint64_t Volume::midOfRoot(uint64_t rootOffset, uint32_t header, uint32_t rank, bool& inverted) const
+{
+  if (form == DagForm::Compact)
+  {
+    const traversal::Streams streams{ roots.data(), mids.data(), leaves.data() };
+    return traversal::svdagRootChildMid(
+      streams, rootOffset, header, rank, widths.midRefBits, widths.leafRefBits, inverted);
+  }
+  const uint32_t ref = nodeChildRef(roots, rootOffset, rank, widths.midRefBits);
+  inverted = inverted != layout::refComplement(ref);
+  return layout::refTarget(ref);
+}
+
+uint64_t Volume::leafOfMid(uint64_t midOffset, uint32_t header, uint32_t rank) const
+{
+  if (form == DagForm::Compact)
+  {
+    const traversal::Streams streams{ roots.data(), mids.data(), leaves.data() };
+    uint32_t symmetry = 0;
+    const glm::uvec2 m =
+      traversal::svdagMidChildLeaf(streams, midOffset, header, rank, widths.leafRefBits, symmetry);
+    return leafUnderSymmetry(symmetry, uint64_t(m.x) | (uint64_t(m.y) << 32));
+  }
+  const uint32_t ref = nodeChildRef(mids, midOffset, rank, widths.leafRefBits);
+  const uint64_t mask = leafMask(ref);
+  return layout::refComplement(ref) ? ~mask : mask;
+}
+
 bool Volume::occupied(uint64_t blockIndex, uint32_t x, uint32_t y, uint32_t z) const
 {
-  uint32_t ref = block(blockIndex).root;
-  bool inverted = false;
-  // Root (16^3) and mid (8^3) levels share the node encoding.
-  const std::vector<uint32_t>* streams[2] = { &roots, &mids };
-  const uint32_t refBits[2] = { widths.midRefBits, widths.leafRefBits };
-  uint32_t half = layout::CELL_SIZE / 2;
-  for (int level = 0; level < 2; ++level, half /= 2)
-  {
-    inverted ^= layout::refComplement(ref);
-    const uint64_t offset = layout::refTarget(ref);
-    const uint32_t header = nodeHeader(*streams[level], offset);
-    const uint32_t o = layout::octant(x, y, z, half);
-    x %= half;
-    y %= half;
-    z %= half;
-    const uint32_t mixed = layout::nodeMixedMask(header);
-    if (!(mixed & (1u << o)))
-    {
-      return ((layout::nodeFullMask(header) >> o) & 1u) != inverted;
-    }
-    ref = nodeChildRef(*streams[level], offset, layout::childRank(mixed, o), refBits[level]);
-  }
-  inverted ^= layout::refComplement(ref);
-  const uint64_t stored = leaves[layout::leafRefIndex(ref)];
-  return ((stored >> layout::leafSymmetryBit(layout::leafRefSymmetry(ref), x, y, z)) & 1u) != inverted;
+  const uint32_t rootRef = block(blockIndex).root;
+  bool inverted = layout::refComplement(rootRef);
+  const uint64_t rootOffset = layout::refTarget(rootRef);
+  const uint32_t rootHeader = nodeHeaderAndFlags(roots, rootOffset);
+  const uint32_t o8 = layout::octant(x, y, z, layout::MID_SIZE);
+  const uint32_t rootMixed = layout::nodeMixedMask(rootHeader);
+  if (!(rootMixed & (1u << o8)))
+    return ((layout::nodeFullMask(rootHeader) >> o8) & 1u) != inverted;
+  const uint64_t midOffset = midOfRoot(rootOffset, rootHeader, layout::childRank(rootMixed, o8), inverted);
+  const uint32_t midHeader = nodeHeaderAndFlags(mids, midOffset);
+  x %= layout::MID_SIZE;
+  y %= layout::MID_SIZE;
+  z %= layout::MID_SIZE;
+  const uint32_t o4 = layout::octant(x, y, z, layout::LEAF_SIZE);
+  const uint32_t midMixed = layout::nodeMixedMask(midHeader);
+  if (!(midMixed & (1u << o4)))
+    return ((layout::nodeFullMask(midHeader) >> o4) & 1u) != inverted;
+  const uint64_t mask = leafOfMid(midOffset, midHeader, layout::childRank(midMixed, o4));
+  const uint32_t bit = layout::leafBit(x % layout::LEAF_SIZE, y % layout::LEAF_SIZE, z % layout::LEAF_SIZE);
+  return ((mask >> bit) & 1u) != inverted;
 }
 
 uint64_t Volume::leafMask(uint32_t leafRef) const
@@ -235,41 +265,29 @@ void Volume::leafMasks(uint64_t blockIndex, uint64_t* out) const
   const uint32_t rootRef = block(blockIndex).root;
   const bool rootInv = layout::refComplement(rootRef);
   const uint64_t rootOff = layout::refTarget(rootRef);
-  const uint32_t rootHeader = nodeHeader(roots, rootOff);
+  const uint32_t rootHeader = nodeHeaderAndFlags(roots, rootOff);
   const uint32_t rootMixed = layout::nodeMixedMask(rootHeader);
   for (uint32_t o = 0; o < 8; ++o)
   {
     const uint32_t lx0 = (o & 1) * 2, ly0 = ((o >> 1) & 1) * 2, lz0 = ((o >> 2) & 1) * 2;
     uint32_t midHeader = 0, midMixed = 0;
     uint64_t midOff = 0;
-    bool midInv = false;
+    bool midInv = rootInv;
     if (rootMixed & (1u << o))
     {
-      const uint32_t midRef =
-        nodeChildRef(roots, rootOff, layout::childRank(rootMixed, o), widths.midRefBits);
-      midInv = rootInv != layout::refComplement(midRef);
-      midOff = layout::refTarget(midRef);
-      midHeader = nodeHeader(mids, midOff);
+      midOff = midOfRoot(rootOff, rootHeader, layout::childRank(rootMixed, o), midInv);
+      midHeader = nodeHeaderAndFlags(mids, midOff);
       midMixed = layout::nodeMixedMask(midHeader);
     }
     else // the octant is one solid or empty child: every leaf of it alike
-    {
-      midInv = rootInv;
       midHeader = ((layout::nodeFullMask(rootHeader) >> o) & 1u) ? 0xFF00u : 0u;
-    }
     for (uint32_t c = 0; c < 8; ++c)
     {
       const uint32_t leaf =
         (lx0 + (c & 1)) + 4 * (ly0 + ((c >> 1) & 1)) + 16 * (lz0 + ((c >> 2) & 1));
       uint64_t mask;
       if (midMixed & (1u << c))
-      {
-        const uint32_t leafRef =
-          nodeChildRef(mids, midOff, layout::childRank(midMixed, c), widths.leafRefBits);
-        mask = leafMask(leafRef);
-        if (layout::refComplement(leafRef))
-          mask = ~mask;
-      }
+        mask = leafOfMid(midOff, midHeader, layout::childRank(midMixed, c));
       else
         mask = ((layout::nodeFullMask(midHeader) >> c) & 1u) ? ~uint64_t(0) : 0;
       out[leaf] = midInv ? ~mask : mask;
@@ -1017,6 +1035,12 @@ void checkLabelTotals(const Volume& v, const LabelTotals& totals)
 
 void Volume::validate() const
 {
+  if (form == DagForm::Compact)
+  {
+    // Checked in the pooled form, which pooled() reads with every bound checked.
+    pooled(*this).validate();
+    return;
+  }
   checkHeader(*this);
   checkLabelTable(*this);
   NodePool mids = checkMidPool(*this);
@@ -1028,6 +1052,8 @@ void Volume::validate() const
 
 void Volume::deriveBoundsAndValidate()
 {
+  if (form != DagForm::Pooled)
+    throw std::logic_error("Volume: validation reads the pooled form (svdag::pooled)");
   checkHeader(*this);
   NodePool mids = checkMidPool(*this);
   NodePool roots = checkRootPool(*this, mids);
@@ -1068,8 +1094,8 @@ bool Volume::operator==(const Volume& o) const
 {
   return geometry == o.geometry && scalarType == o.scalarType && background == o.background &&
     labels == o.labels && widths == o.widths && blockCount == o.blockCount && blocks == o.blocks &&
-    rootCount == o.rootCount && roots == o.roots && midCount == o.midCount && mids == o.mids &&
-    leaves == o.leaves;
+    form == o.form && rootCount == o.rootCount && roots == o.roots && midCount == o.midCount &&
+    mids == o.mids && leaves == o.leaves;
 }
 
 } // namespace svdag

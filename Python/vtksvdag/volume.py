@@ -695,7 +695,12 @@ class SegmentationVolume:
         Returns
         -------
         pandas.DataFrame
-            One row per level, indexed by ``level``. Today's encoding: ``nodes``, ``bits``,
+            One row per level, indexed by ``level``. ``compact_bytes``: the level's bytes in
+            the compact form the volume holds in memory (they sum with the label table to
+            ``stats()["bytes_total"]``: leaves referenced once are inline in their mid node,
+            mids referenced once chained after their root's base offset). The other columns
+            describe the pooled form (every node once in its pool, as ``.svdag`` files store
+            it): ``nodes``, ``bits``,
             ``bytes``, ``header_bits`` (masks, or the blocks' cell, bounds and label fields),
             ``reference_bits``, ``references`` and ``reference_width`` (the level's references
             into the next one). Skew of the references *into* the level:
@@ -781,9 +786,11 @@ class SegmentationVolume:
         -------
         dict
             ``dims`` [x, y, z], ``voxels``, ``labels`` (stored labels, background excluded),
-            ``blocks``, ``dag_nodes`` (= ``root_nodes + mid_nodes + leaves``, unique nodes),
-            ``bytes_blocks``, ``bytes_dag``, ``bytes_labels``, ``bytes_total`` (the sum: what
-            a renderer holds besides its BVH), ``raw_bytes_32`` (voxels * 4),
+            ``blocks``, ``dag_nodes`` (= ``root_nodes + mid_nodes + leaves``, unique nodes;
+            ``leaves`` counts the 4^3 leaves stored apart, those several mid nodes share: in
+            memory a leaf used once is inline in its mid node),
+            ``bytes_blocks``, ``bytes_dag``, ``bytes_labels``, ``bytes_total`` (the sum, in the
+            compact form held in memory: what a renderer holds besides its BVH), ``raw_bytes_32`` (voxels * 4),
             ``bits_per_voxel`` (8 * bytes_total / voxels), ``compression_ratio_32``
             (raw_bytes_32 / bytes_total), ``build_seconds`` (None when not known, e.g. for a
             volume loaded from a ``.svdag`` file), ``load_seconds`` (None unless loaded from a

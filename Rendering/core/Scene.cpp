@@ -96,6 +96,8 @@ Scene::Scene(Context& context, std::shared_ptr<const Volume> volume, Backend bac
   if (backend != Backend::RayTracing && backend != Backend::Compute)
     throw std::invalid_argument("a Scene is built for the rt or the compute backend");
   const Volume& v = *this->Source;
+  if (v.form != DagForm::Compact)
+    throw std::invalid_argument("a Scene renders the compact form of a volume (svdag::compacted)");
   const auto bounds = worldBounds(v.geometry);
   for (int a = 0; a < 3; ++a)
     this->Reference[a] = (bounds[2 * a] + bounds[2 * a + 1]) / 2;

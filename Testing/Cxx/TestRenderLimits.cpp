@@ -15,6 +15,7 @@
 // Three 64 x 64 views: B close up (second BLAS), A's end face close up (first BLAS), and through
 // B onto A (rays that pass both BLAS: the nearest hit must win across instances).
 #include "BigVolume.h"
+#include "svdag/Compact.h"
 
 #include <svdag/Decoder.h>
 #include <svdag/RayCaster.h>
@@ -190,8 +191,9 @@ TEST(RenderLimits, TwoBlasAtTheDriversPrimitiveLimitMatchTheCpuRayCaster)
   phase("device limits");
 
   const Layout layout = layoutFor(limit);
-  auto volume = std::make_shared<const svdag::Volume>(bigvolume::bigVolume(layout.cells, LabelCount,
-    [&](int32_t x, int32_t y, int32_t z) { return cellBlock(layout, x, y, z); }));
+  // Made pooled, rendered compact (Compact.h).
+  auto volume = std::make_shared<const svdag::Volume>(svdag::compacted(bigvolume::bigVolume(
+    layout.cells, LabelCount, [&](int32_t x, int32_t y, int32_t z) { return cellBlock(layout, x, y, z); })));
   const uint64_t bBlocks = uint64_t(BSide) * BSide * BSide;
   ASSERT_EQ(volume->blockCount, limit + bBlocks);
   phase("generate");

@@ -86,10 +86,13 @@ public:
   // std::logic_error once slabs or volumes were added.
   void startBlocks();
 
-  // Packs the pools with their final field widths. Throws std::logic_error if slabs are missing
-  // (not for blocks added by addBlock: cells without a block are empty),
-  // std::length_error if a pool outgrows the 32-bit reference widths.
+  // Packs the pools with their final field widths, in the compact form (Compact.h) that a
+  // volume in memory holds. Throws std::logic_error if slabs are missing (not for blocks added
+  // by addBlock: cells without a block are empty), std::length_error if a pool outgrows the
+  // 32-bit reference widths.
   Volume finish();
+  // The same in the pooled form, as files store it.
+  Volume finishPooled();
 
   // Compresses a whole volume held in memory (x fastest).
   static Volume build(const Geometry& geometry, ScalarType type, const void* data,

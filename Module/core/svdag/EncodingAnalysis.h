@@ -26,7 +26,11 @@ const char* encodingLevelName(EncodingLevel level); // "blocks", "roots", "mids"
 
 struct LevelAnalysis
 {
-  // What this level stores today (Layout.h).
+  // Bytes of this level in the compact form a volume in memory holds (Compact.h; what
+  // Volume::memory counts). Everything else describes the pooled form: every node once in its
+  // pool, a reference per mixed child, as files store it.
+  uint64_t compactBytes = 0;
+  // What this level stores in the pooled form (Layout.h).
   uint64_t nodes = 0;          // block records or distinct nodes
   uint64_t bits = 0;           // packed bits of the level's records or stream
   uint64_t headerBits = 0;     // everything but child references (node masks; block fields)

@@ -29,6 +29,23 @@
  * complement are stored once (the builder keeps the smallest mask of the class), and the child's
  * voxel (x, y, z) is the stored leaf's voxel at leafSymmetryBit(symmetry, x, y, z).
  *
+ * That is the POOLED form: every node stored once in its level's pool and reached through a
+ * reference. Builders and files use it (files store it; readers validate it). A volume in memory
+ * (what the data object holds, the traversal reads and the GPU renders) is in the COMPACT form,
+ * in which a child referenced once in the whole volume costs no reference (most leaves and nearly
+ * all mids are referenced once; svdag::compacted and svdag::pooled convert):
+ *
+ *   mid   [mixed:8][full:8][inline:k][leaf refs: (k - n) x CHILD_REF_BITS][masks: n x 64]
+ *   root  [mixed:8][full:8][chained:k][base: CHILD_REF_BITS - 1, iff n > 0][mid refs: (k - n) x CHILD_REF_BITS]
+ *
+ * with k = popcount(mixed) flag bits, one per mixed child in child order, n of them set. A mid's
+ * inline child is its 64-bit occupancy mask, stored after the references in child order, as the
+ * node sees it (no symmetry, no complement: the node's own complement still applies). A root's
+ * chained children are mid nodes that lie one after another in the MID stream from bit offset
+ * `base`, in child order, each as the root sees it (no complement); a mid node's length follows
+ * from its first 16 + k bits (compactMidBits). References to shared leaves and mids are as above.
+ * The flags start at bit 16, so one read of COMPACT_HEADER_BITS holds a node's masks and flags.
+ *
  * Blocks are fixed-width bit-packed records, sorted by cell index (and, as the builder writes
  * them, by label within a cell; readers accept any order within a cell):
  *   [cell:CELL_BITS][minX:4][minY:4][minZ:4][maxX:4][maxY:4][maxZ:4][label:LABEL_BITS][root:ROOT_REF_BITS]
@@ -47,7 +64,13 @@ namespace svdag
 namespace layout
 {
 typedef uint32_t uint;
-inline uint bitCount(uint v) { return uint(__builtin_popcount(v)); }
+// Arithmetic, not __builtin_popcount: built for any x86-64 (no POPCNT), that is a libgcc call.
+inline uint bitCount(uint v)
+{
+  v = v - ((v >> 1) & 0x55555555u);
+  v = (v & 0x33333333u) + ((v >> 2) & 0x33333333u);
+  return (((v + (v >> 4)) & 0x0F0F0F0Fu) * 0x01010101u) >> 24;
+}
 #define SVDAG_CONST constexpr uint
 #define SVDAG_FN inline
 #define SVDAG_NS svdag::layout::
@@ -124,6 +147,57 @@ SVDAG_FN uint leafSymmetryBit(uint s, uint x, uint y, uint z)
 }
 
 SVDAG_FN uint lowMask(uint width) { return width >= 32u ? 0xFFFFFFFFu : ((1u << width) - 1u); }
+
+/* The compact form (above). `header` is a node's first COMPACT_HEADER_BITS bits; `rank` a mixed
+ * child's rank (childRank). Offsets are in bits from the node's start. */
+SVDAG_CONST COMPACT_HEADER_BITS = 24u; // masks and up to 8 flags
+/* The k flag bits: bit r set = the mixed child of rank r is inline (mids) or chained (roots). */
+SVDAG_FN uint compactFlags(uint header)
+{
+  return (header >> NODE_HEADER_BITS) & lowMask(bitCount(nodeMixedMask(header)));
+}
+SVDAG_FN bool compactChildFlagged(uint header, uint rank) { return ((compactFlags(header) >> rank) & 1u) != 0u; }
+/* Flagged children before rank `rank`. */
+SVDAG_FN uint compactFlaggedBefore(uint header, uint rank)
+{
+  return bitCount(compactFlags(header) & lowMask(rank));
+}
+SVDAG_FN uint compactPrefixBits(uint header) { return NODE_HEADER_BITS + bitCount(nodeMixedMask(header)); }
+SVDAG_FN uint compactReferencedCount(uint header)
+{
+  return bitCount(nodeMixedMask(header)) - bitCount(compactFlags(header));
+}
+/* Mid node: the reference of an unflagged child, the mask of an inline one, the node's length. */
+SVDAG_FN uint compactMidRefOffset(uint header, uint rank, uint leafRefBits)
+{
+  return compactPrefixBits(header) + (rank - compactFlaggedBefore(header, rank)) * leafRefBits;
+}
+SVDAG_FN uint compactMidMaskOffset(uint header, uint rank, uint leafRefBits)
+{
+  return compactPrefixBits(header) + compactReferencedCount(header) * leafRefBits +
+    compactFlaggedBefore(header, rank) * 64u;
+}
+SVDAG_FN uint compactMidBits(uint header, uint leafRefBits)
+{
+  return compactPrefixBits(header) + compactReferencedCount(header) * leafRefBits +
+    bitCount(compactFlags(header)) * 64u;
+}
+/* Root node: the base of its chained mids (when it has any), the reference of an unflagged
+ * child, the node's length. */
+SVDAG_FN uint compactRootBaseBits(uint header, uint midRefBits)
+{
+  return compactFlags(header) != 0u ? midRefBits - 1u : 0u;
+}
+SVDAG_FN uint compactRootRefOffset(uint header, uint rank, uint midRefBits)
+{
+  return compactPrefixBits(header) + compactRootBaseBits(header, midRefBits) +
+    (rank - compactFlaggedBefore(header, rank)) * midRefBits;
+}
+SVDAG_FN uint compactRootBits(uint header, uint midRefBits)
+{
+  return compactPrefixBits(header) + compactRootBaseBits(header, midRefBits) +
+    compactReferencedCount(header) * midRefBits;
+}
 
 #ifdef __cplusplus
 } // namespace layout

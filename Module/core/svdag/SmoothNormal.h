@@ -68,33 +68,24 @@ SVDAG_FN uvec2 svdagLeafMaskAt(SVDAG_STREAMS_PARAM uint rootRef, uint midRefBits
   bool inverted = refComplement(rootRef);
   SVDAG_OFFSET_T offset = SVDAG_OFFSET_T(refTarget(rootRef));
   uint header;
-  SVDAG_READ_BITS(header, SVDAG_ROOT_STREAM, offset, NODE_HEADER_BITS);
+  SVDAG_READ_BITS(header, SVDAG_ROOT_STREAM, offset, COMPACT_HEADER_BITS);
   uint o8 = octant(leaf.x, leaf.y, leaf.z, MID_SIZE);
   uint mixed = nodeMixedMask(header);
   if ((mixed & (1u << o8)) == 0u)
     return ((nodeFullMask(header) >> o8) & 1u) != (inverted ? 1u : 0u) ? uvec2(0xFFFFFFFFu)
                                                                       : uvec2(0u);
-  uint ref;
-  SVDAG_READ_BITS(ref, SVDAG_ROOT_STREAM,
-    offset + SVDAG_OFFSET_T(NODE_HEADER_BITS) +
-      SVDAG_OFFSET_T(childRank(mixed, o8)) * SVDAG_OFFSET_T(midRefBits),
-    midRefBits);
-  inverted = inverted != refComplement(ref);
-  offset = SVDAG_OFFSET_T(refTarget(ref));
-  SVDAG_READ_BITS(header, SVDAG_MID_STREAM, offset, NODE_HEADER_BITS);
+  offset = svdagRootChildMid(SVDAG_STREAMS_ARG offset, header, childRank(mixed, o8), midRefBits,
+    leafRefBits, inverted);
+  SVDAG_READ_BITS(header, SVDAG_MID_STREAM, offset, COMPACT_HEADER_BITS);
   uvec3 inMid = leaf % uvec3(MID_SIZE);
   uint o4 = octant(inMid.x, inMid.y, inMid.z, LEAF_SIZE);
   mixed = nodeMixedMask(header);
   if ((mixed & (1u << o4)) == 0u)
     return ((nodeFullMask(header) >> o4) & 1u) != (inverted ? 1u : 0u) ? uvec2(0xFFFFFFFFu)
                                                                       : uvec2(0u);
-  SVDAG_READ_BITS(ref, SVDAG_MID_STREAM,
-    offset + SVDAG_OFFSET_T(NODE_HEADER_BITS) +
-      SVDAG_OFFSET_T(childRank(mixed, o4)) * SVDAG_OFFSET_T(leafRefBits),
-    leafRefBits);
-  uvec2 mask = SVDAG_LEAF(leafRefIndex(ref));
-  symmetry = leafRefSymmetry(ref);
-  return (inverted != refComplement(ref)) ? ~mask : mask;
+  uvec2 mask = svdagMidChildLeaf(SVDAG_STREAMS_ARG offset, header, childRank(mixed, o4),
+    leafRefBits, symmetry);
+  return inverted ? ~mask : mask;
 }
 
 /* The kernel w(t) = (1 - t^2/R^2)^2 and its derivative, zero for |t| >= R. */

@@ -221,6 +221,63 @@ SVDAG_FN bool svdagLeafBit(uvec2 mask, uint bit)
   return ((word >> (bit & 31u)) & 1u) != 0u;
 }
 
+/* The compact form's child lookups (Layout.h), shared by the traversal, the smooth normals and
+ * the C++ readers. `header` is the node's first COMPACT_HEADER_BITS bits, `rank` the mixed
+ * child's rank.
+ *
+ * The mid node of a root's child: its offset in the mid stream; `inverted` (the root's
+ * polarity on entry) becomes the mid's. A chained mid is found by stepping over the chained
+ * siblings before it (at most 7 header reads). */
+SVDAG_FN SVDAG_OFFSET_T svdagRootChildMid(SVDAG_STREAMS_PARAM SVDAG_OFFSET_T rootOffset,
+  uint header, uint rank, uint midRefBits, uint leafRefBits, SVDAG_INOUT(bool) inverted)
+{
+  if (!compactChildFlagged(header, rank))
+  {
+    uint ref;
+    SVDAG_READ_BITS(ref, SVDAG_ROOT_STREAM,
+      rootOffset + SVDAG_OFFSET_T(compactRootRefOffset(header, rank, midRefBits)), midRefBits);
+    inverted = inverted != refComplement(ref);
+    return SVDAG_OFFSET_T(refTarget(ref));
+  }
+  uint base;
+  SVDAG_READ_BITS(base, SVDAG_ROOT_STREAM, rootOffset + SVDAG_OFFSET_T(compactPrefixBits(header)),
+    midRefBits - 1u);
+  SVDAG_OFFSET_T at = SVDAG_OFFSET_T(base);
+  uint before = compactFlaggedBefore(header, rank);
+  for (uint sibling = 0u; sibling < 7u; ++sibling)
+  {
+    if (sibling >= before)
+      break;
+    uint siblingHeader;
+    SVDAG_READ_BITS(siblingHeader, SVDAG_MID_STREAM, at, COMPACT_HEADER_BITS);
+    at += SVDAG_OFFSET_T(compactMidBits(siblingHeader, leafRefBits));
+  }
+  return at;
+}
+
+/* The occupancy of a mid node's child as the mid node sees it (the caller applies the mid's
+ * polarity): voxel (x, y, z) is bit leafSymmetryBit(symmetry, x, y, z) of the returned mask
+ * (x = bits 0..31, y = bits 32..63). */
+SVDAG_FN uvec2 svdagMidChildLeaf(SVDAG_STREAMS_PARAM SVDAG_OFFSET_T midOffset, uint header,
+  uint rank, uint leafRefBits, SVDAG_INOUT(uint) symmetry)
+{
+  uvec2 mask;
+  if (compactChildFlagged(header, rank))
+  {
+    SVDAG_OFFSET_T at = midOffset + SVDAG_OFFSET_T(compactMidMaskOffset(header, rank, leafRefBits));
+    SVDAG_READ_BITS(mask.x, SVDAG_MID_STREAM, at, 32u);
+    SVDAG_READ_BITS(mask.y, SVDAG_MID_STREAM, at + SVDAG_OFFSET_T(32u), 32u);
+    symmetry = 0u; // the identity
+    return mask;
+  }
+  uint ref;
+  SVDAG_READ_BITS(ref, SVDAG_MID_STREAM,
+    midOffset + SVDAG_OFFSET_T(compactMidRefOffset(header, rank, leafRefBits)), leafRefBits);
+  mask = SVDAG_LEAF(leafRefIndex(ref));
+  symmetry = leafRefSymmetry(ref);
+  return refComplement(ref) ? ~mask : mask;
+}
+
 /* Intersects one block with a ray in cell-local coordinates.
  *   lo, hi       inclusive cell-local voxel bounds of the block (Layout.h block record)
  *   rootRef      the block's root reference (offset << 1 | complement)
@@ -280,7 +337,7 @@ SVDAG_FN SvdagBlockHit svdagIntersectBlock(SVDAG_STREAMS_PARAM uvec3 lo, uvec3 h
   bool rootInverted = refComplement(rootRef);
   SVDAG_OFFSET_T rootOffset = SVDAG_OFFSET_T(refTarget(rootRef));
   uint rootHeader;
-  SVDAG_READ_BITS(rootHeader, SVDAG_ROOT_STREAM, rootOffset, NODE_HEADER_BITS);
+  SVDAG_READ_BITS(rootHeader, SVDAG_ROOT_STREAM, rootOffset, COMPACT_HEADER_BITS);
 
   // Cache of the last mid node (by root octant) and leaf (by octant * 8 + mid child) read.
   uint cachedOctant = 8u;
@@ -308,14 +365,10 @@ SVDAG_FN SvdagBlockHit svdagIntersectBlock(SVDAG_STREAMS_PARAM uvec3 lo, uvec3 h
     {
       if (cachedOctant != octant8)
       {
-        uint midRef;
-        SVDAG_READ_BITS(midRef, SVDAG_ROOT_STREAM,
-          rootOffset + SVDAG_OFFSET_T(NODE_HEADER_BITS) +
-            SVDAG_OFFSET_T(childRank(rootMixed, octant8)) * SVDAG_OFFSET_T(midRefBits),
-          midRefBits);
-        midInverted = rootInverted != refComplement(midRef);
-        midOffset = SVDAG_OFFSET_T(refTarget(midRef));
-        SVDAG_READ_BITS(midHeader, SVDAG_MID_STREAM, midOffset, NODE_HEADER_BITS);
+        midInverted = rootInverted;
+        midOffset = svdagRootChildMid(SVDAG_STREAMS_ARG rootOffset, rootHeader,
+          childRank(rootMixed, octant8), midRefBits, leafRefBits, midInverted);
+        SVDAG_READ_BITS(midHeader, SVDAG_MID_STREAM, midOffset, COMPACT_HEADER_BITS);
         cachedOctant = octant8;
       }
       uvec3 inMid = local % uvec3(MID_SIZE);
@@ -331,14 +384,9 @@ SVDAG_FN SvdagBlockHit svdagIntersectBlock(SVDAG_STREAMS_PARAM uvec3 lo, uvec3 h
         uint leafKey = octant8 * 8u + octant4;
         if (cachedLeaf != leafKey)
         {
-          uint leafRef;
-          SVDAG_READ_BITS(leafRef, SVDAG_MID_STREAM,
-            midOffset + SVDAG_OFFSET_T(NODE_HEADER_BITS) +
-              SVDAG_OFFSET_T(childRank(midMixed, octant4)) * SVDAG_OFFSET_T(leafRefBits),
-            leafRefBits);
-          leafMask = SVDAG_LEAF(leafRefIndex(leafRef));
-          leafSymmetry = leafRefSymmetry(leafRef);
-          if (midInverted != refComplement(leafRef))
+          leafMask = svdagMidChildLeaf(SVDAG_STREAMS_ARG midOffset, midHeader,
+            childRank(midMixed, octant4), leafRefBits, leafSymmetry);
+          if (midInverted)
             leafMask = ~leafMask;
           cachedLeaf = leafKey;
         }

@@ -104,6 +104,13 @@ struct MemoryUsage
   uint64_t total() const { return blocks + dag() + labels; }
 };
 
+// Which form of the DAG a volume's streams hold (Layout.h, Compact.h).
+enum class DagForm : uint8_t
+{
+  Pooled, // builders and files; what validate() checks
+  Compact // in memory: the data object, the traversal, the renderers
+};
+
 class Volume
 {
 public:
@@ -112,6 +119,7 @@ public:
   uint64_t background = 0;
   std::vector<LabelInfo> labels; // sorted by value
   FieldWidths widths;
+  DagForm form = DagForm::Pooled;
 
   uint64_t blockCount = 0;
   std::vector<uint32_t> blocks; // bit-packed records, padded by one word
@@ -122,15 +130,24 @@ public:
   std::vector<uint64_t> leaves; // canonical 4^3 masks (bit 0 clear), one per symmetry class
 
   Block block(uint64_t i) const;
-  // Header (mixed | full << 8) and child reference of the node at a bit offset in a stream.
+  // Pooled form: header (mixed | full << 8) and child reference of the node at a bit offset in
+  // a stream.
   static uint32_t nodeHeader(const std::vector<uint32_t>& stream, uint64_t offset);
   static uint32_t nodeChildRef(const std::vector<uint32_t>& stream, uint64_t offset,
     uint32_t childRank, uint32_t refBits);
   // The occupancy a leaf reference names (Layout.h): its stored leaf under its symmetry, the
   // complement bit not applied. The reference must name an existing leaf.
   uint64_t leafMask(uint32_t leafRef) const;
-  // Bit length of the node at `offset` in a stream whose child references are refBits wide.
+  // Pooled form: bit length of the node at `offset` in a stream whose child references are
+  // refBits wide.
   static uint64_t nodeBits(const std::vector<uint32_t>& stream, uint64_t offset, uint32_t refBits);
+  // Either form: the first COMPACT_HEADER_BITS of the node at a bit offset (masks, and the
+  // compact form's flags); the mid node of a root's mixed child of rank `rank` (its offset;
+  // `inverted`, the root's polarity, becomes the mid's); the occupancy of a mid's mixed child as
+  // the mid sees it (symmetry and the child's complement applied, the mid's polarity not).
+  static uint32_t nodeHeaderAndFlags(const std::vector<uint32_t>& stream, uint64_t offset);
+  uint64_t midOfRoot(uint64_t rootOffset, uint32_t header, uint32_t rank, bool& inverted) const;
+  uint64_t leafOfMid(uint64_t midOffset, uint32_t header, uint32_t rank) const;
 
   // Occupancy of cell-local voxel (x, y, z) in 0..15 of block i.
   bool occupied(uint64_t blockIndex, uint32_t x, uint32_t y, uint32_t z) const;
@@ -146,6 +163,7 @@ public:
   int64_t findLabel(uint64_t value) const;
 
   MemoryUsage memory() const;
+  // A compact volume is checked in its pooled form (Compact.h).
   // Throws std::runtime_error naming the first inconsistency, so that no accessor, decoder or
   // traversal can read out of bounds or disagree with another: widths wide enough; the label
   // table valid for the type, sorted, unique, without the background, bounds inside the volume;
@@ -158,7 +176,8 @@ public:
   // Sets each block's bounds to the tight box of its occupancy and each label's voxel count and
   // bounds to what its blocks hold, then checks the rest as validate() does (a .svdag 4.0 file
   // stores neither: they are derived from the same once-per-node summaries that validate() uses).
-  // Throws std::runtime_error as validate() does, and for a label no block holds.
+  // Throws std::runtime_error as validate() does, and for a label no block holds; pooled form
+  // only (std::logic_error otherwise).
   void deriveBoundsAndValidate();
   bool operator==(const Volume& o) const;
 };

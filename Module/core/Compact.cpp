@@ -1,0 +1,512 @@
+#include "svdag/Compact.h"
+
+#include "Bits.h"
+#include "svdag/LeafSymmetry.h"
+
+#include <algorithm>
+#include <stdexcept>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+namespace svdag
+{
+namespace
+{
+using bits::bitWidth;
+using bits::readBits;
+using bits::writeBits;
+
+constexpr uint32_t Unplaced = 0xFFFFFFFFu;
+
+// One node of either form, as a list of children: the masks, and per mixed child (child order)
+// its target (a node index, or for inline leaves nothing) and its reference bits.
+struct Children
+{
+  uint32_t header = 0; // mixed | full << 8
+  uint32_t count = 0;  // mixed children
+  uint32_t first = 0;  // into the level's child arrays
+};
+
+void fail(const std::string& what)
+{
+  throw std::runtime_error("compact volume: " + what);
+}
+
+// The width of a reference to `largest` with `extra` more bits (complement, symmetry).
+uint32_t refWidth(uint64_t largest, uint32_t extra)
+{
+  const uint32_t width = bitWidth(largest) + extra;
+  if (width > 32)
+    throw std::length_error("SVDAG too large: a reference needs more than 32 bits");
+  return width;
+}
+
+std::vector<uint32_t> wordsFor(uint64_t bits)
+{
+  if (bits > 0xFFFFFFFFull)
+    throw std::length_error("SVDAG too large: a node stream exceeds 2^32 bits");
+  return std::vector<uint32_t>(size_t((bits + 31) / 32 + 1), 0u);
+}
+
+void writeField(std::vector<uint32_t>& words, uint64_t& at, uint32_t width, uint64_t value)
+{
+  writeBits(words, at, width, uint32_t(value));
+  at += width;
+}
+
+// The index of the node starting at a bit offset of a node stream (either form), in constant
+// time, -1 where none starts: nodes take 16 bits at least, so offset / 16 tells them apart (a table of 4 bytes per 16 bits).
+class NodeAt
+{
+public:
+  explicit NodeAt(const std::vector<uint64_t>& starts)
+    : Starts(starts)
+    , Slots(size_t(starts.empty() ? 0 : (starts.back() >> 4) + 1), Unplaced)
+  {
+    for (size_t i = 0; i < starts.size(); ++i)
+      this->Slots[size_t(starts[i] >> 4)] = uint32_t(i);
+  }
+  int64_t operator()(uint64_t offset) const
+  {
+    const size_t slot = size_t(offset >> 4);
+    if (slot >= this->Slots.size() || this->Slots[slot] == Unplaced ||
+      this->Starts[this->Slots[slot]] != offset)
+      return -1;
+    return int64_t(this->Slots[slot]);
+  }
+
+private:
+  const std::vector<uint64_t>& Starts;
+  std::vector<uint32_t> Slots;
+};
+
+// Rewrites the block records' root references (old root offset -> its index by oldRootAt -> new
+// offset) at the new root reference width, record by record: in place where the records do
+// not grow (a volume of billions of blocks is not copied), else into a new stream.
+template <typename Lookup>
+void rewriteBlocks(Volume& v, uint32_t rootRefBits, const Lookup& oldRootAt,
+  const std::vector<uint64_t>& newStarts)
+{
+  const FieldWidths old = v.widths;
+  FieldWidths& w = v.widths;
+  w.rootRefBits = rootRefBits;
+  const uint32_t oldBits = old.blockBits(), recordBits = w.blockBits();
+  std::vector<uint32_t> grown;
+  if (recordBits > oldBits)
+    grown.assign(size_t((v.blockCount * recordBits + 31) / 32 + 1), 0u);
+  std::vector<uint32_t>& out = recordBits > oldBits ? grown : v.blocks;
+  const uint32_t rootAt = layout::blockRootOffset(old.cellBits, old.labelBits);
+  for (uint64_t i = 0; i < v.blockCount; ++i)
+  {
+    // Everything before the root reference is the same fields at the same widths.
+    const uint64_t from = i * oldBits;
+    const uint32_t root = readBits(v.blocks, from + rootAt, old.rootRefBits);
+    const int64_t k = oldRootAt(layout::refTarget(root));
+    if (k < 0)
+      fail("a block's root reference is not at a root node");
+    const uint32_t widths[3] = { old.cellBits, layout::BLOCK_BOUNDS_BITS, old.labelBits };
+    uint32_t fields[3];
+    uint64_t at = from;
+    for (uint32_t f = 0; f < 3; ++f)
+    {
+      fields[f] = readBits(v.blocks, at, widths[f]);
+      at += widths[f];
+    }
+    uint64_t to = i * recordBits;
+    for (uint32_t f = 0; f < 3; ++f)
+    {
+      bits::replaceBits(out, to, widths[f], fields[f]);
+      to += widths[f];
+    }
+    bits::replaceBits(out, to, rootRefBits, uint32_t((newStarts[size_t(k)] << 1) | (root & 1u)));
+  }
+  if (recordBits > oldBits)
+    v.blocks = std::move(grown);
+  else // the words past the last record are zero, as a stream's padding is
+    v.blocks.resize(size_t((v.blockCount * recordBits + 31) / 32 + 1));
+  if (!v.blocks.empty())
+  {
+    const uint64_t used = v.blockCount * recordBits;
+    if (used % 32)
+      v.blocks[size_t(used / 32)] &= layout::lowMask(uint32_t(used % 32));
+    std::fill(v.blocks.begin() + std::ptrdiff_t((used + 31) / 32), v.blocks.end(), 0u);
+  }
+}
+
+uint32_t complementedNode(uint32_t header)
+{
+  const uint32_t mixed = layout::nodeMixedMask(header);
+  return mixed | ((~(mixed | layout::nodeFullMask(header)) & 0xFFu) << 8);
+}
+
+} // namespace
+
+Volume compacted(Volume v)
+{
+  if (v.form == DagForm::Compact)
+    return v;
+  // The pooled nodes and their references.
+  std::vector<Children> mids(size_t(v.midCount)), roots(size_t(v.rootCount));
+  std::vector<uint32_t> leafRefs, midRefs; // per mixed child: the pooled reference
+  std::vector<uint64_t> midStarts(mids.size()), rootStarts(roots.size());
+  {
+    // One pass over each stream: a node's header, then its references in order, kept as
+    // `child(reference)` gives them.
+    auto walk = [](const std::vector<uint32_t>& stream, std::vector<Children>& nodes,
+                  std::vector<uint64_t>& starts, uint32_t refBits, std::vector<uint32_t>& refs,
+                  const auto& child) {
+      refs.reserve(nodes.size() * 4);
+      uint64_t at = 0;
+      for (size_t i = 0; i < nodes.size(); ++i)
+      {
+        Children& n = nodes[i];
+        starts[i] = at;
+        n.header = readBits(stream, at, layout::NODE_HEADER_BITS);
+        n.count = layout::bitCount(layout::nodeMixedMask(n.header));
+        n.first = uint32_t(refs.size());
+        at += layout::NODE_HEADER_BITS;
+        for (uint32_t r = 0; r < n.count; ++r, at += refBits)
+          refs.push_back(child(readBits(stream, at, refBits)));
+      }
+    };
+    walk(v.mids, mids, midStarts, v.widths.leafRefBits, leafRefs, [](uint32_t ref) { return ref; });
+    const NodeAt midAt(midStarts);
+    walk(v.roots, roots, rootStarts, v.widths.midRefBits, midRefs, [&](uint32_t ref) {
+      const int64_t mid = midAt(layout::refTarget(ref));
+      if (mid < 0)
+        fail("a root's reference is not at a mid node");
+      return uint32_t(mid << 1) | (ref & 1u);
+    });
+  }
+  std::vector<uint32_t> leafUses(v.leaves.size()), midUses(mids.size());
+  for (uint32_t ref : leafRefs)
+    ++leafUses[layout::leafRefIndex(ref)];
+  for (uint32_t ref : midRefs)
+    ++midUses[ref >> 1];
+
+  // Order: roots as the blocks first use them; at a root's first use its chained mids (one
+  // after another, child order), then its shared mids not placed yet.
+  std::vector<uint32_t> rootOrder, midOrder;
+  std::vector<uint8_t> midFold; // chained mids: written complemented (as the root sees them)
+  const NodeAt rootAt(rootStarts);
+  {
+    std::vector<uint8_t> rootPlaced(roots.size()), midPlaced(mids.size());
+    const uint32_t recordBits = v.widths.blockBits();
+    const uint32_t rootField = layout::blockRootOffset(v.widths.cellBits, v.widths.labelBits);
+    for (uint64_t b = 0; b < v.blockCount; ++b)
+    {
+      const uint32_t ref = readBits(v.blocks, b * recordBits + rootField, v.widths.rootRefBits);
+      const int64_t root = rootAt(layout::refTarget(ref));
+      if (root < 0)
+        fail("a block's root reference is not at a root node");
+      if (rootPlaced[size_t(root)])
+        continue;
+      rootPlaced[size_t(root)] = 1;
+      rootOrder.push_back(uint32_t(root));
+      const Children& n = roots[size_t(root)];
+      for (int pass = 0; pass < 2; ++pass)
+        for (uint32_t r = 0; r < n.count; ++r)
+        {
+          const uint32_t ref = midRefs[n.first + r];
+          const uint32_t mid = ref >> 1;
+          if ((midUses[mid] == 1) != (pass == 0) || midPlaced[mid])
+            continue;
+          midPlaced[mid] = 1;
+          midOrder.push_back(mid);
+          midFold.push_back(uint8_t(pass == 0 ? (ref & 1u) : 0u));
+        }
+    }
+    if (rootOrder.size() != roots.size() || midOrder.size() != mids.size())
+      fail("a node no block reaches");
+  }
+
+  // Shared leaves numbered by first use in the new mid order.
+  std::vector<uint32_t> leafIndex(v.leaves.size(), Unplaced);
+  std::vector<uint64_t> sharedLeaves;
+  for (uint32_t mid : midOrder)
+    for (uint32_t r = 0; r < mids[mid].count; ++r)
+    {
+      const uint32_t leaf = layout::leafRefIndex(leafRefs[mids[mid].first + r]);
+      if (leafUses[leaf] > 1 && leafIndex[leaf] == Unplaced)
+      {
+        leafIndex[leaf] = uint32_t(sharedLeaves.size());
+        sharedLeaves.push_back(v.leaves[leaf]);
+      }
+    }
+  const uint32_t leafRefBits =
+    refWidth(sharedLeaves.empty() ? 0 : sharedLeaves.size() - 1, 1 + layout::LEAF_SYMMETRY_BITS);
+
+  // The mid stream.
+  auto flagsOf = [](const std::vector<uint32_t>& uses, const std::vector<uint32_t>& refs,
+                   const Children& n, uint32_t shift) {
+    uint32_t flags = 0;
+    for (uint32_t r = 0; r < n.count; ++r)
+      if (uses[refs[n.first + r] >> shift] == 1)
+        flags |= 1u << r;
+    return flags;
+  };
+  std::vector<uint32_t> midFlags(mids.size());
+  std::vector<uint64_t> newMidStart(mids.size());
+  uint64_t midBits = 0, lastMid = 0;
+  for (uint32_t mid : midOrder)
+  {
+    midFlags[mid] = flagsOf(leafUses, leafRefs, mids[mid], layout::LEAF_SYMMETRY_BITS + 1);
+    lastMid = newMidStart[mid] = midBits;
+    midBits += layout::compactMidBits(mids[mid].header | (midFlags[mid] << 16), leafRefBits);
+  }
+  std::vector<uint32_t> midStream = wordsFor(midBits);
+  for (size_t k = 0; k < midOrder.size(); ++k)
+  {
+    const Children& n = mids[midOrder[k]];
+    const uint32_t flags = midFlags[midOrder[k]];
+    const bool fold = midFold[k] != 0;
+    uint64_t at = newMidStart[midOrder[k]];
+    writeField(midStream, at, layout::NODE_HEADER_BITS, fold ? complementedNode(n.header) : n.header);
+    writeField(midStream, at, n.count, flags);
+    for (uint32_t r = 0; r < n.count; ++r)
+      if (!((flags >> r) & 1u))
+      {
+        const uint32_t ref = leafRefs[n.first + r];
+        writeField(midStream, at, leafRefBits,
+          layout::leafRef(leafIndex[layout::leafRefIndex(ref)], layout::leafRefSymmetry(ref),
+            (ref & 1u) ^ (fold ? 1u : 0u)));
+      }
+    for (uint32_t r = 0; r < n.count; ++r)
+      if ((flags >> r) & 1u)
+      {
+        const uint32_t ref = leafRefs[n.first + r];
+        uint64_t mask = v.leafMask(ref);
+        if ((ref & 1u) != (fold ? 1u : 0u))
+          mask = ~mask;
+        writeField(midStream, at, 32, mask);
+        writeField(midStream, at, 32, mask >> 32);
+      }
+  }
+  const uint32_t midRefBits = refWidth(lastMid, 1);
+
+  // The root stream.
+  std::vector<uint64_t> newRootStart(roots.size());
+  std::vector<uint32_t> rootFlags(roots.size());
+  uint64_t rootBits = 0, lastRoot = 0;
+  for (uint32_t root : rootOrder)
+  {
+    rootFlags[root] = flagsOf(midUses, midRefs, roots[root], 1);
+    lastRoot = newRootStart[root] = rootBits;
+    rootBits += layout::compactRootBits(roots[root].header | (rootFlags[root] << 16), midRefBits);
+  }
+  std::vector<uint32_t> rootStream = wordsFor(rootBits);
+  for (uint32_t root : rootOrder)
+  {
+    const Children& n = roots[root];
+    const uint32_t flags = rootFlags[root];
+    uint64_t at = newRootStart[root];
+    writeField(rootStream, at, layout::NODE_HEADER_BITS, n.header);
+    writeField(rootStream, at, n.count, flags);
+    if (flags)
+    {
+      const uint32_t first = uint32_t(__builtin_ctz(flags));
+      writeField(rootStream, at, midRefBits - 1, newMidStart[midRefs[n.first + first] >> 1]);
+    }
+    for (uint32_t r = 0; r < n.count; ++r)
+      if (!((flags >> r) & 1u))
+      {
+        const uint32_t ref = midRefs[n.first + r];
+        writeField(rootStream, at, midRefBits, (newMidStart[ref >> 1] << 1) | (ref & 1u));
+      }
+  }
+
+  v.mids = std::move(midStream);
+  v.roots = std::move(rootStream);
+  v.leaves = std::move(sharedLeaves);
+  v.widths.leafRefBits = leafRefBits;
+  v.widths.midRefBits = midRefBits;
+  rewriteBlocks(v, refWidth(lastRoot, 1), rootAt, newRootStart);
+  v.form = DagForm::Compact;
+  return v;
+}
+
+Volume pooled(Volume v)
+{
+  if (v.form == DagForm::Pooled)
+    return v;
+  const uint64_t midTotal = v.mids.empty() ? 0 : uint64_t(v.mids.size() - 1) * 32;
+  const uint64_t rootTotal = v.roots.empty() ? 0 : uint64_t(v.roots.size() - 1) * 32;
+  if (v.widths.leafRefBits < 1 + layout::LEAF_SYMMETRY_BITS || v.widths.leafRefBits > 32 ||
+    v.widths.midRefBits < 1 || v.widths.midRefBits > 32)
+    fail("reference widths out of range");
+
+  // Leaves: the shared ones keep their index; inline ones are stored canonical, once per class.
+  std::vector<uint64_t> leaves = v.leaves;
+  std::unordered_map<uint64_t, uint32_t> leafOf;
+  for (size_t i = 0; i < leaves.size(); ++i)
+    leafOf.emplace(leaves[i], uint32_t(i));
+  auto inlineRef = [&](uint64_t mask) {
+    if (mask == 0 || mask == ~uint64_t(0))
+      fail("an inline leaf is not mixed");
+    const CanonicalLeaf c = canonicalLeaf(mask);
+    const auto found = leafOf.emplace(c.stored, uint32_t(leaves.size()));
+    if (found.second)
+      leaves.push_back(c.stored);
+    return layout::leafRef(found.first->second, c.symmetry, c.complement);
+  };
+
+  // Mids, in stream order, each made canonical again.
+  std::vector<Children> mids(size_t(v.midCount));
+  std::vector<uint32_t> leafRefs;
+  std::vector<uint64_t> midStarts(mids.size());
+  std::vector<uint8_t> midFlipped(mids.size());
+  uint64_t at = 0;
+  for (size_t i = 0; i < mids.size(); ++i)
+  {
+    if (v.mids.empty() || at + layout::COMPACT_HEADER_BITS > midTotal + 32) // padding: the rest
+      fail("mid stream shorter than its node count");
+    const uint32_t header = Volume::nodeHeaderAndFlags(v.mids, at);
+    const uint64_t bits = layout::compactMidBits(header, v.widths.leafRefBits);
+    if (at + bits > midTotal)
+      fail("a mid node runs past the end of its stream");
+    Children& n = mids[i];
+    midStarts[i] = at;
+    n.header = header & 0xFFFFu;
+    n.count = layout::bitCount(layout::nodeMixedMask(header));
+    n.first = uint32_t(leafRefs.size());
+    if (n.header & (n.header >> 8) & 0xFFu)
+      fail("a mid node's child is both mixed and full");
+    for (uint32_t r = 0; r < n.count; ++r)
+    {
+      if (layout::compactChildFlagged(header, r))
+      {
+        const uint64_t m = at + layout::compactMidMaskOffset(header, r, v.widths.leafRefBits);
+        leafRefs.push_back(inlineRef(uint64_t(readBits(v.mids, m, 32)) |
+          (uint64_t(readBits(v.mids, m + 32, 32)) << 32)));
+      }
+      else
+      {
+        const uint32_t ref = readBits(v.mids,
+          at + layout::compactMidRefOffset(header, r, v.widths.leafRefBits), v.widths.leafRefBits);
+        if (layout::leafRefIndex(ref) >= v.leaves.size() ||
+          layout::leafRefSymmetry(ref) >= layout::LEAF_SYMMETRY_COUNT)
+          fail("a leaf reference is out of range");
+        leafRefs.push_back(ref);
+      }
+    }
+    // Canonical: the first child empty, or mixed through a reference without the complement.
+    const bool firstFull = (n.header >> 8) & 1u;
+    const bool firstComplemented = (n.header & 1u) && (leafRefs[n.first] & 1u);
+    if (firstFull || firstComplemented)
+    {
+      n.header = complementedNode(n.header);
+      for (uint32_t r = 0; r < n.count; ++r)
+        leafRefs[n.first + r] ^= 1u;
+      midFlipped[i] = 1;
+    }
+    at += bits;
+  }
+  if (midTotal - at >= 32)
+    fail("mid stream longer than its nodes");
+
+  // Roots, in stream order: chained mids become references to them.
+  const NodeAt midAt(midStarts);
+  std::vector<Children> roots(size_t(v.rootCount));
+  std::vector<uint32_t> midRefs; // mid index << 1 | complement
+  std::vector<uint64_t> rootStarts(roots.size());
+  at = 0;
+  for (size_t i = 0; i < roots.size(); ++i)
+  {
+    if (v.roots.empty() || at + layout::COMPACT_HEADER_BITS > rootTotal + 32)
+      fail("root stream shorter than its node count");
+    const uint32_t header = Volume::nodeHeaderAndFlags(v.roots, at);
+    const uint64_t bits = layout::compactRootBits(header, v.widths.midRefBits);
+    if (at + bits > rootTotal)
+      fail("a root node runs past the end of its stream");
+    Children& n = roots[i];
+    rootStarts[i] = at;
+    n.header = header & 0xFFFFu;
+    n.count = layout::bitCount(layout::nodeMixedMask(header));
+    n.first = uint32_t(midRefs.size());
+    if (n.header & (n.header >> 8) & 0xFFu)
+      fail("a root node's child is both mixed and full");
+    int64_t chained = -1;
+    if (layout::compactFlags(header))
+    {
+      chained = midAt(readBits(v.roots, at + layout::compactPrefixBits(header),
+        v.widths.midRefBits - 1));
+      if (chained < 0)
+        fail("a root's chained mids do not start at a mid node");
+    }
+    for (uint32_t r = 0; r < n.count; ++r)
+    {
+      int64_t mid;
+      uint32_t complement = 0;
+      if (layout::compactChildFlagged(header, r))
+      {
+        mid = chained++;
+        if (size_t(mid) >= mids.size())
+          fail("a root's chained mids run past the last mid node");
+      }
+      else
+      {
+        const uint32_t ref = readBits(v.roots,
+          at + layout::compactRootRefOffset(header, r, v.widths.midRefBits), v.widths.midRefBits);
+        mid = midAt(layout::refTarget(ref));
+        if (mid < 0)
+          fail("a root's reference is not at a mid node");
+        complement = ref & 1u;
+      }
+      midRefs.push_back(uint32_t(mid << 1) | (complement ^ midFlipped[size_t(mid)]));
+    }
+    at += bits;
+  }
+  if (rootTotal - at >= 32)
+    fail("root stream longer than its nodes");
+
+  // The pooled streams, nodes in the same order.
+  const uint32_t leafRefBits =
+    refWidth(leaves.empty() ? 0 : leaves.size() - 1, 1 + layout::LEAF_SYMMETRY_BITS);
+  std::vector<uint64_t> newMidStart(mids.size());
+  uint64_t midBits = 0;
+  for (size_t i = 0; i < mids.size(); ++i)
+  {
+    newMidStart[i] = midBits;
+    midBits += layout::NODE_HEADER_BITS + uint64_t(mids[i].count) * leafRefBits;
+  }
+  const uint32_t midRefBits = refWidth(mids.empty() ? 0 : newMidStart.back(), 1);
+  std::vector<uint32_t> midStream = wordsFor(midBits);
+  for (size_t i = 0; i < mids.size(); ++i)
+  {
+    uint64_t to = newMidStart[i];
+    writeField(midStream, to, layout::NODE_HEADER_BITS, mids[i].header);
+    for (uint32_t r = 0; r < mids[i].count; ++r)
+      writeField(midStream, to, leafRefBits, leafRefs[mids[i].first + r]);
+  }
+  std::vector<uint64_t> newRootStart(roots.size());
+  uint64_t rootBits = 0;
+  for (size_t i = 0; i < roots.size(); ++i)
+  {
+    newRootStart[i] = rootBits;
+    rootBits += layout::NODE_HEADER_BITS + uint64_t(roots[i].count) * midRefBits;
+  }
+  std::vector<uint32_t> rootStream = wordsFor(rootBits);
+  for (size_t i = 0; i < roots.size(); ++i)
+  {
+    uint64_t to = newRootStart[i];
+    writeField(rootStream, to, layout::NODE_HEADER_BITS, roots[i].header);
+    for (uint32_t r = 0; r < roots[i].count; ++r)
+    {
+      const uint32_t ref = midRefs[roots[i].first + r];
+      writeField(rootStream, to, midRefBits, (newMidStart[ref >> 1] << 1) | (ref & 1u));
+    }
+  }
+
+  v.mids = std::move(midStream);
+  v.roots = std::move(rootStream);
+  v.leaves = std::move(leaves);
+  v.widths.leafRefBits = leafRefBits;
+  v.widths.midRefBits = midRefBits;
+  rewriteBlocks(v, refWidth(roots.empty() ? 0 : newRootStart.back(), 1), NodeAt(rootStarts),
+    newRootStart);
+  v.form = DagForm::Pooled;
+  return v;
+}
+
+} // namespace svdag
