@@ -56,37 +56,56 @@ void writeField(std::vector<uint32_t>& words, uint64_t& at, uint32_t width, uint
 }
 
 // The index of the node starting at a bit offset of a node stream (either form), in constant
-// time, -1 where none starts: nodes take 16 bits at least, so offset / 16 tells them apart (a table of 4 bytes per 16 bits).
+// time, -1 where none starts. Nodes take 16 bits at least, so offset / 16 tells them apart: a
+// bit per 16 bits of stream marks where nodes start, and a count per 64 of those bits ranks them
+// (about a tenth of the stream's own size).
 class NodeAt
 {
 public:
-  explicit NodeAt(const std::vector<uint64_t>& starts)
+  explicit NodeAt(const std::vector<uint32_t>& starts)
     : Starts(starts)
-    , Slots(size_t(starts.empty() ? 0 : (starts.back() >> 4) + 1), Unplaced)
   {
-    for (size_t i = 0; i < starts.size(); ++i)
-      this->Slots[size_t(starts[i] >> 4)] = uint32_t(i);
+    const size_t slots = starts.empty() ? 0 : size_t(starts.back() >> 4) + 1;
+    this->Marks.assign(slots / 64 + 1, 0);
+    for (uint32_t start : starts)
+      this->Marks[start >> 10] |= uint64_t(1) << ((start >> 4) & 63);
+    this->Ranks.resize(this->Marks.size());
+    uint32_t rank = 0;
+    for (size_t w = 0; w < this->Marks.size(); ++w)
+    {
+      this->Ranks[w] = rank;
+      rank += bits::popcount64(this->Marks[w]);
+    }
   }
   int64_t operator()(uint64_t offset) const
   {
-    const size_t slot = size_t(offset >> 4);
-    if (slot >= this->Slots.size() || this->Slots[slot] == Unplaced ||
-      this->Starts[this->Slots[slot]] != offset)
+    const uint64_t word = offset >> 10;
+    const uint32_t bit = uint32_t((offset >> 4) & 63);
+    if (word >= this->Marks.size() || !((this->Marks[size_t(word)] >> bit) & 1u))
       return -1;
-    return int64_t(this->Slots[slot]);
+    const uint32_t index = this->Ranks[size_t(word)] +
+      bits::popcount64(this->Marks[size_t(word)] & ((uint64_t(1) << bit) - 1));
+    return this->Starts[index] == offset ? int64_t(index) : -1;
   }
 
 private:
-  const std::vector<uint64_t>& Starts;
-  std::vector<uint32_t> Slots;
+  const std::vector<uint32_t>& Starts;
+  std::vector<uint64_t> Marks;
+  std::vector<uint32_t> Ranks;
 };
+
+// A count of uses that stops at 2: once or more than once is all the compact form asks.
+void countUse(std::vector<uint8_t>& uses, size_t i)
+{
+  uses[i] = uint8_t(uses[i] < 2 ? uses[i] + 1 : 2);
+}
 
 // Rewrites the block records' root references (old root offset -> its index by oldRootAt -> new
 // offset) at the new root reference width, record by record: in place where the records do
 // not grow (a volume of billions of blocks is not copied), else into a new stream.
 template <typename Lookup>
 void rewriteBlocks(Volume& v, uint32_t rootRefBits, const Lookup& oldRootAt,
-  const std::vector<uint64_t>& newStarts)
+  const std::vector<uint32_t>& newStarts)
 {
   const FieldWidths old = v.widths;
   FieldWidths& w = v.widths;
@@ -119,7 +138,7 @@ void rewriteBlocks(Volume& v, uint32_t rootRefBits, const Lookup& oldRootAt,
       bits::replaceBits(out, to, widths[f], fields[f]);
       to += widths[f];
     }
-    bits::replaceBits(out, to, rootRefBits, uint32_t((newStarts[size_t(k)] << 1) | (root & 1u)));
+    bits::replaceBits(out, to, rootRefBits, uint32_t((uint64_t(newStarts[size_t(k)]) << 1) | (root & 1u)));
   }
   if (recordBits > oldBits)
     v.blocks = std::move(grown);
@@ -149,19 +168,19 @@ Volume compacted(Volume v)
   // The pooled nodes and their references.
   std::vector<Children> mids(size_t(v.midCount)), roots(size_t(v.rootCount));
   std::vector<uint32_t> leafRefs, midRefs; // per mixed child: the pooled reference
-  std::vector<uint64_t> midStarts(mids.size()), rootStarts(roots.size());
+  std::vector<uint32_t> midStarts(mids.size()), rootStarts(roots.size());
   {
     // One pass over each stream: a node's header, then its references in order, kept as
     // `child(reference)` gives them.
     auto walk = [](const std::vector<uint32_t>& stream, std::vector<Children>& nodes,
-                  std::vector<uint64_t>& starts, uint32_t refBits, std::vector<uint32_t>& refs,
+                  std::vector<uint32_t>& starts, uint32_t refBits, std::vector<uint32_t>& refs,
                   const auto& child) {
       refs.reserve(nodes.size() * 4);
       uint64_t at = 0;
       for (size_t i = 0; i < nodes.size(); ++i)
       {
         Children& n = nodes[i];
-        starts[i] = at;
+        starts[i] = uint32_t(at);
         n.header = readBits(stream, at, layout::NODE_HEADER_BITS);
         n.count = layout::bitCount(layout::nodeMixedMask(n.header));
         n.first = uint32_t(refs.size());
@@ -179,11 +198,14 @@ Volume compacted(Volume v)
       return uint32_t(mid << 1) | (ref & 1u);
     });
   }
-  std::vector<uint32_t> leafUses(v.leaves.size()), midUses(mids.size());
+  // What is read is held above: the pooled node streams go before the compact ones are made.
+  std::vector<uint32_t>().swap(v.mids);
+  std::vector<uint32_t>().swap(v.roots);
+  std::vector<uint8_t> leafUses(v.leaves.size()), midUses(mids.size());
   for (uint32_t ref : leafRefs)
-    ++leafUses[layout::leafRefIndex(ref)];
+    countUse(leafUses, layout::leafRefIndex(ref));
   for (uint32_t ref : midRefs)
-    ++midUses[ref >> 1];
+    countUse(midUses, ref >> 1);
 
   // Order: roots as the blocks first use them; at a root's first use its chained mids (one
   // after another, child order), then its shared mids not placed yet.
@@ -238,22 +260,23 @@ Volume compacted(Volume v)
     refWidth(sharedLeaves.empty() ? 0 : sharedLeaves.size() - 1, 1 + layout::LEAF_SYMMETRY_BITS);
 
   // The mid stream.
-  auto flagsOf = [](const std::vector<uint32_t>& uses, const std::vector<uint32_t>& refs,
+  auto flagsOf = [](const std::vector<uint8_t>& uses, const std::vector<uint32_t>& refs,
                    const Children& n, uint32_t shift) {
-    uint32_t flags = 0;
+    uint8_t flags = 0;
     for (uint32_t r = 0; r < n.count; ++r)
       if (uses[refs[n.first + r] >> shift] == 1)
-        flags |= 1u << r;
+        flags = uint8_t(flags | (1u << r));
     return flags;
   };
-  std::vector<uint32_t> midFlags(mids.size());
-  std::vector<uint64_t> newMidStart(mids.size());
+  std::vector<uint8_t> midFlags(mids.size());
+  std::vector<uint32_t> newMidStart(mids.size());
   uint64_t midBits = 0, lastMid = 0;
   for (uint32_t mid : midOrder)
   {
     midFlags[mid] = flagsOf(leafUses, leafRefs, mids[mid], layout::LEAF_SYMMETRY_BITS + 1);
-    lastMid = newMidStart[mid] = midBits;
-    midBits += layout::compactMidBits(mids[mid].header | (midFlags[mid] << 16), leafRefBits);
+    lastMid = midBits;
+    newMidStart[mid] = uint32_t(midBits);
+    midBits += layout::compactMidBits(mids[mid].header | (uint32_t(midFlags[mid]) << 16), leafRefBits);
   }
   std::vector<uint32_t> midStream = wordsFor(midBits);
   for (size_t k = 0; k < midOrder.size(); ++k)
@@ -284,16 +307,19 @@ Volume compacted(Volume v)
       }
   }
   const uint32_t midRefBits = refWidth(lastMid, 1);
+  std::vector<uint32_t>().swap(leafRefs);
+  std::vector<Children>().swap(mids);
 
   // The root stream.
-  std::vector<uint64_t> newRootStart(roots.size());
-  std::vector<uint32_t> rootFlags(roots.size());
+  std::vector<uint32_t> newRootStart(roots.size());
+  std::vector<uint8_t> rootFlags(roots.size());
   uint64_t rootBits = 0, lastRoot = 0;
   for (uint32_t root : rootOrder)
   {
     rootFlags[root] = flagsOf(midUses, midRefs, roots[root], 1);
-    lastRoot = newRootStart[root] = rootBits;
-    rootBits += layout::compactRootBits(roots[root].header | (rootFlags[root] << 16), midRefBits);
+    lastRoot = rootBits;
+    newRootStart[root] = uint32_t(rootBits);
+    rootBits += layout::compactRootBits(roots[root].header | (uint32_t(rootFlags[root]) << 16), midRefBits);
   }
   std::vector<uint32_t> rootStream = wordsFor(rootBits);
   for (uint32_t root : rootOrder)
@@ -312,7 +338,7 @@ Volume compacted(Volume v)
       if (!((flags >> r) & 1u))
       {
         const uint32_t ref = midRefs[n.first + r];
-        writeField(rootStream, at, midRefBits, (newMidStart[ref >> 1] << 1) | (ref & 1u));
+        writeField(rootStream, at, midRefBits, (uint64_t(newMidStart[ref >> 1]) << 1) | (ref & 1u));
       }
   }
 
@@ -335,6 +361,8 @@ Volume pooled(Volume v)
   if (v.widths.leafRefBits < 1 + layout::LEAF_SYMMETRY_BITS || v.widths.leafRefBits > 32 ||
     v.widths.midRefBits < 1 || v.widths.midRefBits > 32)
     fail("reference widths out of range");
+  if (midTotal > 0xFFFFFFFFull || rootTotal > 0xFFFFFFFFull)
+    fail("a node stream longer than 2^32 bits");
 
   // Leaves: the shared ones keep their index; inline ones are stored canonical, once per class.
   std::vector<uint64_t> leaves = v.leaves;
@@ -354,7 +382,7 @@ Volume pooled(Volume v)
   // Mids, in stream order, each made canonical again.
   std::vector<Children> mids(size_t(v.midCount));
   std::vector<uint32_t> leafRefs;
-  std::vector<uint64_t> midStarts(mids.size());
+  std::vector<uint32_t> midStarts(mids.size());
   std::vector<uint8_t> midFlipped(mids.size());
   uint64_t at = 0;
   for (size_t i = 0; i < mids.size(); ++i)
@@ -366,7 +394,7 @@ Volume pooled(Volume v)
     if (at + bits > midTotal)
       fail("a mid node runs past the end of its stream");
     Children& n = mids[i];
-    midStarts[i] = at;
+    midStarts[i] = uint32_t(at);
     n.header = header & 0xFFFFu;
     n.count = layout::bitCount(layout::nodeMixedMask(header));
     n.first = uint32_t(leafRefs.size());
@@ -409,7 +437,7 @@ Volume pooled(Volume v)
   const NodeAt midAt(midStarts);
   std::vector<Children> roots(size_t(v.rootCount));
   std::vector<uint32_t> midRefs; // mid index << 1 | complement
-  std::vector<uint64_t> rootStarts(roots.size());
+  std::vector<uint32_t> rootStarts(roots.size());
   at = 0;
   for (size_t i = 0; i < roots.size(); ++i)
   {
@@ -420,7 +448,7 @@ Volume pooled(Volume v)
     if (at + bits > rootTotal)
       fail("a root node runs past the end of its stream");
     Children& n = roots[i];
-    rootStarts[i] = at;
+    rootStarts[i] = uint32_t(at);
     n.header = header & 0xFFFFu;
     n.count = layout::bitCount(layout::nodeMixedMask(header));
     n.first = uint32_t(midRefs.size());
@@ -463,11 +491,11 @@ Volume pooled(Volume v)
   // The pooled streams, nodes in the same order.
   const uint32_t leafRefBits =
     refWidth(leaves.empty() ? 0 : leaves.size() - 1, 1 + layout::LEAF_SYMMETRY_BITS);
-  std::vector<uint64_t> newMidStart(mids.size());
+  std::vector<uint32_t> newMidStart(mids.size());
   uint64_t midBits = 0;
   for (size_t i = 0; i < mids.size(); ++i)
   {
-    newMidStart[i] = midBits;
+    newMidStart[i] = uint32_t(midBits);
     midBits += layout::NODE_HEADER_BITS + uint64_t(mids[i].count) * leafRefBits;
   }
   const uint32_t midRefBits = refWidth(mids.empty() ? 0 : newMidStart.back(), 1);
@@ -479,11 +507,11 @@ Volume pooled(Volume v)
     for (uint32_t r = 0; r < mids[i].count; ++r)
       writeField(midStream, to, leafRefBits, leafRefs[mids[i].first + r]);
   }
-  std::vector<uint64_t> newRootStart(roots.size());
+  std::vector<uint32_t> newRootStart(roots.size());
   uint64_t rootBits = 0;
   for (size_t i = 0; i < roots.size(); ++i)
   {
-    newRootStart[i] = rootBits;
+    newRootStart[i] = uint32_t(rootBits);
     rootBits += layout::NODE_HEADER_BITS + uint64_t(roots[i].count) * midRefBits;
   }
   std::vector<uint32_t> rootStream = wordsFor(rootBits);
@@ -494,7 +522,7 @@ Volume pooled(Volume v)
     for (uint32_t r = 0; r < roots[i].count; ++r)
     {
       const uint32_t ref = midRefs[roots[i].first + r];
-      writeField(rootStream, to, midRefBits, (newMidStart[ref >> 1] << 1) | (ref & 1u));
+      writeField(rootStream, to, midRefBits, (uint64_t(newMidStart[ref >> 1]) << 1) | (ref & 1u));
     }
   }
 
