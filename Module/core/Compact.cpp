@@ -19,8 +19,8 @@ using bits::writeBits;
 
 constexpr uint32_t Unplaced = 0xFFFFFFFFu;
 
-// One node of either form, as a list of children: the masks, and per mixed child (child order)
-// its target (a node index, or for inline leaves nothing) and its reference bits.
+// A node as read: its masks, and where its mixed children's references (child order, pooled
+// form) start in its level's array of them.
 struct Children
 {
   uint32_t header = 0; // mixed | full << 8
@@ -365,7 +365,8 @@ Volume pooled(Volume v)
     fail("a node stream longer than 2^32 bits");
 
   // Leaves: the shared ones keep their index; inline ones are stored canonical, once per class.
-  std::vector<uint64_t> leaves = v.leaves;
+  const size_t sharedLeaves = v.leaves.size();
+  std::vector<uint64_t> leaves = std::move(v.leaves);
   std::unordered_map<uint64_t, uint32_t> leafOf;
   for (size_t i = 0; i < leaves.size(); ++i)
     leafOf.emplace(leaves[i], uint32_t(i));
@@ -412,7 +413,7 @@ Volume pooled(Volume v)
       {
         const uint32_t ref = readBits(v.mids,
           at + layout::compactMidRefOffset(header, r, v.widths.leafRefBits), v.widths.leafRefBits);
-        if (layout::leafRefIndex(ref) >= v.leaves.size() ||
+        if (layout::leafRefIndex(ref) >= sharedLeaves ||
           layout::leafRefSymmetry(ref) >= layout::LEAF_SYMMETRY_COUNT)
           fail("a leaf reference is out of range");
         leafRefs.push_back(ref);

@@ -113,7 +113,8 @@ struct WriteOptions
 };
 
 // `parallel` runs format 3's chunks (CodedVolume.h) side by side; the bytes and volumes do not
-// depend on it.
+// depend on it. Files store the pooled form of a volume (Compact.h): writers take either form,
+// readers validate the pooled form they read and return it compact.
 
 // The whole file in memory. Throws FileError if the volume does not validate or the level or
 // version is not one written.
