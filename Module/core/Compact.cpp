@@ -159,6 +159,27 @@ uint32_t complementedNode(uint32_t header)
   return mixed | ((~(mixed | layout::nodeFullMask(header)) & 0xFFu) << 8);
 }
 
+// Reads the compact node at bit `at` of a stream holding `total` data bits into `n` (its
+// references to start at `first` in its level's array): returns its first COMPACT_HEADER_BITS
+// and sets `bits` to its length (nodeBits(header)), every bound checked.
+template <typename NodeBits>
+uint32_t readCompactNode(const std::vector<uint32_t>& stream, uint64_t total, uint64_t at,
+  const NodeBits& nodeBits, const std::string& level, Children& n, uint32_t first, uint64_t& bits)
+{
+  if (stream.empty() || at + layout::COMPACT_HEADER_BITS > total + 32) // padding: the rest
+    fail(level + " stream shorter than its node count");
+  const uint32_t header = Volume::nodeHeaderAndFlags(stream, at);
+  bits = nodeBits(header);
+  if (at + bits > total)
+    fail("a " + level + " node runs past the end of its stream");
+  n.header = header & 0xFFFFu;
+  n.count = layout::bitCount(layout::nodeMixedMask(header));
+  n.first = first;
+  if (n.header & (n.header >> 8) & 0xFFu)
+    fail("a " + level + " node's child is both mixed and full");
+  return header;
+}
+
 } // namespace
 
 Volume compacted(Volume v)
@@ -388,19 +409,12 @@ Volume pooled(Volume v)
   uint64_t at = 0;
   for (size_t i = 0; i < mids.size(); ++i)
   {
-    if (v.mids.empty() || at + layout::COMPACT_HEADER_BITS > midTotal + 32) // padding: the rest
-      fail("mid stream shorter than its node count");
-    const uint32_t header = Volume::nodeHeaderAndFlags(v.mids, at);
-    const uint64_t bits = layout::compactMidBits(header, v.widths.leafRefBits);
-    if (at + bits > midTotal)
-      fail("a mid node runs past the end of its stream");
     Children& n = mids[i];
+    uint64_t bits;
+    const uint32_t header = readCompactNode(v.mids, midTotal, at,
+      [&](uint32_t h) { return layout::compactMidBits(h, v.widths.leafRefBits); }, "mid", n,
+      uint32_t(leafRefs.size()), bits);
     midStarts[i] = uint32_t(at);
-    n.header = header & 0xFFFFu;
-    n.count = layout::bitCount(layout::nodeMixedMask(header));
-    n.first = uint32_t(leafRefs.size());
-    if (n.header & (n.header >> 8) & 0xFFu)
-      fail("a mid node's child is both mixed and full");
     for (uint32_t r = 0; r < n.count; ++r)
     {
       if (layout::compactChildFlagged(header, r))
@@ -442,19 +456,12 @@ Volume pooled(Volume v)
   at = 0;
   for (size_t i = 0; i < roots.size(); ++i)
   {
-    if (v.roots.empty() || at + layout::COMPACT_HEADER_BITS > rootTotal + 32)
-      fail("root stream shorter than its node count");
-    const uint32_t header = Volume::nodeHeaderAndFlags(v.roots, at);
-    const uint64_t bits = layout::compactRootBits(header, v.widths.midRefBits);
-    if (at + bits > rootTotal)
-      fail("a root node runs past the end of its stream");
     Children& n = roots[i];
+    uint64_t bits;
+    const uint32_t header = readCompactNode(v.roots, rootTotal, at,
+      [&](uint32_t h) { return layout::compactRootBits(h, v.widths.midRefBits); }, "root", n,
+      uint32_t(midRefs.size()), bits);
     rootStarts[i] = uint32_t(at);
-    n.header = header & 0xFFFFu;
-    n.count = layout::bitCount(layout::nodeMixedMask(header));
-    n.first = uint32_t(midRefs.size());
-    if (n.header & (n.header >> 8) & 0xFFu)
-      fail("a root node's child is both mixed and full");
     int64_t chained = -1;
     if (layout::compactFlags(header))
     {
