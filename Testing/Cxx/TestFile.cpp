@@ -760,7 +760,7 @@ TEST(FileContent, ImpossibleBlocksAreRefusedNamingTheRule)
 // moved the wrong way would let a voxel outside the bounds through (or refuse tight ones).
 TEST(FileContent, EveryBoundMovedInIsRefused)
 {
-  const svdag::Volume v = spheres(ScalarType::UInt16, 45);
+  const svdag::Volume v = svdag::pooled(spheres(ScalarType::UInt16, 45)); // as files hold it
   ASSERT_NO_THROW(v.validate());
   std::array<bool, svdag::layout::LEAF_SYMMETRY_COUNT> symmetrySeen{};
   uint64_t offset = 0;
