@@ -319,7 +319,8 @@ struct Builder::Impl
 
 void Builder::addVolume(const Volume& input)
 {
-  const Volume part = pooled(input);
+  Volume holder;
+  const Volume& part = pooledView(input, holder);
   Impl& m = *impl;
   if (m.blockMode)
     throw std::logic_error("cannot append a volume to a builder given blocks");

@@ -545,4 +545,12 @@ Volume pooled(Volume v)
   return v;
 }
 
+const Volume& pooledView(const Volume& volume, Volume& holder)
+{
+  if (volume.form == DagForm::Pooled)
+    return volume;
+  holder = pooled(volume);
+  return holder;
+}
+
 } // namespace svdag

@@ -229,7 +229,8 @@ EncodingAnalysis analyzeEncoding(const Volume& volume, const ParallelFor& parall
 {
   // The DAG's nodes and references, each node once (the compact form's chained and inline
   // children are nodes of their pools there).
-  const Volume v = pooled(volume);
+  Volume holder;
+  const Volume& v = pooledView(volume, holder);
   EncodingAnalysis a;
   a.labelTableBytes = v.memory().labels;
   {

@@ -740,16 +740,13 @@ Volume readDagStreams(const SectionEntry& e, const uint8_t* data, uint64_t label
 
 namespace
 {
-// What a file stores: the pooled form of the volume (Compact.h), made in `holder` when the
-// volume is compact (a pooled one is not copied).
+// What a file stores: the pooled form of the volume (Compact.h: pooledView), a malformed compact
+// volume refused as a FileError.
 const Volume& pooledForWriting(const Volume& volume, Volume& holder)
 {
-  if (volume.form == DagForm::Pooled)
-    return volume;
   try
   {
-    holder = pooled(volume);
-    return holder;
+    return pooledView(volume, holder);
   }
   catch (const std::bad_alloc&)
   {

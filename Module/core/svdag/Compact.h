@@ -22,4 +22,8 @@ Volume compacted(Volume pooledVolume);
 // pool) rather than reading out of bounds.
 Volume pooled(Volume compactVolume);
 
+// `volume` itself when it is pooled (not copied), else its pooled form, made in `holder`.
+// Throws as pooled() does.
+const Volume& pooledView(const Volume& volume, Volume& holder);
+
 } // namespace svdag
