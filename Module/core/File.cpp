@@ -681,7 +681,7 @@ Volume readCoded(const SectionEntry& e, const uint8_t* data, uint64_t labelCount
 // A format 4 file's volume from its DAG streams section; `header` holds what the file's header
 // says (geometry, type, background, widths and counts).
 Volume readDagStreams(const SectionEntry& e, const uint8_t* data, uint64_t labelCount,
-  uint64_t leafCount, const Volume& header)
+  uint64_t leafCount, const Volume& header, const ParallelFor& parallel)
 {
   const uint8_t* stored = data + e.offset;
   if (crc32Of(stored, size_t(e.stored)) != e.crc)
@@ -724,7 +724,7 @@ Volume readDagStreams(const SectionEntry& e, const uint8_t* data, uint64_t label
   try
   {
     Volume v = dagstreams::decode(streams, shape);
-    v.deriveBoundsAndValidate();
+    v.deriveBoundsAndValidate(parallel);
     return v;
   }
   catch (const std::bad_alloc&)
@@ -929,7 +929,7 @@ Volume deserializePooled(const uint8_t* data, size_t size, const ParallelFor& pa
   }
 
   if (major >= 4)
-    return readDagStreams(*known[DagStreamsSection], data, labelCount, leafCount, v);
+    return readDagStreams(*known[DagStreamsSection], data, labelCount, leafCount, v, parallel);
   if (major >= 3)
     return readCoded(*known[CodedSection], data, labelCount, leafCount, v, parallel);
 
@@ -956,7 +956,7 @@ Volume deserializePooled(const uint8_t* data, size_t size, const ParallelFor& pa
   {
     if (major == 1)
       file::upgradeVersion1(v);
-    v.validate(); // every reference, offset and bound of the structure
+    v.validate(parallel); // every reference, offset and bound of the structure
   }
   catch (const std::exception& e)
   {

@@ -6,6 +6,7 @@
 #include "Bits.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -600,23 +601,24 @@ uint32_t leafSummary(uint64_t mask)
   return leafLanes(mask) | (popcount64(mask) << 24);
 }
 
-// Walks one node stream in order (nodes are contiguous): every node well formed and every child
-// reference at a node start (a reference into the middle of a node would read its references as
-// a header and run past the checked nodes) or an existing leaf. child(ref, acc0, acc1) checks
-// the reference of a mixed child and stores the child's summary in both polarities (a solid
-// child is `solid`); combine(acc) summarises a node from its 8 children. Summarising once per
-// distinct node lets the block checks bound and count voxels without expanding any.
+// Walks one node stream: every node well formed and every child reference at a node start (a
+// reference into the middle of a node would read its references as a header and run past the
+// checked nodes) or an existing leaf. child(ref, acc0, acc1) checks the reference of a mixed
+// child and stores the child's summary in both polarities (a solid child is `solid`);
+// combine(acc) summarises a node from its 8 children. Summarising once per distinct node lets
+// the block checks bound and count voxels without expanding any. Where nodes start is found in
+// order; the children are then checked and summarised node by node through `parallel`, so
+// `child` may be called from several threads at once.
 template <typename Child, typename Combine>
 NodePool walkNodeStream(const std::vector<uint32_t>& stream, uint64_t count, uint32_t refBits,
-  const char* what, uint64_t solid, const Child& child, const Combine& combine)
+  const char* what, uint64_t solid, const Child& child, const Combine& combine,
+  const ParallelFor& parallel)
 {
   const uint32_t* words = stream.data();
   const uint64_t total = uint64_t(stream.size() - 1) * 32;
   const uint64_t expected = std::min<uint64_t>(count, total / layout::NODE_HEADER_BITS + 1);
   NodePool pool;
   pool.index.reset(total, expected);
-  pool.summaries.reset(new uint64_t[size_t(2 * expected)]); // nodes take 16 bits at least
-  uint64_t* summary = pool.summaries.get();
   uint64_t offset = 0;
   for (uint64_t n = 0; n < count; ++n)
   {
@@ -629,48 +631,70 @@ NodePool walkNodeStream(const std::vector<uint32_t>& stream, uint64_t count, uin
     const uint64_t end = offset + layout::NODE_HEADER_BITS + uint64_t(popcount8(mixed)) * refBits;
     if (end > total)
       fail(std::string(what) + " node runs past the end of its stream");
-    uint64_t acc0[8], acc1[8];
-    uint64_t refAt = offset + layout::NODE_HEADER_BITS;
-    for (uint32_t c = 0; c < 8; ++c)
-    {
-      const uint32_t bit = 1u << c;
-      if (mixed & bit)
-      {
-        if (!child(fieldAt(words, refAt, refBits), acc0[c], acc1[c]))
-          fail(std::string(what) + " node at bit " + str(offset) +
-            ": child reference does not point at a node");
-        refAt += refBits;
-      }
-      else
-      {
-        acc0[c] = (full & bit) ? solid : 0;
-        acc1[c] = (full & bit) ? 0 : solid;
-      }
-    }
-    summary[2 * n] = combine(acc0);
-    summary[2 * n + 1] = combine(acc1);
     pool.index.add(offset);
     offset = end;
   }
   if (total - offset >= 32)
     fail(std::string(what) + " stream longer than its nodes");
   pool.index.finish();
+
+  pool.summaries.reset(new uint64_t[size_t(2 * count)]);
+  uint64_t* summary = pool.summaries.get();
+  std::atomic<uint64_t> firstBad{ count }; // the first node with a bad reference, as in order
+  parallel(0, count, 4096, [&](uint64_t begin, uint64_t end) {
+    for (uint64_t n = begin; n < end; ++n)
+    {
+      const uint64_t at = pool.index.start(n);
+      const uint32_t header = fieldAt(words, at, layout::NODE_HEADER_BITS);
+      const uint32_t mixed = layout::nodeMixedMask(header), full = layout::nodeFullMask(header);
+      uint64_t acc0[8], acc1[8];
+      uint64_t refAt = at + layout::NODE_HEADER_BITS;
+      for (uint32_t c = 0; c < 8; ++c)
+      {
+        const uint32_t bit = 1u << c;
+        if (mixed & bit)
+        {
+          if (!child(fieldAt(words, refAt, refBits), acc0[c], acc1[c]))
+          {
+            uint64_t seen = firstBad.load();
+            while (n < seen && !firstBad.compare_exchange_weak(seen, n))
+            {
+            }
+            return;
+          }
+          refAt += refBits;
+        }
+        else
+        {
+          acc0[c] = (full & bit) ? solid : 0;
+          acc1[c] = (full & bit) ? 0 : solid;
+        }
+      }
+      summary[2 * n] = combine(acc0);
+      summary[2 * n + 1] = combine(acc1);
+    }
+  });
+  if (firstBad.load() < count)
+    fail(std::string(what) + " node at bit " + str(pool.index.start(firstBad.load())) +
+      ": child reference does not point at a node");
   pool.used.assign(size_t(count), 0);
   return pool;
 }
 
 // The mid pool: references to existing leaves. Summary: lanes x bits 0-7, y 8-15, z 16-23;
 // voxels from bit 32.
-NodePool checkMidPool(const Volume& v)
+NodePool checkMidPool(const Volume& v, const ParallelFor& parallel)
 {
   // Each stored leaf's summary in both polarities, once; a reference moves its lanes.
   static const LaneSymmetries symmetries;
   std::vector<uint32_t> stored(2 * v.leaves.size());
-  for (size_t l = 0; l < v.leaves.size(); ++l)
-  {
-    stored[2 * l] = leafSummary(v.leaves[l]);
-    stored[2 * l + 1] = leafSummary(~v.leaves[l]);
-  }
+  parallel(0, v.leaves.size(), 4096, [&](uint64_t begin, uint64_t end) {
+    for (uint64_t l = begin; l < end; ++l)
+    {
+      stored[2 * l] = leafSummary(v.leaves[l]);
+      stored[2 * l + 1] = leafSummary(~v.leaves[l]);
+    }
+  });
   return walkNodeStream(v.mids, v.midCount, v.widths.leafRefBits, "mid",
     uint64_t(0x0F0F0Fu | (64u << 24)),
     [&](uint32_t ref, uint64_t& a0, uint64_t& a1) {
@@ -691,12 +715,13 @@ NodePool checkMidPool(const Volume& v)
       const uint64_t zlo = a[0] | a[1] | a[2] | a[3], zhi = a[4] | a[5] | a[6] | a[7];
       return (xlo & 0xFu) | ((xhi & 0xFu) << 4) | (ylo & 0xF00u) | ((yhi & 0xF00u) << 4) |
         (zlo & 0xF0000u) | ((zhi & 0xF0000u) << 4) | (voxels << 32);
-    });
+    },
+    parallel);
 }
 
 // The root pool: references at mid node starts. Summary: lanes x bits 0-15, y 16-31, z 32-47;
 // voxels from bit 48.
-NodePool checkRootPool(const Volume& v, NodePool& mids)
+NodePool checkRootPool(const Volume& v, NodePool& mids, const ParallelFor& parallel)
 {
   return walkNodeStream(v.roots, v.rootCount, v.widths.midRefBits, "root",
     uint64_t(0xFFFFFFu) | (uint64_t(512) << 32),
@@ -704,7 +729,8 @@ NodePool checkRootPool(const Volume& v, NodePool& mids)
       const int64_t mid = mids.index.find(layout::refTarget(ref));
       if (mid < 0)
         return false;
-      mids.used[size_t(mid)] = 1;
+      // Roots are walked in parallel and share mids: the one write is an atomic store.
+      __atomic_store_n(&mids.used[size_t(mid)], uint8_t(1), __ATOMIC_RELAXED);
       const size_t at = 2 * size_t(mid) + (ref & 1u);
       a0 = mids.summaries[at];
       a1 = mids.summaries[at ^ 1u];
@@ -719,7 +745,8 @@ NodePool checkRootPool(const Volume& v, NodePool& mids)
       return (xlo & 0xFFu) | ((xhi & 0xFFu) << 8) | ((ylo & 0xFF00u) << 8) |
         ((yhi & 0xFF00u) << 16) | ((zlo & 0xFF0000u) << 16) | ((zhi & 0xFF0000u) << 24) |
         (voxels << 48);
-    });
+    },
+    parallel);
 }
 
 // The blocks of one cell, gathered while the blocks are checked in order: no label twice, and
@@ -1033,30 +1060,30 @@ void checkLabelTotals(const Volume& v, const LabelTotals& totals)
 
 } // namespace
 
-void Volume::validate() const
+void Volume::validate(const ParallelFor& parallel) const
 {
   if (form == DagForm::Compact)
   {
     // Checked in the pooled form, which pooled() reads with every bound checked.
-    pooled(*this).validate();
+    pooled(*this).validate(parallel);
     return;
   }
   checkHeader(*this);
   checkLabelTable(*this);
-  NodePool mids = checkMidPool(*this);
-  NodePool roots = checkRootPool(*this, mids);
+  NodePool mids = checkMidPool(*this, parallel);
+  NodePool roots = checkRootPool(*this, mids, parallel);
   mids.checkAllUsed("mid");
   checkLabelTotals(*this, checkBlocks(*this, roots));
   roots.checkAllUsed("root");
 }
 
-void Volume::deriveBoundsAndValidate()
+void Volume::deriveBoundsAndValidate(const ParallelFor& parallel)
 {
   if (form != DagForm::Pooled)
     throw std::logic_error("Volume: validation reads the pooled form (svdag::pooled)");
   checkHeader(*this);
-  NodePool mids = checkMidPool(*this);
-  NodePool roots = checkRootPool(*this, mids);
+  NodePool mids = checkMidPool(*this, parallel);
+  NodePool roots = checkRootPool(*this, mids, parallel);
   mids.checkAllUsed("mid");
   const uint64_t recordBits = this->widths.blockBits();
   const uint32_t boundsAt = layout::blockBoundsOffset(this->widths.cellBits);

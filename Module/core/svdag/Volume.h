@@ -3,6 +3,7 @@
 #pragma once
 
 #include "svdag/Layout.h"
+#include "svdag/Parallel.h"
 
 #include <array>
 #include <cstddef>
@@ -171,14 +172,15 @@ public:
   // node start of its pool; blocks sorted by (cell, label), bounds ordered and inside the volume,
   // each occupancy non-empty and inside its bounds, the blocks of a cell disjoint; each label's
   // voxel count and bounds exactly what its blocks hold. Linear in the size of the volume:
-  // occupancy is summarised once per distinct node, never expanded per block.
-  void validate() const;
+  // occupancy is summarised once per distinct node, never expanded per block. `parallel` runs
+  // the per-node checks; the outcome does not depend on it.
+  void validate(const ParallelFor& parallel = sequentialFor) const;
   // Sets each block's bounds to the tight box of its occupancy and each label's voxel count and
   // bounds to what its blocks hold, then checks the rest as validate() does (a .svdag 4.0 file
   // stores neither: they are derived from the same once-per-node summaries that validate() uses).
   // Throws std::runtime_error as validate() does, and for a label no block holds; pooled form
   // only (std::logic_error otherwise).
-  void deriveBoundsAndValidate();
+  void deriveBoundsAndValidate(const ParallelFor& parallel = sequentialFor);
   bool operator==(const Volume& o) const;
 };
 
