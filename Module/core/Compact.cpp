@@ -1,6 +1,7 @@
 #include "svdag/Compact.h"
 
 #include "Bits.h"
+#include "PooledGraph.h"
 #include "svdag/LeafSymmetry.h"
 
 #include <algorithm>
@@ -19,14 +20,7 @@ using bits::writeBits;
 
 constexpr uint32_t Unplaced = 0xFFFFFFFFu;
 
-// A node as read: its masks, and where its mixed children's references (child order, pooled
-// form) start in its level's array of them.
-struct Children
-{
-  uint32_t header = 0; // mixed | full << 8
-  uint32_t count = 0;  // mixed children
-  uint32_t first = 0;  // into the level's child arrays
-};
+using Children = PooledGraph::Node;
 
 void fail(const std::string& what)
 {
@@ -100,11 +94,11 @@ void countUse(std::vector<uint8_t>& uses, size_t i)
   uses[i] = uint8_t(uses[i] < 2 ? uses[i] + 1 : 2);
 }
 
-// Rewrites the block records' root references (old root offset -> its index by oldRootAt -> new
-// offset) at the new root reference width, record by record: in place where the records do
+// Rewrites the block records' root references (block and old reference -> the root's index by
+// rootOf -> new offset) at the new root reference width, record by record: in place where the records do
 // not grow (a volume of billions of blocks is not copied), else into a new stream.
 template <typename Lookup>
-void rewriteBlocks(Volume& v, uint32_t rootRefBits, const Lookup& oldRootAt,
+void rewriteBlocks(Volume& v, uint32_t rootRefBits, const Lookup& rootOf,
   const std::vector<uint32_t>& newStarts)
 {
   const FieldWidths old = v.widths;
@@ -121,7 +115,7 @@ void rewriteBlocks(Volume& v, uint32_t rootRefBits, const Lookup& oldRootAt,
     // Everything before the root reference is the same fields at the same widths.
     const uint64_t from = i * oldBits;
     const uint32_t root = readBits(v.blocks, from + rootAt, old.rootRefBits);
-    const int64_t k = oldRootAt(layout::refTarget(root));
+    const int64_t k = rootOf(i, root);
     if (k < 0)
       fail("a block's root reference is not at a root node");
     const uint32_t widths[3] = { old.cellBits, layout::BLOCK_BOUNDS_BITS, old.labelBits };
@@ -182,43 +176,74 @@ uint32_t readCompactNode(const std::vector<uint32_t>& stream, uint64_t total, ui
 
 } // namespace
 
+PooledGraph pooledGraph(const Volume& v)
+{
+  if (v.form != DagForm::Pooled)
+    throw std::logic_error("pooledGraph: the volume is not in the pooled form");
+  PooledGraph g;
+  g.mids.resize(size_t(v.midCount));
+  g.roots.resize(size_t(v.rootCount));
+  std::vector<uint32_t> midStarts(g.mids.size()), rootStarts(g.roots.size());
+  // One pass over each stream: a node's header, then its references in order, kept as
+  // `child(reference)` gives them.
+  auto walk = [](const std::vector<uint32_t>& stream, std::vector<Children>& nodes,
+                std::vector<uint32_t>& starts, uint32_t refBits, std::vector<uint32_t>& refs,
+                const auto& child) {
+    refs.reserve(nodes.size() * 4);
+    uint64_t at = 0;
+    for (size_t i = 0; i < nodes.size(); ++i)
+    {
+      Children& n = nodes[i];
+      starts[i] = uint32_t(at);
+      n.header = readBits(stream, at, layout::NODE_HEADER_BITS);
+      n.count = layout::bitCount(layout::nodeMixedMask(n.header));
+      n.first = uint32_t(refs.size());
+      at += layout::NODE_HEADER_BITS;
+      for (uint32_t r = 0; r < n.count; ++r, at += refBits)
+        refs.push_back(child(readBits(stream, at, refBits)));
+    }
+  };
+  walk(v.mids, g.mids, midStarts, v.widths.leafRefBits, g.leafRefs, [](uint32_t ref) { return ref; });
+  const NodeAt midAt(midStarts);
+  walk(v.roots, g.roots, rootStarts, v.widths.midRefBits, g.midRefs, [&](uint32_t ref) {
+    const int64_t mid = midAt(layout::refTarget(ref));
+    if (mid < 0)
+      fail("a root's reference is not at a mid node");
+    return uint32_t(mid << 1) | (ref & 1u);
+  });
+  const NodeAt rootAt(rootStarts);
+  const uint32_t recordBits = v.widths.blockBits();
+  const uint32_t rootField = layout::blockRootOffset(v.widths.cellBits, v.widths.labelBits);
+  g.blockRoots.resize(size_t(v.blockCount));
+  for (uint64_t b = 0; b < v.blockCount; ++b)
+  {
+    const uint32_t ref = readBits(v.blocks, b * recordBits + rootField, v.widths.rootRefBits);
+    const int64_t root = rootAt(layout::refTarget(ref));
+    if (root < 0)
+      fail("a block's root reference is not at a root node");
+    g.blockRoots[size_t(b)] = uint32_t(root << 1) | (ref & 1u);
+  }
+  return g;
+}
+
 Volume compacted(Volume v)
 {
   if (v.form == DagForm::Compact)
     return v;
-  // The pooled nodes and their references.
-  std::vector<Children> mids(size_t(v.midCount)), roots(size_t(v.rootCount));
-  std::vector<uint32_t> leafRefs, midRefs; // per mixed child: the pooled reference
-  std::vector<uint32_t> midStarts(mids.size()), rootStarts(roots.size());
-  {
-    // One pass over each stream: a node's header, then its references in order, kept as
-    // `child(reference)` gives them.
-    auto walk = [](const std::vector<uint32_t>& stream, std::vector<Children>& nodes,
-                  std::vector<uint32_t>& starts, uint32_t refBits, std::vector<uint32_t>& refs,
-                  const auto& child) {
-      refs.reserve(nodes.size() * 4);
-      uint64_t at = 0;
-      for (size_t i = 0; i < nodes.size(); ++i)
-      {
-        Children& n = nodes[i];
-        starts[i] = uint32_t(at);
-        n.header = readBits(stream, at, layout::NODE_HEADER_BITS);
-        n.count = layout::bitCount(layout::nodeMixedMask(n.header));
-        n.first = uint32_t(refs.size());
-        at += layout::NODE_HEADER_BITS;
-        for (uint32_t r = 0; r < n.count; ++r, at += refBits)
-          refs.push_back(child(readBits(stream, at, refBits)));
-      }
-    };
-    walk(v.mids, mids, midStarts, v.widths.leafRefBits, leafRefs, [](uint32_t ref) { return ref; });
-    const NodeAt midAt(midStarts);
-    walk(v.roots, roots, rootStarts, v.widths.midRefBits, midRefs, [&](uint32_t ref) {
-      const int64_t mid = midAt(layout::refTarget(ref));
-      if (mid < 0)
-        fail("a root's reference is not at a mid node");
-      return uint32_t(mid << 1) | (ref & 1u);
-    });
-  }
+  PooledGraph graph = pooledGraph(v);
+  return compacted(std::move(v), std::move(graph));
+}
+
+Volume compacted(Volume v, PooledGraph graph)
+{
+  if (v.form == DagForm::Compact)
+    return v;
+  std::vector<Children> mids = std::move(graph.mids), roots = std::move(graph.roots);
+  std::vector<uint32_t> leafRefs = std::move(graph.leafRefs), midRefs = std::move(graph.midRefs);
+  const std::vector<uint32_t> blockRoots = std::move(graph.blockRoots);
+  if (mids.size() != v.midCount || roots.size() != v.rootCount ||
+    blockRoots.size() != v.blockCount)
+    throw std::logic_error("compacted: the graph is not the volume's");
   // What is read is held above: the pooled node streams go before the compact ones are made.
   std::vector<uint32_t>().swap(v.mids);
   std::vector<uint32_t>().swap(v.roots);
@@ -232,17 +257,11 @@ Volume compacted(Volume v)
   // after another, child order), then its shared mids not placed yet.
   std::vector<uint32_t> rootOrder, midOrder;
   std::vector<uint8_t> midFold; // chained mids: written complemented (as the root sees them)
-  const NodeAt rootAt(rootStarts);
   {
     std::vector<uint8_t> rootPlaced(roots.size()), midPlaced(mids.size());
-    const uint32_t recordBits = v.widths.blockBits();
-    const uint32_t rootField = layout::blockRootOffset(v.widths.cellBits, v.widths.labelBits);
     for (uint64_t b = 0; b < v.blockCount; ++b)
     {
-      const uint32_t ref = readBits(v.blocks, b * recordBits + rootField, v.widths.rootRefBits);
-      const int64_t root = rootAt(layout::refTarget(ref));
-      if (root < 0)
-        fail("a block's root reference is not at a root node");
+      const uint32_t root = blockRoots[size_t(b)] >> 1;
       if (rootPlaced[size_t(root)])
         continue;
       rootPlaced[size_t(root)] = 1;
@@ -264,37 +283,36 @@ Volume compacted(Volume v)
       fail("a node no block reaches");
   }
 
-  // Shared leaves numbered by first use in the new mid order.
+  // Shared leaves numbered by first use in the new mid order; each mid's flags (its inline
+  // leaves: those used once) on the way.
   std::vector<uint32_t> leafIndex(v.leaves.size(), Unplaced);
   std::vector<uint64_t> sharedLeaves;
+  std::vector<uint8_t> midFlags(mids.size());
   for (uint32_t mid : midOrder)
-    for (uint32_t r = 0; r < mids[mid].count; ++r)
+  {
+    const Children& n = mids[mid];
+    uint32_t flags = 0;
+    for (uint32_t r = 0; r < n.count; ++r)
     {
-      const uint32_t leaf = layout::leafRefIndex(leafRefs[mids[mid].first + r]);
-      if (leafUses[leaf] > 1 && leafIndex[leaf] == Unplaced)
+      const uint32_t leaf = layout::leafRefIndex(leafRefs[n.first + r]);
+      if (leafUses[leaf] == 1)
+        flags |= 1u << r;
+      else if (leafIndex[leaf] == Unplaced)
       {
         leafIndex[leaf] = uint32_t(sharedLeaves.size());
         sharedLeaves.push_back(v.leaves[leaf]);
       }
     }
+    midFlags[mid] = uint8_t(flags);
+  }
   const uint32_t leafRefBits =
     refWidth(sharedLeaves.empty() ? 0 : sharedLeaves.size() - 1, 1 + layout::LEAF_SYMMETRY_BITS);
 
   // The mid stream.
-  auto flagsOf = [](const std::vector<uint8_t>& uses, const std::vector<uint32_t>& refs,
-                   const Children& n, uint32_t shift) {
-    uint8_t flags = 0;
-    for (uint32_t r = 0; r < n.count; ++r)
-      if (uses[refs[n.first + r] >> shift] == 1)
-        flags = uint8_t(flags | (1u << r));
-    return flags;
-  };
-  std::vector<uint8_t> midFlags(mids.size());
   std::vector<uint32_t> newMidStart(mids.size());
   uint64_t midBits = 0, lastMid = 0;
   for (uint32_t mid : midOrder)
   {
-    midFlags[mid] = flagsOf(leafUses, leafRefs, mids[mid], layout::LEAF_SYMMETRY_BITS + 1);
     lastMid = midBits;
     newMidStart[mid] = uint32_t(midBits);
     midBits += layout::compactMidBits(mids[mid].header | (uint32_t(midFlags[mid]) << 16), leafRefBits);
@@ -337,7 +355,10 @@ Volume compacted(Volume v)
   uint64_t rootBits = 0, lastRoot = 0;
   for (uint32_t root : rootOrder)
   {
-    rootFlags[root] = flagsOf(midUses, midRefs, roots[root], 1);
+    const Children& n = roots[root];
+    for (uint32_t r = 0; r < n.count; ++r)
+      if (midUses[midRefs[n.first + r] >> 1] == 1)
+        rootFlags[root] = uint8_t(rootFlags[root] | (1u << r));
     lastRoot = rootBits;
     newRootStart[root] = uint32_t(rootBits);
     rootBits += layout::compactRootBits(roots[root].header | (uint32_t(rootFlags[root]) << 16), midRefBits);
@@ -368,7 +389,8 @@ Volume compacted(Volume v)
   v.leaves = std::move(sharedLeaves);
   v.widths.leafRefBits = leafRefBits;
   v.widths.midRefBits = midRefBits;
-  rewriteBlocks(v, refWidth(lastRoot, 1), rootAt, newRootStart);
+  rewriteBlocks(v, refWidth(lastRoot, 1),
+    [&](uint64_t block, uint32_t) { return int64_t(blockRoots[size_t(block)] >> 1); }, newRootStart);
   v.form = DagForm::Compact;
   return v;
 }
@@ -539,8 +561,9 @@ Volume pooled(Volume v)
   v.leaves = std::move(leaves);
   v.widths.leafRefBits = leafRefBits;
   v.widths.midRefBits = midRefBits;
-  rewriteBlocks(v, refWidth(roots.empty() ? 0 : newRootStart.back(), 1), NodeAt(rootStarts),
-    newRootStart);
+  const NodeAt rootAt(rootStarts);
+  rewriteBlocks(v, refWidth(roots.empty() ? 0 : newRootStart.back(), 1),
+    [&](uint64_t, uint32_t ref) { return rootAt(layout::refTarget(ref)); }, newRootStart);
   v.form = DagForm::Pooled;
   return v;
 }

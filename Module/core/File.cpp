@@ -6,6 +6,7 @@
 #include "CodedVolume.h"
 #include "DagStreams.h"
 #include "FileVersion1.h"
+#include "PooledGraph.h"
 
 #include <zlib.h>
 #include <zstd.h>
@@ -724,8 +725,9 @@ Volume readDagStreams(const SectionEntry& e, const uint8_t* data, uint64_t label
   try
   {
     Volume v = dagstreams::decode(streams, shape);
-    v.deriveBoundsAndValidate(parallel);
-    return v;
+    PooledGraph graph; // what validation reads, compaction needs: the streams are walked once
+    v.deriveBoundsAndValidate(parallel, &graph);
+    return compacted(std::move(v), std::move(graph));
   }
   catch (const std::bad_alloc&)
   {
@@ -781,7 +783,8 @@ std::vector<uint8_t> serialize(const Volume& volume, const WriteOptions& options
 namespace
 {
 // The file's volume in the pooled form it stores, validated.
-Volume deserializePooled(const uint8_t* data, size_t size, const ParallelFor& parallel)
+// The validated volume a file holds: compact from a 4.0 file, pooled from older ones.
+Volume deserializeValidated(const uint8_t* data, size_t size, const ParallelFor& parallel)
 {
   if (size < FileMagicSize || std::memcmp(data, FileMagic, FileMagicSize) != 0)
     throw FileError("not an .svdag file (the file does not start with the .svdag signature)");
@@ -968,8 +971,8 @@ Volume deserializePooled(const uint8_t* data, size_t size, const ParallelFor& pa
 
 Volume deserialize(const uint8_t* data, size_t size, const ParallelFor& parallel)
 {
-  // The validated pooled form, in the compact form a volume in memory holds.
-  return compacted(deserializePooled(data, size, parallel));
+  // In the compact form a volume in memory holds.
+  return compacted(deserializeValidated(data, size, parallel));
 }
 
 void writeFile(const Volume& compactOrPooled, const std::string& path, const WriteOptions& options,

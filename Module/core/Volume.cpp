@@ -4,6 +4,7 @@
 #include "svdag/Traversal.h"
 
 #include "Bits.h"
+#include "PooledGraph.h"
 
 #include <algorithm>
 #include <atomic>
@@ -608,18 +609,22 @@ uint32_t leafSummary(uint64_t mask)
 // combine(acc) summarises a node from its 8 children. Summarising once per distinct node lets
 // the block checks bound and count voxels without expanding any. Where nodes start is found in
 // order; the children are then checked and summarised node by node through `parallel`, so
-// `child` may be called from several threads at once.
+// `child` may be called from several threads at once. Where `nodes` and `refs` are given they
+// receive the nodes and, per mixed child, what child() resolved its reference to (PooledGraph).
 template <typename Child, typename Combine>
 NodePool walkNodeStream(const std::vector<uint32_t>& stream, uint64_t count, uint32_t refBits,
   const char* what, uint64_t solid, const Child& child, const Combine& combine,
-  const ParallelFor& parallel)
+  const ParallelFor& parallel, std::vector<PooledGraph::Node>* nodes = nullptr,
+  std::vector<uint32_t>* refs = nullptr)
 {
   const uint32_t* words = stream.data();
   const uint64_t total = uint64_t(stream.size() - 1) * 32;
   const uint64_t expected = std::min<uint64_t>(count, total / layout::NODE_HEADER_BITS + 1);
   NodePool pool;
   pool.index.reset(total, expected);
-  uint64_t offset = 0;
+  uint64_t offset = 0, children = 0;
+  if (nodes)
+    nodes->resize(size_t(expected));
   for (uint64_t n = 0; n < count; ++n)
   {
     if (offset + layout::NODE_HEADER_BITS > total)
@@ -631,9 +636,16 @@ NodePool walkNodeStream(const std::vector<uint32_t>& stream, uint64_t count, uin
     const uint64_t end = offset + layout::NODE_HEADER_BITS + uint64_t(popcount8(mixed)) * refBits;
     if (end > total)
       fail(std::string(what) + " node runs past the end of its stream");
+    if (nodes)
+      (*nodes)[size_t(n)] = { header, popcount8(mixed), uint32_t(children) };
+    children += popcount8(mixed);
+    if (nodes && children > 0xFFFFFFFFull)
+      fail(std::string(what) + " stream: more than 2^32 references");
     pool.index.add(offset);
     offset = end;
   }
+  if (refs)
+    refs->resize(size_t(children));
   if (total - offset >= 32)
     fail(std::string(what) + " stream longer than its nodes");
   pool.index.finish();
@@ -641,7 +653,7 @@ NodePool walkNodeStream(const std::vector<uint32_t>& stream, uint64_t count, uin
   pool.summaries.reset(new uint64_t[size_t(2 * count)]);
   uint64_t* summary = pool.summaries.get();
   std::atomic<uint64_t> firstBad{ count }; // the first node with a bad reference, as in order
-  parallel(0, count, 4096, [&](uint64_t begin, uint64_t end) {
+  parallel(0, count, 1024, [&](uint64_t begin, uint64_t end) {
     for (uint64_t n = begin; n < end; ++n)
     {
       const uint64_t at = pool.index.start(n);
@@ -649,12 +661,14 @@ NodePool walkNodeStream(const std::vector<uint32_t>& stream, uint64_t count, uin
       const uint32_t mixed = layout::nodeMixedMask(header), full = layout::nodeFullMask(header);
       uint64_t acc0[8], acc1[8];
       uint64_t refAt = at + layout::NODE_HEADER_BITS;
+      uint32_t* resolved = refs ? refs->data() + (*nodes)[size_t(n)].first : nullptr;
       for (uint32_t c = 0; c < 8; ++c)
       {
         const uint32_t bit = 1u << c;
         if (mixed & bit)
         {
-          if (!child(fieldAt(words, refAt, refBits), acc0[c], acc1[c]))
+          uint32_t target;
+          if (!child(fieldAt(words, refAt, refBits), acc0[c], acc1[c], target))
           {
             uint64_t seen = firstBad.load();
             while (n < seen && !firstBad.compare_exchange_weak(seen, n))
@@ -662,6 +676,8 @@ NodePool walkNodeStream(const std::vector<uint32_t>& stream, uint64_t count, uin
             }
             return;
           }
+          if (resolved)
+            *resolved++ = target;
           refAt += refBits;
         }
         else
@@ -683,7 +699,7 @@ NodePool walkNodeStream(const std::vector<uint32_t>& stream, uint64_t count, uin
 
 // The mid pool: references to existing leaves. Summary: lanes x bits 0-7, y 8-15, z 16-23;
 // voxels from bit 32.
-NodePool checkMidPool(const Volume& v, const ParallelFor& parallel)
+NodePool checkMidPool(const Volume& v, const ParallelFor& parallel, PooledGraph* graph = nullptr)
 {
   // Each stored leaf's summary in both polarities, once; a reference moves its lanes.
   static const LaneSymmetries symmetries;
@@ -697,7 +713,7 @@ NodePool checkMidPool(const Volume& v, const ParallelFor& parallel)
   });
   return walkNodeStream(v.mids, v.midCount, v.widths.leafRefBits, "mid",
     uint64_t(0x0F0F0Fu | (64u << 24)),
-    [&](uint32_t ref, uint64_t& a0, uint64_t& a1) {
+    [&](uint32_t ref, uint64_t& a0, uint64_t& a1, uint32_t& target) {
       const uint32_t leaf = layout::leafRefIndex(ref), s = layout::leafRefSymmetry(ref);
       if (leaf >= v.leaves.size() || s >= layout::LEAF_SYMMETRY_COUNT)
         return false;
@@ -705,6 +721,7 @@ NodePool checkMidPool(const Volume& v, const ParallelFor& parallel)
       const uint32_t c = stored[(2 * size_t(leaf) + (ref & 1u)) ^ 1u];
       a0 = symmetries.apply(s, m) | (m & 0xFF000000u);
       a1 = symmetries.apply(s, c) | (c & 0xFF000000u);
+      target = ref;
       return true;
     },
     [](const uint64_t* a) {
@@ -716,16 +733,17 @@ NodePool checkMidPool(const Volume& v, const ParallelFor& parallel)
       return (xlo & 0xFu) | ((xhi & 0xFu) << 4) | (ylo & 0xF00u) | ((yhi & 0xF00u) << 4) |
         (zlo & 0xF0000u) | ((zhi & 0xF0000u) << 4) | (voxels << 32);
     },
-    parallel);
+    parallel, graph ? &graph->mids : nullptr, graph ? &graph->leafRefs : nullptr);
 }
 
 // The root pool: references at mid node starts. Summary: lanes x bits 0-15, y 16-31, z 32-47;
 // voxels from bit 48.
-NodePool checkRootPool(const Volume& v, NodePool& mids, const ParallelFor& parallel)
+NodePool checkRootPool(
+  const Volume& v, NodePool& mids, const ParallelFor& parallel, PooledGraph* graph = nullptr)
 {
   return walkNodeStream(v.roots, v.rootCount, v.widths.midRefBits, "root",
     uint64_t(0xFFFFFFu) | (uint64_t(512) << 32),
-    [&](uint32_t ref, uint64_t& a0, uint64_t& a1) {
+    [&](uint32_t ref, uint64_t& a0, uint64_t& a1, uint32_t& target) {
       const int64_t mid = mids.index.find(layout::refTarget(ref));
       if (mid < 0)
         return false;
@@ -734,6 +752,7 @@ NodePool checkRootPool(const Volume& v, NodePool& mids, const ParallelFor& paral
       const size_t at = 2 * size_t(mid) + (ref & 1u);
       a0 = mids.summaries[at];
       a1 = mids.summaries[at ^ 1u];
+      target = uint32_t(mid << 1) | (ref & 1u);
       return true;
     },
     [](const uint64_t* a) {
@@ -746,7 +765,7 @@ NodePool checkRootPool(const Volume& v, NodePool& mids, const ParallelFor& paral
         ((yhi & 0xFF00u) << 16) | ((zlo & 0xFF0000u) << 16) | ((zhi & 0xFF0000u) << 24) |
         (voxels << 48);
     },
-    parallel);
+    parallel, graph ? &graph->roots : nullptr, graph ? &graph->midRefs : nullptr);
 }
 
 // The blocks of one cell, gathered while the blocks are checked in order: no label twice, and
@@ -1077,17 +1096,19 @@ void Volume::validate(const ParallelFor& parallel) const
   roots.checkAllUsed("root");
 }
 
-void Volume::deriveBoundsAndValidate(const ParallelFor& parallel)
+void Volume::deriveBoundsAndValidate(const ParallelFor& parallel, PooledGraph* graph)
 {
   if (form != DagForm::Pooled)
     throw std::logic_error("Volume: validation reads the pooled form (svdag::pooled)");
   checkHeader(*this);
-  NodePool mids = checkMidPool(*this, parallel);
-  NodePool roots = checkRootPool(*this, mids, parallel);
+  NodePool mids = checkMidPool(*this, parallel, graph);
+  NodePool roots = checkRootPool(*this, mids, parallel, graph);
   mids.checkAllUsed("mid");
   const uint64_t recordBits = this->widths.blockBits();
   const uint32_t boundsAt = layout::blockBoundsOffset(this->widths.cellBits);
   const uint32_t rootAt = layout::blockRootOffset(this->widths.cellBits, this->widths.labelBits);
+  if (graph)
+    graph->blockRoots.reserve(size_t(this->blockCount)); // checkHeader matched it to the blocks
   for (uint64_t i = 0; i < this->blockCount; ++i)
   {
     const uint32_t rootRef = fieldAt(this->blocks.data(), i * recordBits + rootAt,
@@ -1095,6 +1116,8 @@ void Volume::deriveBoundsAndValidate(const ParallelFor& parallel)
     const int64_t root = roots.index.find(layout::refTarget(rootRef));
     if (root < 0)
       fail("block " + str(i) + ": root reference does not point at a root node");
+    if (graph)
+      graph->blockRoots.push_back(uint32_t(root << 1) | (rootRef & 1u));
     const uint64_t summary = roots.summaries[2 * size_t(root) + (rootRef & 1u)];
     uint32_t box = 0; // an empty occupancy keeps 0 (checkBlocks refuses it)
     for (uint32_t a = 0; a < 3 && (summary >> 48) != 0; ++a)

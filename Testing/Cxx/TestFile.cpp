@@ -23,6 +23,7 @@
 #include <iterator>
 #include <new>
 #include <random>
+#include <thread>
 #include <unistd.h>
 
 // The largest single allocation since the last reset, for the tests proving that absurd header
@@ -843,6 +844,77 @@ TEST(FileContent, ImpossibleNodeReferencesAreRefused)
     const std::string message = loadError(rewriteSections(good, bad));
     EXPECT_NE(message.find("mid node at bit"), std::string::npos) << message;
   }
+}
+
+// Runs a range as `pieces` chunks, each on a thread of its own, all at once: what a thread pool
+// does at worst (the nodes of one pool checked side by side, none of them in order).
+svdag::ParallelFor onThreads(uint64_t pieces)
+{
+  return [pieces](uint64_t begin, uint64_t end, uint64_t, const svdag::RangeFunction& f) {
+    std::vector<std::thread> running;
+    for (uint64_t p = 0; p < pieces; ++p)
+    {
+      const uint64_t b = begin + (end - begin) * p / pieces, e = begin + (end - begin) * (p + 1) / pieces;
+      if (b < e)
+        running.emplace_back([&f, b, e]() { f(b, e); });
+    }
+    for (std::thread& t : running)
+      t.join();
+  };
+}
+
+std::string loadError(const Bytes& b, const svdag::ParallelFor& parallel)
+{
+  try
+  {
+    svdag::deserialize(b.data(), b.size(), parallel);
+  }
+  catch (const FileError& e)
+  {
+    return e.what();
+  }
+  return "loaded without an error";
+}
+
+// Validation checks the nodes of a pool in parallel: the same volume as in order, and for a file
+// with two bad references the same error (the one of the first node in the stream).
+TEST(FileContent, ParallelValidationAgreesWithTheOrderedOne)
+{
+  std::mt19937 rng(41);
+  const svdag::Volume v = svdag::pooled(build(ScalarType::UInt16, geometry(64, 48, 40),
+    [&](int x, int y, int z) { return uint64_t((x / 5 + y / 7 + z / 3 + (rng() % 9 == 0)) % 40); }));
+  ASSERT_GT(v.midCount, 1024u) << "fewer nodes than one of the validation's grains";
+  for (const svdag::WriteOptions options : { svdag::WriteOptions{}, svdag::WriteOptions{ 0, 2 } })
+  {
+    SCOPED_TRACE("format " + std::to_string(options.formatVersion));
+    const Bytes good = svdag::serialize(v, options);
+    const svdag::Volume ordered = svdag::deserialize(good);
+    EXPECT_TRUE(ordered == svdag::compacted(v));
+    for (uint64_t pieces : { 2u, 7u })
+      EXPECT_TRUE(svdag::deserialize(good.data(), good.size(), onThreads(pieces)) == ordered);
+  }
+  // Two mid nodes' first references moved past the last leaf, one early in the stream, one late.
+  const Bytes good = svdag::serialize(v, { 0, 2 });
+  svdag::Volume bad = v;
+  uint64_t offset = 0;
+  std::vector<uint64_t> refs; // the first reference of each mid node that has one
+  for (uint64_t n = 0; n < v.midCount; ++n)
+  {
+    if (svdag::layout::nodeMixedMask(svdag::Volume::nodeHeader(v.mids, offset)))
+      refs.push_back(offset + svdag::layout::NODE_HEADER_BITS);
+    offset += svdag::Volume::nodeBits(v.mids, offset, v.widths.leafRefBits);
+  }
+  ASSERT_GT(refs.size(), 100u);
+  const uint32_t past = uint32_t(v.leaves.size()) << (svdag::layout::LEAF_SYMMETRY_BITS + 1);
+  ASSERT_EQ(past >> v.widths.leafRefBits, 0u) << "the leaf field cannot hold an index past the end";
+  for (uint64_t at : { refs[refs.size() - 3], refs[refs.size() / 5] })
+    writeBits(bad.mids, at, v.widths.leafRefBits, past);
+  const Bytes edited = rewriteSections(good, bad);
+  const std::string message = loadError(edited);
+  EXPECT_NE(message.find("mid node at bit " + std::to_string(refs[refs.size() / 5] -
+              svdag::layout::NODE_HEADER_BITS)), std::string::npos) << message;
+  for (uint64_t pieces : { 2u, 7u })
+    EXPECT_EQ(loadError(edited, onThreads(pieces)), message);
 }
 
 TEST(FileContent, LabelTableMustMatchTheBlocks)

@@ -13,6 +13,7 @@
 
 namespace svdag
 {
+struct PooledGraph;
 
 // Integer label types. Values are kept as 64-bit patterns (sign-extended for signed types).
 enum class ScalarType : uint8_t
@@ -179,8 +180,10 @@ public:
   // bounds to what its blocks hold, then checks the rest as validate() does (a .svdag 4.0 file
   // stores neither: they are derived from the same once-per-node summaries that validate() uses).
   // Throws std::runtime_error as validate() does, and for a label no block holds; pooled form
-  // only (std::logic_error otherwise).
-  void deriveBoundsAndValidate(const ParallelFor& parallel = sequentialFor);
+  // only (std::logic_error otherwise). `graph`, where given, receives the nodes as validation
+  // read them, for compaction (PooledGraph.h, private to the core).
+  void deriveBoundsAndValidate(
+    const ParallelFor& parallel = sequentialFor, PooledGraph* graph = nullptr);
   bool operator==(const Volume& o) const;
 };
 
