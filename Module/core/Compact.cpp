@@ -257,6 +257,9 @@ Volume compacted(Volume v, PooledGraph graph)
   // after another, child order), then its shared mids not placed yet.
   std::vector<uint32_t> rootOrder, midOrder;
   std::vector<uint8_t> midFold; // chained mids: written complemented (as the root sees them)
+  rootOrder.reserve(roots.size());
+  midOrder.reserve(mids.size());
+  midFold.reserve(mids.size());
   {
     std::vector<uint8_t> rootPlaced(roots.size()), midPlaced(mids.size());
     for (uint64_t b = 0; b < v.blockCount; ++b)

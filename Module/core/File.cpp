@@ -522,22 +522,25 @@ bool readAll(std::FILE* f, uint8_t* data, size_t size)
 
 // ---- reading ----
 
+// One per thread, kept between loads: making one costs a small file's load a twentieth of its
+// time. inflate() resets it before each frame.
+using DecompressionContext = ZSTD_DCtx*;
+DecompressionContext decompressionContext()
+{
+  thread_local const std::unique_ptr<ZSTD_DCtx, size_t (*)(ZSTD_DCtx*)> ctx(
+    ZSTD_createDCtx(), ZSTD_freeDCtx);
+  if (!ctx)
+    throw FileError("cannot create a zstd decompression context");
+  return ctx.get();
+}
+
 // Decompresses one zstd frame that must yield exactly `raw` bytes into `out`, as the raw
 // little-endian bytes of its elements (raw is a multiple of their size), followed by `padding`
 // zero elements. The output grows with what the frame actually produces, so a false raw size
 // cannot make us reserve memory up front; decompressing into the elements themselves costs a
 // section its size once, not twice.
-using DecompressionContext = std::unique_ptr<ZSTD_DCtx, size_t (*)(ZSTD_DCtx*)>;
-DecompressionContext decompressionContext()
-{
-  DecompressionContext ctx(ZSTD_createDCtx(), ZSTD_freeDCtx);
-  if (!ctx)
-    throw FileError("cannot create a zstd decompression context");
-  return ctx;
-}
-
 template <typename T>
-void inflate(const DecompressionContext& ctx, const uint8_t* src, size_t stored, uint64_t raw,
+void inflate(DecompressionContext ctx, const uint8_t* src, size_t stored, uint64_t raw,
   const std::string& part, std::vector<T>& out, size_t padding)
 {
   const unsigned long long declared = ZSTD_getFrameContentSize(src, stored);
@@ -545,7 +548,7 @@ void inflate(const DecompressionContext& ctx, const uint8_t* src, size_t stored,
     fail(part + " is not a valid zstd frame");
   if (declared == ZSTD_CONTENTSIZE_UNKNOWN || declared != raw)
     fail(part + ": the zstd frame's size does not match the declared raw size");
-  ZSTD_DCtx_reset(ctx.get(), ZSTD_reset_session_only);
+  ZSTD_DCtx_reset(ctx, ZSTD_reset_session_only);
 
   const uint64_t rawElements = raw / sizeof(T);
   // Reserving the padding with each step makes the last step's allocation the final one.
@@ -568,7 +571,7 @@ void inflate(const DecompressionContext& ctx, const uint8_t* src, size_t stored,
       ? ZSTD_outBuffer{ &scratch, 1, 0 }
       : ZSTD_outBuffer{ reinterpret_cast<uint8_t*>(out.data()), capacity, produced };
     const size_t inBefore = in.pos, outBefore = o.pos;
-    const size_t r = ZSTD_decompressStream(ctx.get(), &o, &in);
+    const size_t r = ZSTD_decompressStream(ctx, &o, &in);
     if (ZSTD_isError(r))
       fail(part + ": corrupt zstd data (" + ZSTD_getErrorName(r) + ")");
     if (full && o.pos > 0)

@@ -989,7 +989,58 @@ struct LabelTotals
 // its bounds (decoders write only inside the bounds, the traversal reads the whole cell: both
 // must agree), the blocks of a cell disjoint (CellBlocks); returns each label's voxel count and
 // bounds as the blocks hold them.
-LabelTotals checkBlocks(const Volume& v, NodePool& roots)
+// The blocks of every cell disjoint and of distinct labels (CellBlocks), for blocks whose
+// fields checkBlocks has checked; cells side by side through `parallel` (a range of blocks
+// takes the cells that start in it). The error is the first failing cell's, as in order.
+void checkCells(const Volume& v, const ParallelFor& parallel)
+{
+  const FieldWidths& w = v.widths;
+  const uint32_t* blockWords = v.blocks.data();
+  const uint32_t recordBits = w.blockBits();
+  const uint32_t labelFieldAt = layout::blockLabelOffset(w.cellBits);
+  const uint32_t rootAt = layout::blockRootOffset(w.cellBits, w.labelBits);
+  auto cellOf = [&](uint64_t i) { return fieldAt(blockWords, i * recordBits, w.cellBits); };
+  // The cell starting at block `first` through `cells`; returns the block after it.
+  auto checkCell = [&](uint64_t first, CellBlocks& cells) {
+    const uint32_t cell = cellOf(first);
+    uint64_t i = first;
+    for (; i < v.blockCount && cellOf(i) == cell; ++i)
+      cells.add(i, fieldAt(blockWords, i * recordBits + labelFieldAt, w.labelBits),
+        fieldAt(blockWords, i * recordBits + rootAt, w.rootRefBits));
+    cells.check(cell);
+    return i;
+  };
+  std::atomic<uint64_t> firstBad{ v.blockCount };
+  parallel(0, v.blockCount, 4096, [&](uint64_t begin, uint64_t end) {
+    uint64_t i = begin;
+    while (i > 0 && i < end && cellOf(i) == cellOf(i - 1))
+      ++i;
+    CellBlocks cells(v);
+    while (i < end)
+    {
+      const uint64_t first = i;
+      try
+      {
+        i = checkCell(first, cells);
+      }
+      catch (const std::runtime_error&)
+      {
+        uint64_t seen = firstBad.load();
+        while (first < seen && !firstBad.compare_exchange_weak(seen, first))
+        {
+        }
+        return;
+      }
+    }
+  });
+  if (firstBad.load() < v.blockCount)
+  {
+    CellBlocks cells(v);
+    checkCell(firstBad.load(), cells); // throws its error on this thread
+  }
+}
+
+LabelTotals checkBlocks(const Volume& v, NodePool& roots, const ParallelFor& parallel)
 {
   const FieldWidths& w = v.widths;
   const auto& d = v.geometry.dims;
@@ -999,7 +1050,6 @@ LabelTotals checkBlocks(const Volume& v, NodePool& roots)
   totals.voxels.assign(v.labels.size(), 0);
   totals.bounds.assign(v.labels.size(),
     std::array<int32_t, 6>{ { INT32_MAX, INT32_MIN, INT32_MAX, INT32_MIN, INT32_MAX, INT32_MIN } });
-  CellBlocks cellBlocks(v);
   const uint32_t* blockWords = v.blocks.data();
   const uint32_t recordBits = w.blockBits();
   const uint32_t boundsAt = layout::blockBoundsOffset(w.cellBits);
@@ -1022,8 +1072,6 @@ LabelTotals checkBlocks(const Volume& v, NodePool& roots)
     // sorted them by label come in scan order: only a label twice in one cell is refused.
     if (i > 0 && cell < previousCell)
       fail("blocks not sorted by cell (" + name() + ")");
-    if (i > 0 && cell != previousCell)
-      cellBlocks.check(previousCell);
     previousCell = cell;
     const int64_t root = roots.index.find(layout::refTarget(rootRef));
     if (root < 0)
@@ -1054,9 +1102,8 @@ LabelTotals checkBlocks(const Volume& v, NodePool& roots)
       lb[2 * a + 1] = std::max(lb[2 * a + 1], int32_t(cellOrigin[a] + hi));
     }
     totals.voxels[label] += voxels;
-    cellBlocks.add(i, label, rootRef);
   }
-  cellBlocks.check(previousCell);
+  checkCells(v, parallel);
   return totals;
 }
 
@@ -1092,7 +1139,7 @@ void Volume::validate(const ParallelFor& parallel) const
   NodePool mids = checkMidPool(*this, parallel);
   NodePool roots = checkRootPool(*this, mids, parallel);
   mids.checkAllUsed("mid");
-  checkLabelTotals(*this, checkBlocks(*this, roots));
+  checkLabelTotals(*this, checkBlocks(*this, roots, parallel));
   roots.checkAllUsed("root");
 }
 
@@ -1128,7 +1175,7 @@ void Volume::deriveBoundsAndValidate(const ParallelFor& parallel, PooledGraph* g
     }
     bits::replaceBits(this->blocks, i * recordBits + boundsAt, layout::BLOCK_BOUNDS_BITS, box);
   }
-  const LabelTotals totals = checkBlocks(*this, roots);
+  const LabelTotals totals = checkBlocks(*this, roots, parallel);
   for (size_t l = 0; l < this->labels.size(); ++l)
   {
     if (totals.voxels[l] == 0)

@@ -876,8 +876,8 @@ std::string loadError(const Bytes& b, const svdag::ParallelFor& parallel)
   return "loaded without an error";
 }
 
-// Validation checks the nodes of a pool in parallel: the same volume as in order, and for a file
-// with two bad references the same error (the one of the first node in the stream).
+// Validation checks the nodes of a pool and the cells in parallel: the same volume as in order,
+// and for a file with two bad references or two overlapping cells the same error (the first's).
 TEST(FileContent, ParallelValidationAgreesWithTheOrderedOne)
 {
   std::mt19937 rng(41);
@@ -915,6 +915,27 @@ TEST(FileContent, ParallelValidationAgreesWithTheOrderedOne)
               svdag::layout::NODE_HEADER_BITS)), std::string::npos) << message;
   for (uint64_t pieces : { 2u, 7u })
     EXPECT_EQ(loadError(edited, onThreads(pieces)), message);
+
+  // Two cells, one early and one late, whose second block becomes a copy of their first (its
+  // root and bounds, its own label): blocks that overlap, found by cells checked side by side.
+  std::vector<uint64_t> pairs; // the first block of each cell with two or more
+  for (uint64_t i = 0; i + 1 < v.blockCount; ++i)
+    if (v.block(i).cell == v.block(i + 1).cell && (pairs.empty() || v.block(pairs.back()).cell != v.block(i).cell))
+      pairs.push_back(i);
+  ASSERT_GT(pairs.size(), 20u);
+  svdag::Volume overlapping = v;
+  for (uint64_t i : { pairs[pairs.size() - 2], pairs[pairs.size() / 4] })
+  {
+    setBlockRoot(overlapping, i + 1, v.block(i).root);
+    setBlockBox(overlapping, i + 1, v.block(i));
+  }
+  const Bytes twice = rewriteSections(good, overlapping);
+  const std::string overlap = loadError(twice);
+  EXPECT_NE(overlap.find("blocks " + std::to_string(pairs[pairs.size() / 4]) + " and "),
+    std::string::npos) << overlap;
+  EXPECT_NE(overlap.find("overlap"), std::string::npos) << overlap;
+  for (uint64_t pieces : { 2u, 7u })
+    EXPECT_EQ(loadError(twice, onThreads(pieces)), overlap);
 }
 
 TEST(FileContent, LabelTableMustMatchTheBlocks)
