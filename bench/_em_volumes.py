@@ -11,6 +11,10 @@ neurites' cross sections rather than polyhedra), a membrane of label 0 where a v
 differs from a neighbour's within MEMBRANE voxels, and a quarter of the cells removed (label 0:
 unannotated space between the remaining ones). Deterministic (seeded).
 
+``mosaic(n, k)``: k^3 em_like(n) volumes side by side, each seeded apart and with labels of its
+own: an EM-like volume of (k n)^3 whose every part is different (em_like itself takes minutes at
+512^3 and its Voronoi step grows with voxels times cells, so larger ones are built this way).
+
 ``tiled(labels, k)``: a real volume repeated k times per axis, each copy's labels offset so that
 the copies are distinct objects (k^3 times the labels, as a larger acquisition would have).
 
@@ -42,15 +46,16 @@ def _warp_offsets(n, a, b):
     return np.rint(total).astype(np.int32)
 
 
-def em_like(n: int = 512, seeds: int | None = None) -> np.ndarray:
+def em_like(n: int = 512, seeds: int | None = None, seed: int = SEED) -> np.ndarray:
     """An n^3 EM-like label volume, uint16, indexed [z, y, x] (see the module docstring); seeds
-    default to SEEDS at n = 512 and the same cell size at other n."""
+    default to SEEDS at n = 512 and the same cell size at other n; `seed` fixes the random
+    cells."""
     from vtksvdag import synthetic
 
     if seeds is None:
         seeds = max(8, int(round(SEEDS * (n / 512.0) ** 3)))
 
-    cells = synthetic.voronoi((n, n, n), seeds, seed=SEED, dtype=np.uint16)
+    cells = synthetic.voronoi((n, n, n), seeds, seed=seed, dtype=np.uint16)
     # Warped sampling: every axis displaced by sines of the two others, clamped to the volume;
     # slice by slice (no n^3 index arrays).
     i = np.arange(n, dtype=np.float32)
@@ -79,11 +84,30 @@ def em_like(n: int = 512, seeds: int | None = None) -> np.ndarray:
     labels[boundary] = 0
     del boundary
     # Unannotated space: a seeded quarter of the cells removed.
-    rng = np.random.default_rng(SEED)
+    rng = np.random.default_rng(seed)
     removed = rng.choice(np.arange(1, seeds + 1), size=int(REMOVED * seeds), replace=False)
     table = np.arange(seeds + 1, dtype=np.uint16)
     table[removed] = 0
     return table[labels]
+
+
+def mosaic(n: int = 512, k: int = 2, workers: int = 2) -> np.ndarray:
+    """k^3 em_like(n) volumes side by side ([z, y, x], uint32), part c seeded SEED + c and its
+    non-zero labels offset by c times the largest label em_like(n) can give; parts are made
+    `workers` at a time."""
+    import concurrent.futures
+
+    seeds = max(8, int(round(SEEDS * (n / 512.0) ** 3)))
+    out = np.empty((k * n,) * 3, np.uint32)
+    corners = [(cz, cy, cx) for cz in range(k) for cy in range(k) for cx in range(k)]
+    with concurrent.futures.ProcessPoolExecutor(max_workers=workers) as pool:
+        parts = pool.map(em_like, [n] * len(corners), [seeds] * len(corners),
+                         [SEED + c for c in range(len(corners))])
+        for c, ((cz, cy, cx), part) in enumerate(zip(corners, parts)):
+            block = part.astype(np.uint32)
+            block[part != 0] += np.uint32(c * seeds)
+            out[cz * n:(cz + 1) * n, cy * n:(cy + 1) * n, cx * n:(cx + 1) * n] = block
+    return out
 
 
 def tiled(labels: np.ndarray, k: int = 2) -> np.ndarray:
@@ -110,12 +134,15 @@ def tiled(labels: np.ndarray, k: int = 2) -> np.ndarray:
 def _make(name: str, shared_data: pathlib.Path) -> np.ndarray:
     if name.startswith("em_like"):
         return em_like(int(name[len("em_like"):]))
+    if name.startswith("em_mosaic2x"):
+        return mosaic(int(name[len("em_mosaic2x"):]), 2)
     if name.startswith("tiled2_"):
         import nrrd
 
         data, _ = nrrd.read(str(shared_data / f"{name[len('tiled2_'):]}.nrrd"), index_order="C")
         return tiled(data, 2)
-    raise ValueError(f"unknown generated volume {name!r} (em_like<n> or tiled2_<shared volume>)")
+    raise ValueError(f"unknown generated volume {name!r} "
+                     "(em_like<n>, em_mosaic2x<n> or tiled2_<shared volume>)")
 
 
 def cached_volume(name: str, out_dir, shared_data):

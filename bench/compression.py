@@ -12,6 +12,11 @@ status 1), measures the reference codecs on the same array, measures the peak me
 compressing from the file in a subprocess, prints plain-text tables, and writes compression.csv
 and compression.png to the output folder. Figures reported elsewhere (../shared/notes/anchors.md) are
 printed in a separate table and never mixed with measured ones.
+
+    .venv/bin/python bench/compression.py --large [--quick]
+
+measures only the in-memory bytes of EM-like volumes larger than 512^3 (LARGE_VOLUMES) against
+compressed_segmentation, both round trips checked, and writes compression_large.csv.
 """
 from __future__ import annotations
 
@@ -85,6 +90,15 @@ QUICK_GENERATED_VOLUMES = {
     "checkerboard64_p1": GENERATED_VOLUMES["checkerboard64_p1"],
     "checkerboard64_p2": GENERATED_VOLUMES["checkerboard64_p2"],
 }
+
+# Issue 23's in-memory target holds on EM-like volumes "of 512^3 and up": larger ones, measured by
+# --large for their bytes in memory against compressed_segmentation only (their files, codecs and
+# peak memory would take an hour). Eight em_like(512) parts seeded apart (bench/_em_volumes.py).
+LARGE_VOLUMES = {"em_mosaic2x512": lambda: _em_volumes.mosaic(512, 2)}
+QUICK_LARGE_VOLUMES = {"em_mosaic2x32": lambda: _em_volumes.mosaic(32, 2)}
+LARGE_COLUMNS = ["volume", "dims_xyz", "voxels", "labels", "blocks", "root_nodes", "mid_nodes",
+                 "leaf_nodes", "bytes_blocks", "bytes_dag", "bytes_labels", "bytes_total", "bits_per_voxel",
+                 "generate_s", "build_s", "cseg_bytes", "cseg_s", "ours_over_cseg"]
 
 COLUMNS = [
     "volume", "source", "dims_xyz", "dtype", "voxels", "labels",
@@ -746,6 +760,76 @@ def write_plot(rows, path: pathlib.Path):
 
 
 # ---------------------------------------------------------------------------------- main
+# compressed_segmentation's format holds one encoding's tables in 24-bit offsets: past 512^3 EM-like
+# voxels it overflows, so larger volumes are encoded in chunks of this edge (as Neuroglancer
+# stores them: in chunks, most often far smaller ones, which cost cseg more).
+CSEG_CHUNK = 512
+
+
+def measure_cseg_chunked(name: str, labels: np.ndarray, chunk: int = CSEG_CHUNK) -> dict:
+    """measure_cseg over chunk^3 pieces of `labels`: their bytes and seconds summed."""
+    total = {"cseg_bytes": 0, "cseg_s": 0.0}
+    nz, ny, nx = labels.shape
+    for z in range(0, nz, chunk):
+        for y in range(0, ny, chunk):
+            for x in range(0, nx, chunk):
+                piece = np.ascontiguousarray(labels[z:z + chunk, y:y + chunk, x:x + chunk])
+                row = measure_cseg(f"{name} chunk ({x}, {y}, {z})", piece)
+                total["cseg_bytes"] += row["cseg_bytes"]
+                total["cseg_s"] += row["cseg_s"]
+                total["cseg_dtype"] = row["cseg_dtype"]
+    return total
+
+
+def measure_large(name: str, make) -> dict:
+    """In-memory bytes of a generated volume against compressed_segmentation (in CSEG_CHUNK^3
+    chunks), both round trips checked."""
+    start = time.perf_counter()
+    labels = make()
+    generate_s = time.perf_counter() - start
+    svdag, build_s = build_svdag(to_image(labels))
+    check_round_trip(name, labels, svdag)
+    total = svdag.GetCompressedSize()
+    row = {
+        "volume": name, "dims_xyz": "x".join(str(d) for d in labels.shape[::-1]),
+        "voxels": labels.size, "labels": svdag.GetNumberOfLabels(),
+        "blocks": svdag.GetNumberOfBlocks(), "root_nodes": svdag.GetNumberOfRootNodes(),
+        "mid_nodes": svdag.GetNumberOfMidNodes(), "leaf_nodes": svdag.GetNumberOfLeaves(),
+        "bytes_blocks": svdag.GetBlocksMemorySize(), "bytes_dag": svdag.GetDAGMemorySize(),
+        "bytes_labels": svdag.GetLabelTableMemorySize(), "bytes_total": total,
+        "bits_per_voxel": 8.0 * total / labels.size, "generate_s": generate_s, "build_s": build_s,
+    }
+    del svdag
+    row.update(measure_cseg_chunked(name, labels))
+    row["ours_over_cseg"] = total / row["cseg_bytes"]
+    return row
+
+
+def run_large(args) -> int:
+    out = pathlib.Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    print(f"machine: {machine_description()}")
+    rows = []
+    for name, make in (QUICK_LARGE_VOLUMES if args.quick else LARGE_VOLUMES).items():
+        rows.append(measure_large(name, make))
+        print(f"  {name}: {rows[-1]['bytes_total'] / MB:.3f} MB, round trips ok", flush=True)
+    print_table(f"Larger EM-like volumes in memory (MB), against compressed_segmentation in "
+                f"{CSEG_CHUNK}^3 chunks",
+                ["volume", "dims", "labels", "blocks", "ours", "cseg", "ours/cseg", "bits/voxel",
+                 "generate s", "build s"],
+                [[r["volume"], r["dims_xyz"], r["labels"], r["blocks"], r["bytes_total"] / MB,
+                  r["cseg_bytes"] / MB, r["ours_over_cseg"], r["bits_per_voxel"], r["generate_s"],
+                  r["build_s"]] for r in rows])
+    csv_path = out / "compression_large.csv"
+    with open(csv_path, "w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=LARGE_COLUMNS, extrasaction="ignore")
+        writer.writeheader()
+        for r in rows:
+            writer.writerow({k: (f"{v:.6g}" if isinstance(v, float) else v) for k, v in r.items()})
+    print(f"\nwrote {csv_path}")
+    return 0
+
+
 def run(args) -> int:
     out = pathlib.Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -810,6 +894,9 @@ def main(argv=None) -> int:
                         help="with --frames: another build's vtksvdag-render, timed on the same "
                              "files, interleaved (the encoding before a change)")
     parser.add_argument("--frame-rounds", type=int, default=3, help="with --frames: rounds (median)")
+    parser.add_argument("--large", action="store_true",
+                        help="instead: EM-like volumes larger than 512^3 in memory against "
+                             "compressed_segmentation (1024^3: about 10 minutes, 10 GB)")
     parser.add_argument("--memory-probe", metavar="PATH", help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.memory_probe is not None:
@@ -824,7 +911,7 @@ def main(argv=None) -> int:
     if args.frames and not RENDER_TOOL.is_file():
         parser.error(f"--frames needs {RENDER_TOOL} (cmake --build build)")
     try:
-        return run(args)
+        return run_large(args) if args.large else run(args)
     except BenchError as error:
         print(f"\nBENCHMARK FAILED: {error}", file=sys.stderr)
         return 1

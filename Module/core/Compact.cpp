@@ -95,8 +95,8 @@ void countUse(std::vector<uint8_t>& uses, size_t i)
 }
 
 // Rewrites the block records' root references (block and old reference -> the root's index by
-// rootOf -> new offset) at the new root reference width, record by record: in place where the records do
-// not grow (a volume of billions of blocks is not copied), else into a new stream.
+// rootOf -> new offset) at the new root reference width, record by record: in place where the
+// records do not grow (a volume of billions of blocks is not copied), else into a new stream.
 template <typename Lookup>
 void rewriteBlocks(Volume& v, uint32_t rootRefBits, const Lookup& rootOf,
   const std::vector<uint32_t>& newStarts)

@@ -985,10 +985,6 @@ struct LabelTotals
   std::vector<std::array<int32_t, 6>> bounds;
 };
 
-// Blocks: sorted by cell, inside the grid and the volume, each occupancy non-empty and inside
-// its bounds (decoders write only inside the bounds, the traversal reads the whole cell: both
-// must agree), the blocks of a cell disjoint (CellBlocks); returns each label's voxel count and
-// bounds as the blocks hold them.
 // The blocks of every cell disjoint and of distinct labels (CellBlocks), for blocks whose
 // fields checkBlocks has checked; cells side by side through `parallel` (a range of blocks
 // takes the cells that start in it). The error is the first failing cell's, as in order.
@@ -1040,6 +1036,10 @@ void checkCells(const Volume& v, const ParallelFor& parallel)
   }
 }
 
+// Blocks: sorted by cell, inside the grid and the volume, each occupancy non-empty and inside
+// its bounds (decoders write only inside the bounds, the traversal reads the whole cell: both
+// must agree), the blocks of a cell disjoint (checkCells); returns each label's voxel count and
+// bounds as the blocks hold them.
 LabelTotals checkBlocks(const Volume& v, NodePool& roots, const ParallelFor& parallel)
 {
   const FieldWidths& w = v.widths;

@@ -199,3 +199,57 @@ def test_dense_indices_and_cseg_input():
     negative = bench.cseg_input(np.array([-1, 2], dtype=np.int32))
     assert negative.dtype == np.uint64 and negative[0] == 2**64 - 1
     assert [bench.min_width_bytes(n) for n in (2, 256, 257, 65536, 65537, 2**33)] == [1, 1, 2, 2, 4, 8]
+
+
+def test_large_mode_writes_its_table(tmp_path):
+    completed = subprocess.run(
+        [sys.executable, str(SCRIPT), "--large", "--quick", "--out", str(tmp_path)],
+        capture_output=True, text=True, cwd=REPO, env=os.environ.copy(), timeout=600,
+    )
+    assert completed.returncode == 0, completed.stdout[-3000:] + completed.stderr[-3000:]
+    assert "Larger EM-like volumes in memory" in completed.stdout
+    with open(tmp_path / "compression_large.csv", newline="") as f:
+        rows = list(csv.DictReader(f))
+    assert [r["volume"] for r in rows] == ["em_mosaic2x32"]
+    r = rows[0]
+    assert r["dims_xyz"] == "64x64x64" and int(r["voxels"]) == 64 ** 3
+    total = int(r["bytes_total"])
+    assert total == int(r["bytes_blocks"]) + int(r["bytes_dag"]) + int(r["bytes_labels"])
+    assert float(r["ours_over_cseg"]) == pytest.approx(total / int(r["cseg_bytes"]), rel=1e-4)
+
+
+def test_mosaic_is_its_parts_seeded_apart_with_labels_of_their_own():
+    import numpy as np
+
+    sys.path.insert(0, str(REPO / "bench"))
+    import _em_volumes as em
+
+    n, seeds = 16, 8  # em_like's cell count at n = 16
+    whole = em.mosaic(n, 2, workers=1)
+    assert whole.shape == (2 * n,) * 3 and whole.dtype == np.uint32
+    labels_of_parts = []
+    for c, (cz, cy, cx) in enumerate((z, y, x) for z in range(2) for y in range(2) for x in range(2)):
+        part = em.em_like(n, seeds, em.SEED + c).astype(np.uint32)
+        expected = np.where(part != 0, part + c * seeds, 0)
+        got = whole[cz * n:(cz + 1) * n, cy * n:(cy + 1) * n, cx * n:(cx + 1) * n]
+        np.testing.assert_array_equal(got, expected)
+        labels_of_parts.append(set(np.unique(got[got != 0]).tolist()))
+    for a in range(8):
+        for b in range(a + 1, 8):
+            assert not labels_of_parts[a] & labels_of_parts[b]
+    assert not np.array_equal(whole[:n, :n, :n] != 0, whole[:n, :n, n:] != 0)  # seeded apart
+
+
+def test_cseg_in_chunks_is_the_sum_of_its_pieces():
+    import numpy as np
+
+    bench = load_bench_module()
+    labels = np.random.default_rng(5).integers(0, 50, (40, 24, 33)).astype(np.uint32)
+    whole = bench.measure_cseg("whole", labels)
+    assert bench.measure_cseg_chunked("one chunk", labels, chunk=64)["cseg_bytes"] == whole["cseg_bytes"]
+    pieces = [p for zs in np.array_split(labels, [16, 32], axis=0)
+              for ys in np.array_split(zs, [16], axis=1)
+              for p in np.array_split(ys, [16, 32], axis=2)]
+    assert len(pieces) == 18
+    expected = sum(bench.measure_cseg("piece", np.ascontiguousarray(p))["cseg_bytes"] for p in pieces)
+    assert bench.measure_cseg_chunked("chunks", labels, chunk=16)["cseg_bytes"] == expected
