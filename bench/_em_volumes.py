@@ -46,6 +46,11 @@ def _warp_offsets(n, a, b):
     return np.rint(total).astype(np.int32)
 
 
+def cells_at(n: int) -> int:
+    """em_like's cells before removal at edge n: SEEDS at 512, the same cell size at other n."""
+    return max(8, int(round(SEEDS * (n / 512.0) ** 3)))
+
+
 def em_like(n: int = 512, seeds: int | None = None, seed: int = SEED) -> np.ndarray:
     """An n^3 EM-like label volume, uint16, indexed [z, y, x] (see the module docstring); seeds
     default to SEEDS at n = 512 and the same cell size at other n; `seed` fixes the random
@@ -53,7 +58,7 @@ def em_like(n: int = 512, seeds: int | None = None, seed: int = SEED) -> np.ndar
     from vtksvdag import synthetic
 
     if seeds is None:
-        seeds = max(8, int(round(SEEDS * (n / 512.0) ** 3)))
+        seeds = cells_at(n)
 
     cells = synthetic.voronoi((n, n, n), seeds, seed=seed, dtype=np.uint16)
     # Warped sampling: every axis displaced by sines of the two others, clamped to the volume;
@@ -97,7 +102,7 @@ def mosaic(n: int = 512, k: int = 2, workers: int = 2) -> np.ndarray:
     `workers` at a time."""
     import concurrent.futures
 
-    seeds = max(8, int(round(SEEDS * (n / 512.0) ** 3)))
+    seeds = cells_at(n)
     out = np.empty((k * n,) * 3, np.uint32)
     corners = [(cz, cy, cx) for cz in range(k) for cy in range(k) for cx in range(k)]
     with concurrent.futures.ProcessPoolExecutor(max_workers=workers) as pool:

@@ -278,6 +278,27 @@ def measure_cseg(name: str, labels: np.ndarray) -> dict:
     return {"cseg_dtype": str(data.dtype), "cseg_bytes": len(encoded), "cseg_s": seconds}
 
 
+# compressed_segmentation's format holds one encoding's tables in 24-bit offsets: past 512^3 EM-like
+# voxels it overflows, so larger volumes are encoded in chunks of this edge (as Neuroglancer
+# stores them: in chunks, most often far smaller ones, which cost cseg more).
+CSEG_CHUNK = 512
+
+
+def measure_cseg_chunked(name: str, labels: np.ndarray, chunk: int = CSEG_CHUNK) -> dict:
+    """measure_cseg over chunk^3 pieces of `labels`: their bytes and seconds summed."""
+    total = {"cseg_bytes": 0, "cseg_s": 0.0}
+    nz, ny, nx = labels.shape
+    for z in range(0, nz, chunk):
+        for y in range(0, ny, chunk):
+            for x in range(0, nx, chunk):
+                piece = np.ascontiguousarray(labels[z:z + chunk, y:y + chunk, x:x + chunk])
+                row = measure_cseg(f"{name} chunk ({x}, {y}, {z})", piece)
+                total["cseg_bytes"] += row["cseg_bytes"]
+                total["cseg_s"] += row["cseg_s"]
+                total["cseg_dtype"] = row["cseg_dtype"]
+    return total
+
+
 def dense_indices(labels: np.ndarray):
     """The distinct values and, per voxel, the index of its value among them, in the narrowest
     unsigned type that holds the count (1, 2, 4 or 8 bytes)."""
@@ -760,27 +781,6 @@ def write_plot(rows, path: pathlib.Path):
 
 
 # ---------------------------------------------------------------------------------- main
-# compressed_segmentation's format holds one encoding's tables in 24-bit offsets: past 512^3 EM-like
-# voxels it overflows, so larger volumes are encoded in chunks of this edge (as Neuroglancer
-# stores them: in chunks, most often far smaller ones, which cost cseg more).
-CSEG_CHUNK = 512
-
-
-def measure_cseg_chunked(name: str, labels: np.ndarray, chunk: int = CSEG_CHUNK) -> dict:
-    """measure_cseg over chunk^3 pieces of `labels`: their bytes and seconds summed."""
-    total = {"cseg_bytes": 0, "cseg_s": 0.0}
-    nz, ny, nx = labels.shape
-    for z in range(0, nz, chunk):
-        for y in range(0, ny, chunk):
-            for x in range(0, nx, chunk):
-                piece = np.ascontiguousarray(labels[z:z + chunk, y:y + chunk, x:x + chunk])
-                row = measure_cseg(f"{name} chunk ({x}, {y}, {z})", piece)
-                total["cseg_bytes"] += row["cseg_bytes"]
-                total["cseg_s"] += row["cseg_s"]
-                total["cseg_dtype"] = row["cseg_dtype"]
-    return total
-
-
 def measure_large(name: str, make) -> dict:
     """In-memory bytes of a generated volume against compressed_segmentation (in CSEG_CHUNK^3
     chunks), both round trips checked."""

@@ -224,7 +224,8 @@ def test_mosaic_is_its_parts_seeded_apart_with_labels_of_their_own():
     sys.path.insert(0, str(REPO / "bench"))
     import _em_volumes as em
 
-    n, seeds = 16, 8  # em_like's cell count at n = 16
+    n = 16
+    seeds = em.cells_at(n)
     whole = em.mosaic(n, 2, workers=1)
     assert whole.shape == (2 * n,) * 3 and whole.dtype == np.uint32
     labels_of_parts = []
