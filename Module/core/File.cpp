@@ -430,7 +430,7 @@ EncodedFile encode(const Volume& volume, const WriteOptions& options, const Para
     throw FileError("zstd level must be in 0..22 (got " + std::to_string(options.zstdLevel) + ")");
   try
   {
-    volume.validate();
+    volume.validate(parallel);
   }
   catch (const std::exception& e)
   {
@@ -785,7 +785,6 @@ std::vector<uint8_t> serialize(const Volume& volume, const WriteOptions& options
 
 namespace
 {
-// The file's volume in the pooled form it stores, validated.
 // The validated volume a file holds: compact from a 4.0 file, pooled from older ones.
 Volume deserializeValidated(const uint8_t* data, size_t size, const ParallelFor& parallel)
 {
