@@ -295,6 +295,8 @@ struct FeatureConstants
     values[SVDAG_CONSTANT_EMISSION] = f.emission;
     values[SVDAG_CONSTANT_TRANSMISSION] = f.transmission;
     values[SVDAG_CONSTANT_PREVIEW] = f.preview;
+    values[SVDAG_CONSTANT_SMOOTH_SHADING] = f.smoothShading;
+    values[SVDAG_CONSTANT_CLIPPING] = f.clipping;
     values[SVDAG_CONSTANT_STEP_STATISTICS] = f.stepStatistics;
     for (uint32_t i = 0; i < SVDAG_CONSTANT_COUNT; ++i)
       entries[i] = { i, uint32_t(i * sizeof(VkBool32)), sizeof(VkBool32) };
@@ -502,7 +504,8 @@ void PipelineLibrary::createRayTracingPipeline(
     stage.stage = c.stage;
     stage.module = modules.list.back();
     stage.pName = "main";
-    if (c.stage == VK_SHADER_STAGE_RAYGEN_BIT_KHR)
+    // The raygen's path tracer and the closest hit's shading normal read the switches.
+    if (c.stage == VK_SHADER_STAGE_RAYGEN_BIT_KHR || c.stage == VK_SHADER_STAGE_CLOSEST_HIT_BIT_KHR)
       stage.pSpecializationInfo = &specialization;
     stages.push_back(stage);
   }

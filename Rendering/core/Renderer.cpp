@@ -843,6 +843,8 @@ ShaderFeatures Renderer::shaderFeatures() const
   f.sun = sun.on && (sun.irradiance[0] > 0 || sun.irradiance[1] > 0 || sun.irradiance[2] > 0);
   f.emission = false;
   f.transmission = false;
+  f.smoothShading = this->Settings.shading == Shading::Smooth;
+  f.clipping = !this->Settings.clipPlanes.empty() || this->Settings.crop.on;
   f.stepStatistics = this->StepStatisticsOn;
   for (const Material& m : this->Materials)
   {
@@ -994,6 +996,7 @@ const Image& Renderer::render(PassUse use)
     traceFeatures = ShaderFeatures();
     traceFeatures.nextEventEstimation = false;
     traceFeatures.preview = true;
+    traceFeatures.clipping = features.clipping; // what is cut away stays away
   }
   const SunLight& sun = settings.sun;
   const auto& sd = sun.direction;

@@ -11,11 +11,15 @@ layout(constant_id = SVDAG_CONSTANT_SUN) const bool featureSun = false;
 layout(constant_id = SVDAG_CONSTANT_EMISSION) const bool featureEmission = false;
 layout(constant_id = SVDAG_CONSTANT_TRANSMISSION) const bool featureTransmission = false;
 layout(constant_id = SVDAG_CONSTANT_PREVIEW) const bool featurePreview = false;
+layout(constant_id = SVDAG_CONSTANT_SMOOTH_SHADING) const bool featureSmoothShading = false;
+layout(constant_id = SVDAG_CONSTANT_CLIPPING) const bool featureClipping = false;
 #define SVDAG_FEATURE_NEE featureNee
 #define SVDAG_FEATURE_ENV_MAP featureEnvMap
 #define SVDAG_FEATURE_SUN featureSun
 #define SVDAG_FEATURE_EMISSION featureEmission
 #define SVDAG_FEATURE_TRANSMISSION featureTransmission
 #define SVDAG_FEATURE_PREVIEW featurePreview
+#define SVDAG_FEATURE_SMOOTH_SHADING featureSmoothShading
+#define SVDAG_FEATURE_CLIPPING featureClipping
 
 #endif

@@ -6,6 +6,8 @@
 #ifndef SVDAG_RENDER_HIT_PAYLOAD_GLSL
 #define SVDAG_RENDER_HIT_PAYLOAD_GLSL
 
+#include "Features.glsl"
+
 SvdagWords gNeighbours;
 // The hit block's 27 neighbour root references start at word 27 * block of the table.
 #define SVDAG_NEIGHBOURS_PARAM uint svdagNeighbourBase,
@@ -39,7 +41,7 @@ SvdagPayload svdagHitPayload(uint label, float t, vec3 objectNormal, uint block,
   vec3 n = objectNormal * worldToObject;
   p.normal = dot(n, n) > 0.0 ? normalize(n) : vec3(0.0);
   p.shading = vec4(p.normal, 0.0);
-  if (frame.image.w == SVDAG_SHADING_SMOOTH && block != SVDAG_NO_BLOCK && dot(n, n) > 0.0)
+  if (SVDAG_FEATURE_SMOOTH_SHADING && block != SVDAG_NO_BLOCK && dot(n, n) > 0.0)
   {
     gNeighbours = SvdagWords(frame.widths2.zw);
     vec4 s = svdagSmoothNormalLift(27u * block, frame.widths.w, frame.widths2.x, cellLocalHit,

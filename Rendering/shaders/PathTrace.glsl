@@ -65,7 +65,7 @@ void traceClipped(vec3 origin, vec3 direction, float tmax, uint hitGroup, bool a
   c.tmin = 0.0;
   c.tmax = tmax;
   c.enterPlane = -1;
-  if (frame.clipping.x != 0u)
+  if (SVDAG_FEATURE_CLIPPING && frame.clipping.x != 0u)
     c = svdagClipInterval(frame.clipping.x, origin, direction, 0.0, tmax);
   if (!c.kept)
     return;

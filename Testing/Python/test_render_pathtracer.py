@@ -9,7 +9,8 @@ import pytest
 from conftest import capture_errors, compress_zyx as build
 from vtkmodules.util.numpy_support import vtk_to_numpy
 
-from vtksvdag.vtkSVDAGRendering import vtkSegmentationSVDAGRenderer
+from vtksvdag.vtkSVDAGRendering import (vtkSegmentationSVDAGRenderer,
+                                        vtkSegmentationSVDAGRenderSettings)
 
 WIDTH, HEIGHT = 48, 32
 VALUES = (3, 5, 9)  # label values; their indices in the label table are 0, 1, 2
@@ -318,6 +319,47 @@ def test_material_edit_does_not_rebuild(volume, backend):
     np.testing.assert_array_equal(images[2], images[0])
     np.testing.assert_array_equal(images[3], images[1])
     assert not np.array_equal(images[1], images[0])
+
+
+@pytest.mark.parametrize("backend", ["rt", "compute"])
+def test_smooth_shading_and_clipping_are_compiled_in_only_when_used(volume, backend):
+    """Each is a specialization of the path tracer (Pipeline.h's ShaderFeatures): switched on, one
+    more pipeline is compiled, and the frame is a fresh renderer's with that setting; switched off
+    again, nothing is compiled and the frame is the first one again."""
+    from vtkmodules.vtkCommonDataModel import vtkPlane
+
+    smooth = vtkSegmentationSVDAGRenderSettings.SHADING_SMOOTH
+    voxel = vtkSegmentationSVDAGRenderSettings.SHADING_VOXEL
+    plane = vtkPlane()
+    plane.SetOrigin(14.0, 14.0, 14.0)
+    plane.SetNormal(1.0, 0.3, 0.0)
+
+    def configured(r, shading, clipped):
+        r.GetSettings().SetBackend(backend)
+        r.GetSettings().SetShading(shading)
+        r.RemoveAllClippingPlanes()
+        if clipped:
+            r.AddClippingPlane(plane)
+        return r
+
+    r = configured(make_renderer(volume), voxel, False)
+    first = render(r)
+    pipelines = r.GetNumberOfPipelineBuilds()
+    frames = {}
+    for step, (shading, clipped) in enumerate([(smooth, False), (voxel, True), (smooth, True)]):
+        frames[shading, clipped] = render(configured(r, shading, clipped))
+        assert r.GetNumberOfPipelineBuilds() == pipelines + step + 1
+        fresh = render(configured(make_renderer(volume), shading, clipped))
+        for name in ("Label", "Depth", "Normal", "HDR"):
+            np.testing.assert_array_equal(frames[shading, clipped][name], fresh[name], err_msg=name)
+    hit = first["Label"] > 0
+    assert not np.array_equal(frames[smooth, False]["Normal"][hit], first["Normal"][hit])
+    np.testing.assert_array_equal(frames[smooth, False]["Label"], first["Label"])
+    assert (frames[voxel, True]["Label"] > 0).sum() < 0.9 * hit.sum()  # the plane cut some away
+    again = render(configured(r, voxel, False))
+    assert r.GetNumberOfPipelineBuilds() == pipelines + 3
+    for name in ("Label", "Depth", "Normal", "HDR"):
+        np.testing.assert_array_equal(again[name], first[name], err_msg=name)
 
 
 def test_bad_settings_fail_cleanly(volume, tmp_path):

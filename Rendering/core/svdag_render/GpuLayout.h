@@ -93,9 +93,11 @@ typedef uint32_t uint;
 #define SVDAG_CONSTANT_EMISSION 3
 #define SVDAG_CONSTANT_TRANSMISSION 4
 #define SVDAG_CONSTANT_PREVIEW 5
+#define SVDAG_CONSTANT_SMOOTH_SHADING 6
+#define SVDAG_CONSTANT_CLIPPING 7
 /* The compute backend's step statistics (camera.comp; the ray tracing shaders have none). */
-#define SVDAG_CONSTANT_STEP_STATISTICS 6
-#define SVDAG_CONSTANT_COUNT 7
+#define SVDAG_CONSTANT_STEP_STATISTICS 8
+#define SVDAG_CONSTANT_COUNT 9
 
 /* The compute backend's workgroup: SVDAG_COMPUTE_GROUP_SIZE^2 pixels (camera.comp). */
 #define SVDAG_COMPUTE_GROUP_SIZE 8
@@ -152,7 +154,8 @@ SVDAG_UNIFORMS_BEGIN(FrameUniforms)
                        //    size of a pixel at the ray origin, w: its growth per unit distance (a
                        //    voxel at distance t covers x / (z + w t) pixels)
   uvec4 image;         // x: width, y: height, z: LOD (SVDAG_RENDER_LOD_*), w: shading
-                       // (SVDAG_SHADING_*)
+                       // (SVDAG_SHADING_*; the shaders compile smooth shading in or out by
+                       // SVDAG_CONSTANT_SMOOTH_SHADING, set from the same setting)
   uvec4 grid;          // x, y: cells along x and y (cell index = cx + nx * (cy + ny * cz));
                        // z: primitives per BLAS (instance i's primitive p is entry
                        // i * z + p of the primitive -> block buffer); w: log2 of the words

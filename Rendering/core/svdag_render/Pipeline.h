@@ -61,6 +61,10 @@ struct ShaderFeatures
   bool transmission = false;
   // The preview (PathTracer.h's SVDAG_FEATURE_PREVIEW): primary hits only, a small pipeline.
   bool preview = false;
+  // Smooth shading normals (RenderSettings::shading) and clipping planes or a crop box: each
+  // almost doubles the path tracer's compilation on lavapipe, and most scenes use neither.
+  bool smoothShading = false;
+  bool clipping = false;
   // The compute backend's per-pixel step counters (Renderer::setStepStatistics); the ray
   // tracing backend ignores it.
   bool stepStatistics = false;
@@ -68,7 +72,8 @@ struct ShaderFeatures
   {
     return nextEventEstimation == o.nextEventEstimation && environmentMap == o.environmentMap &&
       sun == o.sun && emission == o.emission && transmission == o.transmission &&
-      preview == o.preview && stepStatistics == o.stepStatistics;
+      preview == o.preview && smoothShading == o.smoothShading && clipping == o.clipping &&
+      stepStatistics == o.stepStatistics;
   }
   bool operator!=(const ShaderFeatures& o) const { return !(*this == o); }
 };
