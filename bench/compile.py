@@ -20,6 +20,8 @@ selects, Pipeline.h's ShaderFeatures):
   sky        next-event estimation, a constant environment (the default scene)
   sun        the same with a disk sun (the README's main job)
   no-nee     the plain estimator (no shadow rays)
+  smooth     sky with smooth shading normals (--shading smooth)
+  clipped    sky with a clipping plane (--clip; where it cuts does not change what is compiled)
   preview    --preview: the small preview pipeline a window shows while the full one compiles
              in the background (its compile time is measured beside that background work);
              warm, the compute backend creates the full one from its binary at once instead
@@ -49,6 +51,8 @@ VARIANTS = {
     "sky": [],
     "sun": ["--sun", "0,-20"],
     "no-nee": ["--no-nee"],
+    "smooth": ["--shading", "smooth"],
+    "clipped": ["--clip", "0,0,0,1,0,0"],
     "preview": ["--preview"],
 }
 

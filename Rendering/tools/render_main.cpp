@@ -7,6 +7,7 @@
 //     [--view-angle 30] [--hide 0,5,7] [--frames 1] [--spp 1] [--bounces 4] [--seed 0]
 //     [--no-nee] [--denoise|--no-denoise] [--environment MAP.exr] [--sun AZ,EL]
 //     [--backend auto|rt|compute] [--restart] [--preview] [--trace-reduction R]
+//     [--shading voxel|smooth] [--clip OX,OY,OZ,NX,NY,NZ]...
 //
 // Unset options take svdag::render::RenderSettings' defaults (LOD auto, bounces 4, seed 0, NEE
 // on, denoiser on, backend auto). --backend picks how rays find the blocks (RenderSettings.h; auto: per device). --restart makes
@@ -23,6 +24,9 @@
 // Every frame adds --spp path-traced samples per pixel to the accumulated image. --sun places a
 // disk sun (the renderer's default size and irradiance) at azimuth AZ (degrees from +x towards
 // +y) and elevation EL (degrees above the xy plane).
+//
+// --shading and --clip (a clipping plane in world units, keeping the side the normal points to;
+// repeatable) are `vtksvdag render`'s options of the same names.
 //
 // The camera frames the whole volume (svdag::render::frameVolume). --hide takes label INDICES
 // (positions in the volume's sorted label table). --frames renders several frames and reports
@@ -68,6 +72,8 @@ struct Options
   bool restart = false;
   bool preview = false;
   uint32_t traceReduction = svdag::render::Renderer::DefaultTraceReduction;
+  svdag::render::Shading shading = defaults.shading;
+  std::vector<svdag::render::ClipPlane> clipPlanes;
 };
 
 struct UsageError : std::invalid_argument
@@ -174,6 +180,22 @@ Options parse(int argc, char** argv)
       o.sunAzimuth = number(arg, value.substr(0, comma));
       o.sunElevation = number(arg, value.substr(comma + 1));
     }
+    else if (arg == "--shading")
+      o.shading = svdag::render::parseShading(value);
+    else if (arg == "--clip")
+    {
+      std::stringstream list(value);
+      std::string item;
+      std::vector<double> v;
+      while (std::getline(list, item, ','))
+        v.push_back(number(arg, item));
+      if (v.size() != 6)
+        throw UsageError("--clip needs OX,OY,OZ,NX,NY,NZ, got '" + value + "'");
+      svdag::render::ClipPlane plane;
+      plane.origin = { { v[0], v[1], v[2] } };
+      plane.normal = { { v[3], v[4], v[5] } };
+      o.clipPlanes.push_back(plane);
+    }
     else if (arg == "--hide")
     {
       std::stringstream list(value);
@@ -229,7 +251,8 @@ int main(int argc, char** argv)
               << "[--hide I,J,...] [--frames N] [--spp N] [--bounces N] [--seed N] [--no-nee] "
               << "[--denoise|--no-denoise] [--environment MAP.exr] [--sun AZ,EL] [--backend "
               << svdag::render::backendNames("|") << "] [--restart] [--preview] "
-              << "[--trace-reduction R]\n";
+              << "[--trace-reduction R] [--shading " << svdag::render::shadingNames("|")
+              << "] [--clip OX,OY,OZ,NX,NY,NZ]...\n";
     return 1;
   }
   try
@@ -251,6 +274,9 @@ int main(int argc, char** argv)
     renderer.setNextEventEstimation(o.nee);
     renderer.setDenoise(o.denoise);
     renderer.setPreviewWhileCompiling(o.preview);
+    renderer.setShading(o.shading);
+    if (!o.clipPlanes.empty())
+      renderer.setClipping(o.clipPlanes);
     if (!o.environment.empty())
       renderer.setEnvironmentMap(o.environment);
     if (o.sun)

@@ -18,6 +18,7 @@ def test_compile_quick(tmp_path):
     with open(tmp_path / "compile.csv", newline="") as f:
         rows = list(csv.DictReader(f))
     assert sorted((r["variant"], r["caches"]) for r in rows) == [
-        (v, c) for v in ["no-nee", "preview", "sky", "sun"] for c in ["cold", "warm"]]
+        (v, c) for v in ["clipped", "no-nee", "preview", "sky", "smooth", "sun"]
+        for c in ["cold", "warm"]]
     assert all(float(r["compile_seconds"]) > 0 for r in rows)
     assert "preview" in completed.stdout and "/ sun" in completed.stdout

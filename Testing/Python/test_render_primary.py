@@ -535,6 +535,61 @@ def test_command_line_renders_a_file(real_volume, tmp_path):
     assert failed.returncode == 2 and "vtksvdag-render:" in failed.stderr
 
 
+def test_command_line_shading_and_clipping_options(real_volume, tmp_path):
+    """--shading and --clip (repeatable) of vtksvdag-render give the VTK class's frame with the
+    same settings; a malformed plane is a usage error."""
+    from PIL import Image
+    from vtkmodules.vtkCommonDataModel import vtkPlane
+    from vtksvdag.vtkSVDAGIO import vtkSegmentationSVDAGWriter
+
+    volume = real_volume[1]
+    svdag_file = tmp_path / "plant.svdag"
+    writer = vtkSegmentationSVDAGWriter()
+    writer.SetInputData(volume)
+    writer.SetFileName(str(svdag_file))
+    assert writer.Write() == 1
+    # The fixture's grid: spacing (1.0, 0.9, 1.2), origin (-50, 0, 20), labels in (z, y, x).
+    dims = real_volume[0].shape[::-1]
+    center = [o + s * (n - 1) / 2 for o, s, n in zip((-50.0, 0.0, 20.0), (1.0, 0.9, 1.2), dims)]
+    planes = [(center, (1.0, 0.2, 0.0)), (center, (0.0, -1.0, 0.5))]
+    png = tmp_path / "clipped.png"
+    command = [str(cli_path()), str(svdag_file), str(png), "--width", "40", "--height", "30",
+               "--lod", "voxel", "--shading", "smooth"]
+    for origin, normal in planes:
+        command += ["--clip", ",".join(str(v) for v in (*origin, *normal))]
+    run = subprocess.run(command, capture_output=True, text=True, timeout=120)
+    assert run.returncode == 0, run.stderr
+    renderer = vtkSegmentationSVDAGRenderer()
+    renderer.SetInputData(volume)
+    renderer.SetWidth(40)
+    renderer.SetHeight(30)
+    settings = renderer.GetSettings()
+    settings.SetLOD(vtkSegmentationSVDAGRenderSettings.LOD_VOXEL)
+    settings.SetShading(vtkSegmentationSVDAGRenderSettings.SHADING_SMOOTH)
+    for origin, normal in planes:
+        plane = vtkPlane()
+        plane.SetOrigin(*origin)
+        plane.SetNormal(*normal)
+        renderer.AddClippingPlane(plane)
+    renderer.ResetCamera(30, 20, 1)  # the command line's default view
+    assert renderer.Render() == 1
+    color = vtk_to_numpy(renderer.GetOutput().GetPointData().GetArray("Color"))
+    label = vtk_to_numpy(renderer.GetOutput().GetPointData().GetArray("Label"))
+    assert 0 < np.count_nonzero(label) < label.size
+    image = np.asarray(Image.open(png))
+    assert np.array_equal(image[::-1].reshape(-1, 4), color)
+    renderer.RemoveAllClippingPlanes()
+    assert renderer.Render() == 1
+    unclipped = vtk_to_numpy(renderer.GetOutput().GetPointData().GetArray("Label"))
+    assert np.count_nonzero(label) < np.count_nonzero(unclipped)  # the planes cut some away
+
+    for bad, message in ((["--clip", "1,2,3"], "--clip needs OX,OY,OZ,NX,NY,NZ"),
+                         (["--shading", "phong"], "phong")):
+        failed = subprocess.run([str(cli_path()), str(svdag_file), str(png), *bad],
+                                capture_output=True, text=True, timeout=60)
+        assert failed.returncode == 1 and message in failed.stderr, failed.stderr
+
+
 def test_degenerate_camera_is_an_error(real_volume):
     renderer = make_renderer(real_volume[1])
     messages = capture_errors(renderer)
