@@ -6,7 +6,7 @@ its label in :func:`vtksvdag.add_segmentation`, so a slice and the path-traced v
 """
 import numpy as np
 
-from .plotting import _apply_colors, _label_keys, _segmentation_volume
+from .plotting import _apply_colors, _own_label_keys, _segmentation_volume
 
 _AXIS_NAMES = ("x", "y", "z")
 
@@ -35,7 +35,7 @@ def label_colors(volume, colors=None, cmap=None):
     # index), so that the slice cannot drift from the 3D view.
     material = [0.0] * 16
     linear = np.empty((len(volume.labels), 3))
-    for index, key in enumerate(_label_keys(volume, volume.labels.tolist(), "label")):
+    for index, key in enumerate(_own_label_keys(volume)):
         props.GetMaterial(volume.dataobject, key, material)
         linear[index] = material[:3]
     return _srgb_from_linear(linear)

@@ -207,6 +207,26 @@ def test_default_colors_on_the_mapper_are_the_palette_assignment(plotter):
     assert np.allclose(material[:3], linear, atol=1e-5)
 
 
+@pytest.mark.parametrize("dtype", DTYPES)
+def test_default_colors_reach_every_label_of_every_dtype(plotter, dtype):
+    """The colors are keyed by each label's 64-bit pattern (sign-extended, uint64 above 2^63 as
+    negative int64) without a call per label: every label, the extremes of its type included,
+    reads its palette color back by its value."""
+    info = np.iinfo(dtype)
+    labels = np.zeros((6, 7, 8), dtype)
+    values = sorted({info.min, info.min + 1, 1, 2, info.max - 1, info.max} - {0})
+    for i, value in enumerate(values):
+        labels[i, i % 7, :] = value
+    volume = vtksvdag.from_numpy(labels)
+    assert volume.labels.tolist() == values
+    props = vtksvdag.add_segmentation(plotter, volume, spp=1).GetMapper().GetLabelProperties()
+    rgb = [0.0] * 3
+    for value, color in zip(values, volume.distinct_colors()):
+        key = value - 2**64 if value >= 2**63 else value  # the mapper's int64 key
+        assert props.GetColor(key, rgb), value
+        assert np.allclose(rgb, color), value
+
+
 def test_hash_colors_stay_available(plotter):
     labels = synthetic.voronoi((20, 20, 20), 10, seed=1)
     actor = vtksvdag.add_segmentation(plotter, labels, cmap="hash", spp=1)
