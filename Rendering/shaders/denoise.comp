@@ -135,8 +135,11 @@ void prepare(uint x, uint y)
 // A surface's color is the mean of the pixels in the 7x7 window that show it, in this
 // iteration's input (wider windows served membranes' thin strips better, narrower ones rounded
 // cells' staircases: bench/README.md). Preferred are pixels of its label and face that are not on
-// a label edge (an edge pixel's value may mix labels), then edge pixels of them (a thin part, a
-// groove's wall), then its label's pixels whatever their face; background pixels are all exact.
+// a label edge (an edge pixel's value may mix labels once samples accumulate), then edge pixels of
+// them (a thin part, a groove's wall), then its label's pixels whatever their face; background
+// pixels are all exact. In a one-sample image an edge pixel's value is its pixel-center sample's,
+// of its own label only, and nearest to the edge: there edge pixels count as much as the others
+// (preferring pixels away from the edge brightened creases, whose occlusion those do not see).
 // `own` (the pixel's value) stands for a surface of its own label where its label is not in the
 // window. The estimate gives way to the pixel's own mean as samples accumulate (weight
 // G / (G + samples), G the coverage rays), so that the accumulating image still converges to the
@@ -169,7 +172,7 @@ vec4 resolveEdge(uint x, uint y, uvec4 labels, uvec4 keys, uint ownLabel, vec4 o
       if (all(notEqual(labels, uvec4(gq.x))))
         continue;
       uint faceBits = 0u;
-      uint edge = (gq.z & 0x80000000u) != 0u ? 1u : 0u;
+      uint edge = (gq.z & 0x80000000u) != 0u && p.samples.x > 1u ? 1u : 0u;
       if (gq.x != 0u)
         faceBits = svdagPackDirection8(vec3(normals.v[faces + 3u * j],
                      normals.v[faces + 3u * j + 1u], normals.v[faces + 3u * j + 2u])) << 16u;
@@ -246,9 +249,14 @@ void filterPixel(uint x, uint y)
           continue;
         uint j = uint(q.x) + width * uint(q.y);
         uvec4 gq = guides.v[j];
-        // Another label, or a label edge pixel (the sign bit of its depth) other than this one,
-        // unless the image is one sample (through the pixel center: of its own label only).
-        if (gq.x != g.x || (j != i && (gq.z & 0x80000000u) != 0u && p.samples.x > 1u))
+        // Never another label. Label edge pixels (the sign bit of the depth): once samples
+        // accumulate, no other pixel's tap (their samples may have hit the neighbouring label);
+        // in a one-sample image (through pixel centers: of their own labels only) taps, and an
+        // edge pixel's only taps, so that an edge is filtered along itself (a crease's
+        // occlusion darkens its edge pixels, which the pixels beside them do not share).
+        bool tapEdge = (gq.z & 0x80000000u) != 0u;
+        if (gq.x != g.x ||
+          (j != i && (p.samples.x > 1u ? tapEdge : (g.z & 0x80000000u) != 0u && !tapEdge)))
           continue;
         vec4 c = colors.v[j];
         // The 3x3 kernel (1/4, 1/2, 1/4) in each direction.

@@ -131,6 +131,66 @@ def test_no_radiance_crosses_labels_and_noise_falls(two_boxes):
     assert np.max(np.abs(np.round(np.clip(srgb, 0, 1) * 255) - color)) <= 1
 
 
+def test_crease_keeps_its_occlusion():
+    """A wall (label 2) standing on a floor (label 1) under a white sky: the floor darkens towards
+    the crease, where the wall hides half the sky. The floor's crease pixels (a 4-neighbour on the
+    wall) are label edge pixels; in a one-sample image the denoiser filters them along the crease
+    and resolves their coverage from pixels that include the crease itself, so they keep the
+    darkening rather than take the brighter floor beside them. Measured (seeds 5-8, 128^2,
+    against 1024 samples): the denoised crease 0.028 brighter than the reference on average
+    (0.014-0.042 per seed; 0.054 when crease pixels took their shade from the pixels beside
+    them), RMSE 0.048-0.058 against 0.077 for 16 raw samples."""
+    labels = np.zeros((24, 28, 28), np.uint8)  # z, y, x
+    labels[0:3] = 1
+    labels[3:22, 12:16, 2:26] = 2
+    volume = vtksvdag.from_numpy(labels)
+    size = 128
+
+    def sky_renderer(denoise, seed):
+        r = vtkSegmentationSVDAGRenderer()
+        r.SetInputData(volume.dataobject)
+        r.SetWidth(size)
+        r.SetHeight(size)
+        props = r.GetLabelProperties()
+        for label in (1, 2):
+            props.SetColor(label, 0.8, 0.8, 0.8)
+            props.SetSpecular(label, 0.0)
+            props.SetMetallic(label, 0.0)
+        s = r.GetSettings()
+        s.SetLOD("voxel")
+        s.SetMaximumBounces(1)
+        s.SetSeed(seed)
+        s.SetDenoise(denoise)
+        s.SunOff()
+        s.SetEnvironmentColor(1.0, 1.0, 1.0)
+        assert r.ResetCamera(30, 25, 1.2)
+        return r
+
+    reference_renderer = sky_renderer(False, 11)
+    reference = render_to(reference_renderer, 1024)
+    label = output(reference_renderer, "Label").reshape(size, size)
+    padded = np.pad(label, 1)
+    on_wall = np.zeros((size, size), bool)
+    for dy, dx in ((0, 1), (0, -1), (1, 0), (-1, 0)):
+        on_wall |= padded[1 + dy:1 + dy + size, 1 + dx:1 + dx + size] == 2
+    crease = ((label == 1) & on_wall).reshape(-1)
+    assert crease.sum() > 60
+    luminance = np.array([0.2126, 0.7152, 0.0722])
+    # The occlusion to keep: the reference's crease is well below the rest of the floor.
+    floor = (label == 1).reshape(-1) & ~crease
+    assert (reference[crease] @ luminance).mean() < 0.8 * (reference[floor] @ luminance).mean()
+    brighter, errors = [], []
+    for seed in (5, 6, 7, 8):
+        denoised = render_to(sky_renderer(True, seed), 1)
+        difference = (denoised[crease] - reference[crease]) @ luminance
+        brighter.append(difference.mean())
+        errors.append(np.sqrt(np.mean((denoised[crease] - reference[crease]) ** 2)))
+    raw16 = render_to(sky_renderer(False, 5), 16)
+    raw_error = np.sqrt(np.mean((raw16[crease] - reference[crease]) ** 2))
+    assert np.mean(brighter) < 0.045, brighter
+    assert np.mean(errors) < raw_error, (errors, raw_error)
+
+
 def test_filter_and_edge_estimate_fade_as_samples_converge(two_boxes):
     raw, denoised = renderer(two_boxes, False), renderer(two_boxes, True)
     render_to(raw, 1)
