@@ -24,9 +24,14 @@ Run from the repository root:
    EM-like volumes (--generated; bench/_em_volumes.py: thousands of labels, unlabelled space
    between the cells) at voxel and block LOD.
 2. Volcanite (when a binary is given by --volcanite, the VOLCANITE environment variable or found
-   on PATH; it is not a dependency): its frame time on each volume through --volcanite-command
-   (a template; the last "<number> ms" it prints is taken), beside ours; without a binary, the
-   same-run figures anchors.md reports (marked as reported, not measured here).
+   on PATH; it is not a dependency; bench/_volcanite.py runs it): every volume above, the
+   generated ones included, written as the NRRD it reads and compressed to its CSGV form once
+   (kept in --out/volcanite), at each size in its own default view, still, for
+   --volcanite-frames frames through --volcanite-command (its evaluation log's median frame
+   time), against ours in the same view (compute and rt, voxel LOD, NEE, 1 bounce: the camera
+   ray and one occlusion ray), --volcanite-rounds rounds interleaved, medians of the rounds.
+   Without a binary, the same-run figures anchors.md reports (marked as reported, not measured
+   here).
 3. Error against run time: on voronoi256 at --error-size pixels, lit by a disk sun (8 degrees
    radius) plus a constant sky, a reference image per LOD from the same renderer with NEE and
    --reference-spp samples per pixel (seed 1); then, per LOD, with NEE and without, one sample
@@ -38,7 +43,7 @@ Run from the repository root:
    path tracer's own figures). Default backend (auto).
 
 Prints plain-text tables and writes render.csv (one row per measurement; `kind` is `frame`,
-`volcanite` or `error`), render_backends.png (ms per frame of both backends at 256x256 (the
+`volcanite`, `matched` (ours in Volcanite's view) or `error`), render_backends.png (ms per frame of both backends at 256x256 (the
 smallest size measured), voxel LOD) and render_error.png (RMSE against seconds, log-log) to the output folder. --quick renders
 a small volume at a tiny size (a smoke test).
 """
@@ -48,11 +53,8 @@ import argparse
 import csv
 import os
 import pathlib
-import re
-import shlex
 import shutil
 import statistics
-import subprocess
 import sys
 import time
 
@@ -62,6 +64,7 @@ REPO = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 import _em_volumes  # noqa: E402
 import _scenes  # noqa: E402
+import _volcanite  # noqa: E402
 # The real volumes: ../shared/data, or where VTKSVDAG_SHARED_DATA points (as the tests).
 SHARED_DATA = pathlib.Path(os.environ.get("VTKSVDAG_SHARED_DATA") or REPO.parent / "shared" / "data")
 
@@ -82,7 +85,6 @@ ANCHORS_MS = {("voxel", 1): "140-220", ("voxel", 4): "155-220", ("block", 1): "7
 # Volcanite 0.6 on lavapipe, 256x256, default frame (primary + shadow rays), same-run comparison
 # of 2026-12-01 (anchors.md): ms per frame and GPU bytes in use (encoding + brick cache).
 VOLCANITE_REPORTED = {"voronoi256": ("9.3 (8.7)", 6.3e6), "fib_ts2_groundtruth250": ("9.3 (8.6)", 6.2e6)}
-DEFAULT_VOLCANITE_COMMAND = "{binary} --headless --resolution {width}x{height} --frames {frames} {volume}"
 
 
 def load_volume(quick):
@@ -232,44 +234,76 @@ def find_volcanite(path):
     return None
 
 
-def volcanite_times(binary, template, volumes, size, frames):
-    """Volcanite's frame time per volume: the last '<number> ms' its output holds."""
+def volcanite_comparison(binary, template, volumes, sizes, frames, rounds, out):
+    """Volcanite's median frame time in its default view against ours in the same view."""
     rows = []
-    for name, path in volumes:
-        command = template.format(binary=shlex.quote(binary), volume=shlex.quote(str(path)),
-                                  width=size, height=size, frames=frames)
-        run = subprocess.run(command, shell=True, capture_output=True, text=True, timeout=600)
-        found = re.findall(r"([0-9]+(?:\.[0-9]+)?)\s*ms", run.stdout + run.stderr)
-        if run.returncode != 0 or not found:
-            print(f"  Volcanite on {name}: no frame time (exit {run.returncode}; command: {command})")
-            continue
-        rows.append(dict(kind="volcanite", volume=name, width=size, height=size, frames=frames,
-                         ms_median=float(found[-1])))
-        print(f"  Volcanite on {name}: {float(found[-1]):.2f} ms", flush=True)
+    camera = _volcanite.CAMERA
+    for name, volume in volumes:
+        nrrd = out / "volcanite" / f"{name}.nrrd"
+        if not nrrd.with_suffix(".csgv").is_file():
+            _volcanite.write_input(volume.to_numpy(axis_order="zyx"), nrrd)
+        csgv = _volcanite.compress(binary, nrrd)
+        for size in sizes:
+            renderers = {}
+            for backend in BACKENDS:
+                r = make_renderer(volume, size, "voxel", 1, True, backend)
+                r.SetCameraViewAngle(camera["view_angle"])
+                if not r.ResetCamera(camera["azimuth"], camera["elevation"], camera["zoom"]):
+                    raise RuntimeError("ResetCamera failed")
+                render(r)  # warm-up: shader compilation
+                renderers[backend] = r
+            medians = {key: [] for key in (*BACKENDS, "volcanite")}
+            for _ in range(rounds):
+                for backend, r in renderers.items():
+                    times = []
+                    for _ in range(frames):
+                        render(r)
+                        times.append(r.GetLastFrameMilliseconds())
+                    medians[backend].append(statistics.median(times))
+                medians["volcanite"].append(_volcanite.frame_ms(
+                    binary, template, csgv, size, size, frames, out / "volcanite"))
+            for key, values in medians.items():
+                rows.append(dict(kind="volcanite" if key == "volcanite" else "matched",
+                                 volume=name, backend="" if key == "volcanite" else key,
+                                 width=size, height=size, lod="voxel", bounces=1, nee=1, spp=1,
+                                 frames=frames, ms_median=round(statistics.median(values), 3),
+                                 ms_min=round(min(values), 3)))
+            ratio = statistics.median(medians["compute"]) / statistics.median(medians["volcanite"])
+            print(f"  {name:<24} {size:>4}: compute {statistics.median(medians['compute']):8.2f} ms, "
+                  f"rt {statistics.median(medians['rt']):8.2f} ms, Volcanite "
+                  f"{statistics.median(medians['volcanite']):8.2f} ms (rounds "
+                  f"{', '.join(f'{v:.1f}' for v in medians['volcanite'])}): compute / Volcanite "
+                  f"{ratio:.2f}", flush=True)
     return rows
 
 
 def print_volcanite_table(rows, measured):
+    if measured:
+        print("\nAgainst Volcanite in its default view, voxel LOD, primary + one shadow/occlusion "
+              "ray per pixel (medians of the rounds)")
+        print(f"{'volume':<24} {'size':>5} {'compute ms':>10} {'rt ms':>8} {'Volcanite ms':>13} "
+              f"{'compute / Volcanite':>20}")
+        for r in rows:
+            if r["kind"] != "volcanite":
+                continue
+            ours = {m["backend"]: m["ms_median"] for m in rows if m["kind"] == "matched"
+                    and m["volume"] == r["volume"] and m["width"] == r["width"]}
+            print(f"{r['volume']:<24} {r['width']:>5} {ours['compute']:10.2f} {ours['rt']:8.2f} "
+                  f"{r['ms_median']:13.2f} {ours['compute'] / r['ms_median']:20.2f}")
+        return
     print("\nAgainst Volcanite, 256x256, voxel LOD, primary + one shadow/occlusion ray per pixel"
-          + ("" if measured else "   [Volcanite: anchors.md's same-run figures, reported, not measured here]"))
+          "   [Volcanite: anchors.md's same-run figures, reported, not measured here]")
     print(f"{'volume':<24} {'compute ms':>10} {'rt ms':>8} {'Volcanite ms':>14} {'compute MB':>10} "
           f"{'Volcanite MB':>12} {'bytes ratio':>11}")
-    volcanite = {r["volume"]: r["ms_median"] for r in rows if r["kind"] == "volcanite"}
     for name in sorted({r["volume"] for r in rows if r["kind"] == "frame"}):
         pick = {r["backend"]: r for r in rows if r["kind"] == "frame" and r["volume"] == name
                 and r["width"] == 256 and r["lod"] == "voxel" and r["bounces"] == 1 and r["nee"] == 1}
-        if set(pick) != set(BACKENDS):
+        if set(pick) != set(BACKENDS) or name not in VOLCANITE_REPORTED:
             continue
         ours_mb = (pick["compute"]["bytes_encoding"] + pick["compute"]["bytes_acceleration"]) / 1e6
-        if measured:
-            theirs, theirs_mb = (f"{volcanite[name]:.2f}" if name in volcanite else ""), None
-        elif name in VOLCANITE_REPORTED:
-            theirs, theirs_mb = VOLCANITE_REPORTED[name][0], VOLCANITE_REPORTED[name][1] / 1e6
-        else:
-            continue
+        theirs, theirs_mb = VOLCANITE_REPORTED[name][0], VOLCANITE_REPORTED[name][1] / 1e6
         print(f"{name:<24} {pick['compute']['ms_median']:10.2f} {pick['rt']['ms_median']:8.2f} "
-              f"{theirs:>14} {ours_mb:10.2f} {theirs_mb if theirs_mb else float('nan'):12.2f} "
-              f"{ours_mb / theirs_mb if theirs_mb else float('nan'):11.2f}")
+              f"{theirs:>14} {ours_mb:10.2f} {theirs_mb:12.2f} {ours_mb / theirs_mb:11.2f}")
 
 
 def plot_backends(rows, path):
@@ -396,9 +430,15 @@ def main(argv=None) -> int:
                              "tiled2_<shared volume>; built once, kept in --out as .svdag); "
                              "default em_like512 (--quick: em_like48)")
     parser.add_argument("--volcanite", help="path of a Volcanite binary (else $VOLCANITE or PATH)")
-    parser.add_argument("--volcanite-command", default=DEFAULT_VOLCANITE_COMMAND,
+    parser.add_argument("--volcanite-command", default=_volcanite.DEFAULT_COMMAND,
                         help="how Volcanite renders one volume (placeholders {binary} {volume} "
-                             "{width} {height} {frames}); the last '<n> ms' printed is its frame time")
+                             "{width} {height} {frames} {image} {log}); its frame time is the "
+                             "median its evaluation log {log} gets, else the last '<n> ms' it "
+                             "prints")
+    parser.add_argument("--volcanite-frames", type=int, default=60,
+                        help="frames per Volcanite run, and per round of ours in its view")
+    parser.add_argument("--volcanite-rounds", type=int, default=3,
+                        help="interleaved rounds of Volcanite and ours (medians)")
     args = parser.parse_args(argv)
     if args.quick:
         sizes = args.sizes or [32]
@@ -420,7 +460,7 @@ def main(argv=None) -> int:
     print("Frame times:")
     rows = frame_times(volume, name, sizes, args.frames, configurations(name, args.quick))
     print_frame_table(rows, name)
-    volumes = [(name, SHARED_DATA / f"{name}.nrrd")]
+    volumes = [(name, volume)]  # what Volcanite renders too
     if not args.quick:
         from vtksvdag import read
 
@@ -428,9 +468,10 @@ def main(argv=None) -> int:
             other = path.name[: -len(".nrrd")]
             if other == name or (args.volumes and other not in args.volumes):
                 continue
-            volumes.append((other, path))
+            shared = read(str(path))
+            volumes.append((other, shared))
             print(f"Frame times, {other}:")
-            rows += frame_times(read(str(path)), other, sizes, args.frames, configurations(other, False))
+            rows += frame_times(shared, other, sizes, args.frames, configurations(other, False))
             print_frame_table(rows, other)
     generated = args.generated if args.generated is not None else (
         ["em_like48"] if args.quick else ["em_like512"])
@@ -442,11 +483,13 @@ def main(argv=None) -> int:
         configs = configurations(other, True) if args.quick else [(lod, 1, True) for lod in ("voxel", "block")]
         rows += frame_times(em, other, sizes, args.frames, configs)
         print_frame_table(rows, other)
+        volumes.append((other, em))
 
     binary = find_volcanite(args.volcanite)
     if binary:
-        print(f"\nVolcanite: {binary}")
-        rows += volcanite_times(binary, args.volcanite_command, volumes, 256, max(args.frames, 5))
+        print(f"\nVolcanite ({binary}) and ours in its default view:")
+        rows += volcanite_comparison(binary, args.volcanite_command, volumes, sizes,
+                                     args.volcanite_frames, args.volcanite_rounds, out)
     print_volcanite_table(rows, measured=binary is not None)
 
     print(f"\nError against run time ({args.error_size}x{args.error_size}, 4 bounces):")
