@@ -29,15 +29,16 @@ def two_boxes():
     return vtksvdag.from_numpy(labels)
 
 
-def renderer(volume, denoise, seed=5):
+def renderer(volume, denoise, seed=5, size=SIZE, colors=((1.0, 0.0, 0.0), (0.0, 0.0, 1.0)),
+             sun=True, sky=0.3, camera=(35, 25, 1.0)):
+    """Labels 1, 2, ... diffuse in `colors`, a disk sun (or none) and a constant sky, one bounce."""
     r = vtkSegmentationSVDAGRenderer()
     r.SetInputData(volume.dataobject)
-    r.SetWidth(SIZE)
-    r.SetHeight(SIZE)
+    r.SetWidth(size)
+    r.SetHeight(size)
     props = r.GetLabelProperties()
-    props.SetColor(1, 1.0, 0.0, 0.0)
-    props.SetColor(2, 0.0, 0.0, 1.0)
-    for label in (1, 2):
+    for label, color in enumerate(colors, start=1):
+        props.SetColor(label, *color)
         props.SetSpecular(label, 0.0)
         props.SetMetallic(label, 0.0)
     s = r.GetSettings()
@@ -45,11 +46,14 @@ def renderer(volume, denoise, seed=5):
     s.SetMaximumBounces(1)
     s.SetSeed(seed)
     s.SetDenoise(denoise)
-    s.SunOn()
-    s.SetSunDirection(0.4, 0.3, 0.85)
-    s.SetSunAngularRadius(10.0)
-    s.SetEnvironmentColor(0.3, 0.3, 0.3)
-    assert r.ResetCamera(35, 25, 1.0)
+    if sun:
+        s.SunOn()
+        s.SetSunDirection(0.4, 0.3, 0.85)
+        s.SetSunAngularRadius(10.0)
+    else:
+        s.SunOff()
+    s.SetEnvironmentColor(sky, sky, sky)
+    assert r.ResetCamera(*camera)
     return r
 
 
@@ -147,24 +151,8 @@ def test_crease_keeps_its_occlusion():
     size = 128
 
     def sky_renderer(denoise, seed):
-        r = vtkSegmentationSVDAGRenderer()
-        r.SetInputData(volume.dataobject)
-        r.SetWidth(size)
-        r.SetHeight(size)
-        props = r.GetLabelProperties()
-        for label in (1, 2):
-            props.SetColor(label, 0.8, 0.8, 0.8)
-            props.SetSpecular(label, 0.0)
-            props.SetMetallic(label, 0.0)
-        s = r.GetSettings()
-        s.SetLOD("voxel")
-        s.SetMaximumBounces(1)
-        s.SetSeed(seed)
-        s.SetDenoise(denoise)
-        s.SunOff()
-        s.SetEnvironmentColor(1.0, 1.0, 1.0)
-        assert r.ResetCamera(30, 25, 1.2)
-        return r
+        return renderer(volume, denoise, seed, size=size, colors=((0.8, 0.8, 0.8),) * 2,
+                        sun=False, sky=1.0, camera=(30, 25, 1.2))
 
     reference_renderer = sky_renderer(False, 11)
     reference = render_to(reference_renderer, 1024)

@@ -61,8 +61,9 @@ struct ShaderFeatures
   bool transmission = false;
   // The preview (PathTracer.h's SVDAG_FEATURE_PREVIEW): primary hits only, a small pipeline.
   bool preview = false;
-  // Smooth shading normals (RenderSettings::shading) and clipping planes or a crop box: each
-  // almost doubles the path tracer's compilation on lavapipe, and most scenes use neither.
+  // Smooth shading normals (RenderSettings::shading) and clipping planes or a crop box: on
+  // lavapipe the first doubles the path tracer's compilation, the second adds a fifth, and most
+  // scenes use neither.
   bool smoothShading = false;
   bool clipping = false;
   // The compute backend's per-pixel step counters (Renderer::setStepStatistics); the ray
