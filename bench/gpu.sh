@@ -8,8 +8,9 @@
 # the VTK mapper's interactive frames do: --trace-reduction 2), and the device bytes (encoding + what the backend finds blocks with). Then the start-up of each
 # backend on the first file: seconds of a whole one-frame run with every cache empty (the
 # driver's disk cache off: __GL_SHADER_DISK_CACHE=0, MESA_SHADER_CACHE_DISABLE=true), the same
-# with --preview (first frame from the preview pipeline), and with only our pipeline cache
-# (PipelineCacheFile.h) warm; each with its frame's pipeline compile seconds.
+# with --preview (first frame from the preview pipeline), with smooth shading and with a clipping
+# plane (the feature variants a scene compiles in only when it uses them), and with only our
+# pipeline cache (PipelineCacheFile.h) warm; each with its frame's pipeline compile seconds.
 #
 # Here (to prepare the files from the shared volumes):
 #   for f in ../shared/data/*.nrrd; do .venv/bin/vtksvdag compress "$f" -o "DIR/$(basename "$f" .nrrd).svdag"; done
@@ -91,17 +92,22 @@ for f in "${files[@]}"; do
 done
 
 # Start-up: a whole one-frame run per backend, every cache empty (with the full pipeline, then
-# with --preview: the first frame from the small preview pipeline while the full one compiles),
-# then with our cache warm. The JSON's pipeline_compile_seconds: the frame's pipeline's compile.
+# with --preview: the first frame from the small preview pipeline while the full one compiles,
+# then the smooth-shading and the clipping variants), then with our cache warm. The JSON's
+# pipeline_compile_seconds: the frame's pipeline's compile.
 startup="$out/startup.txt"
 for backend in rt compute; do
   cache="$out/cache-$backend"
-  for state in cold cold-preview ours-warm; do
+  for state in cold cold-preview cold-smooth cold-clipped ours-warm; do
     flags=()
     run_cache="$cache"
-    if [ "$state" = cold-preview ]; then
-      flags=(--preview)
-      run_cache="$out/cache-$backend-preview"
+    case "$state" in
+      cold-preview) flags=(--preview) ;;
+      cold-smooth) flags=(--shading smooth) ;;
+      cold-clipped) flags=(--clip 0,0,0,1,0,0) ;; # where it cuts does not change the compile
+    esac
+    if [ ${#flags[@]} -gt 0 ]; then
+      run_cache="$out/cache-$backend-$state"
     fi
     begin=$(date +%s.%N)
     if json=$(XDG_CACHE_HOME="$run_cache" __GL_SHADER_DISK_CACHE=0 MESA_SHADER_CACHE_DISABLE=true \
@@ -153,8 +159,8 @@ for (name, lod, bounces), runs in sorted(rows.items()):
           f"{ms('compute', 'restart+denoise'):8.2f} {ms('compute', 'restart+denoise+r2'):8.2f} | "
           f"{ratio:6.2f} | {mb('rt'):6.2f} {mb('compute'):6.2f}")
 try:
-    print("\nstart-up, seconds of a one-frame run (every cache empty; empty with --preview; only our"
-          " pipeline cache warm)")
+    print("\nstart-up, seconds of a one-frame run (every cache empty; empty with --preview, with"
+          " smooth shading, with a clipping plane; only our pipeline cache warm)")
     for line in open(startup).read().splitlines():
         print("  " + line)
 except FileNotFoundError:

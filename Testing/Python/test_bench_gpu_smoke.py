@@ -41,11 +41,13 @@ def test_gpu_script_prints_one_table(tmp_path):
         # resolution and upsampled; the ratio; the bytes.
         numbers = [float(v) for v in r[3:] if v != "|"]
         assert len(numbers) == 11 and all(n > 0 for n in numbers), r
-    # The start-up of each backend: every cache empty (with the full pipeline, and with the
-    # preview's first frame), and with our pipeline cache warm; each with its compile seconds.
+    # The start-up of each backend: every cache empty (with the full pipeline, with the
+    # preview's first frame, with the smooth-shading and the clipping variants), and with our
+    # pipeline cache warm; each with its compile seconds.
     startup = [line.replace(",", "").split() for line in lines[end + 2:]]
     assert sorted((s[0], s[1]) for s in startup) == sorted(
-        (b, state) for b in ("rt", "compute") for state in ("cold", "cold-preview", "ours-warm"))
+        (b, state) for b in ("rt", "compute")
+        for state in ("cold", "cold-preview", "cold-smooth", "cold-clipped", "ours-warm"))
     for s in startup:
         assert float(s[2]) > 0 and s[4] == "compile" and float(s[5]) > 0, s
         assert s[8] == ("True" if s[1] == "cold-preview" else "False"), s
