@@ -481,3 +481,57 @@ TEST(DeviceSharing, PreviewWhileThePipelineCompiles)
   }
   }
 }
+
+// Clipping is a feature of the path tracer (ShaderFeatures::clipping): the preview a window shows
+// while a clipped scene's kernel compiles is clipped too, the same labels and depths as the full
+// kernel's block-LOD frame, and the plane does cut something away.
+TEST(DeviceSharing, APreviewKeepsTheClipping)
+{
+  for (const auto backend : { svdag::render::Backend::Compute, svdag::render::Backend::RayTracing })
+  {
+    const TemporaryCacheHome cache("svdag-preview-clipping");
+    ASSERT_EQ(svdag::render::Renderer::deviceUsers(), 0u); // a new device: nothing compiled
+    const auto volume = randomVolume(3);
+    svdag::render::ClipPlane plane;
+    for (int a = 0; a < 3; ++a)
+      plane.origin[size_t(a)] = 0.5 * (volume->geometry.dims[size_t(a)] - 1);
+    plane.normal = { { 1.0, 0.3, 0.0 } };
+    auto make = [&](bool clipped) {
+      auto r = makeRenderer(volume, backend);
+      r->setDenoise(false);
+      r->setClipping(clipped ? std::vector<svdag::render::ClipPlane>{ plane }
+                             : std::vector<svdag::render::ClipPlane>{});
+      return r;
+    };
+    auto previewing = make(true);
+    previewing->setPreviewWhileCompiling(true);
+    const svdag::render::Image preview = previewing->render();
+    ASSERT_TRUE(previewing->previewed());
+    auto plain = make(true); // compiles (or waits for) the full clipped kernel
+    plain->setLod(svdag::render::Lod::Block);
+    const svdag::render::Image block = plain->render();
+    EXPECT_FALSE(plain->previewed());
+    EXPECT_EQ(preview.label, block.label);
+    EXPECT_EQ(preview.depth, block.depth);
+    auto whole = make(false);
+    whole->setLod(svdag::render::Lod::Block);
+    const svdag::render::Image unclipped = whole->render();
+    size_t cut = 0;
+    for (size_t i = 0; i < unclipped.label.size(); ++i)
+      cut += unclipped.label[i] != 0 && block.label[i] != unclipped.label[i];
+    EXPECT_GT(cut, unclipped.label.size() / 20);
+    // The background compilation ends before the device goes (bounded).
+    const auto start = std::chrono::steady_clock::now();
+    while (previewing->previewed() &&
+      std::chrono::steady_clock::now() - start < std::chrono::seconds(120))
+    {
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+      previewing->render();
+    }
+    EXPECT_FALSE(previewing->previewed());
+    previewing.reset();
+    plain.reset();
+    whole.reset();
+    ASSERT_EQ(svdag::render::Renderer::deviceUsers(), 0u);
+  }
+}
