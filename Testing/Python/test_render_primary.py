@@ -574,7 +574,7 @@ def test_command_line_shading_and_clipping_options(real_volume, tmp_path):
     renderer.ResetCamera(30, 20, 1)  # the command line's default view
     assert renderer.Render() == 1
     color = vtk_to_numpy(renderer.GetOutput().GetPointData().GetArray("Color"))
-    label = vtk_to_numpy(renderer.GetOutput().GetPointData().GetArray("Label"))
+    label = vtk_to_numpy(renderer.GetOutput().GetPointData().GetArray("Label")).copy()
     assert 0 < np.count_nonzero(label) < label.size
     image = np.asarray(Image.open(png))
     assert np.array_equal(image[::-1].reshape(-1, 4), color)
