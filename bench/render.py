@@ -243,6 +243,7 @@ def volcanite_comparison(binary, template, volumes, sizes, frames, rounds, out):
         if not nrrd.with_suffix(".csgv").is_file():
             _volcanite.write_input(volume.to_numpy(axis_order="zyx"), nrrd)
         csgv = _volcanite.compress(binary, nrrd)
+        nrrd.unlink(missing_ok=True)  # raw labels (512 MB for em_like512): the CSGV file is kept
         for size in sizes:
             renderers = {}
             for backend in BACKENDS:

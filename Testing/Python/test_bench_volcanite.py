@@ -72,8 +72,8 @@ def test_comparison_runs_through_a_stand_in(tmp_path):
     assert [(r["volume"], r["width"], r["ms_median"]) for r in theirs] == [("boxes", 16, 12.5)]
     assert sorted(r["backend"] for r in ours) == ["compute", "rt"]
     assert all(r["ms_median"] > 0 and r["ms_min"] <= r["ms_median"] for r in ours)
-    # The input was written once and compressed once, beside each other.
-    assert (tmp_path / "out" / "volcanite" / "boxes.nrrd").is_file()
+    # The input was written and compressed once; only the compressed form is kept.
+    assert not (tmp_path / "out" / "volcanite" / "boxes.nrrd").exists()
     assert (tmp_path / "out" / "volcanite" / "boxes.csgv").read_text().startswith("csgv of ")
     # A template without {log}: the last "<n> ms" it prints (its mean over the frames).
     template = _volcanite.DEFAULT_COMMAND.replace(" --eval-logfiles {log}", "")
