@@ -101,16 +101,18 @@ inline uint64_t loadLE(const uint8_t* at, int n)
 }
 
 // ORs `value` (at most `width` bits, 0..32) into a zero-filled field of a stream that has a word
-// past the field's last one.
+// past the field's last one. It writes the word after the field's first word either way (zero
+// bits where the field ends before it): whether a field straddles two words changes from field
+// to field, a branch a load would mispredict at every other field. So no other thread may write
+// that word meanwhile.
 inline void writeBits(std::vector<uint32_t>& stream, uint64_t offset, uint32_t width, uint32_t value)
 {
   if (width == 0)
     return;
   const uint64_t word = offset >> 5;
-  const uint32_t shift = uint32_t(offset & 31);
-  stream[size_t(word)] |= value << shift;
-  if (shift + width > 32)
-    stream[size_t(word + 1)] |= value >> (32 - shift);
+  const uint64_t wide = uint64_t(value) << (offset & 31);
+  stream[size_t(word)] |= uint32_t(wide);
+  stream[size_t(word + 1)] |= uint32_t(wide >> 32);
 }
 // Sets a field (whatever it held) to `value` (at most `width` bits, 0..32), as writeBits.
 inline void replaceBits(
@@ -119,13 +121,10 @@ inline void replaceBits(
   const uint64_t word = offset >> 5;
   const uint32_t shift = uint32_t(offset & 31);
   const uint64_t mask = uint64_t(layout::lowMask(width)) << shift;
-  uint64_t pair = stream[size_t(word)];
-  if (shift + width > 32)
-    pair |= uint64_t(stream[size_t(word + 1)]) << 32;
+  uint64_t pair = stream[size_t(word)] | (uint64_t(stream[size_t(word + 1)]) << 32);
   pair = (pair & ~mask) | (uint64_t(value) << shift);
   stream[size_t(word)] = uint32_t(pair);
-  if (shift + width > 32)
-    stream[size_t(word + 1)] = uint32_t(pair >> 32);
+  stream[size_t(word + 1)] = uint32_t(pair >> 32);
 }
 } // namespace bits
 } // namespace svdag

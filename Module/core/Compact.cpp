@@ -297,10 +297,11 @@ Volume compacted(Volume v, PooledGraph graph)
     uint32_t flags = 0;
     for (uint32_t r = 0; r < n.count; ++r)
     {
+      // Few branches: whether a leaf is used once changes from child to child.
       const uint32_t leaf = layout::leafRefIndex(leafRefs[n.first + r]);
-      if (leafUses[leaf] == 1)
-        flags |= 1u << r;
-      else if (leafIndex[leaf] == Unplaced)
+      const uint32_t once = leafUses[leaf] == 1;
+      flags |= once << r;
+      if ((leafIndex[leaf] == Unplaced) & !once)
       {
         leafIndex[leaf] = uint32_t(sharedLeaves.size());
         sharedLeaves.push_back(v.leaves[leaf]);
@@ -329,24 +330,21 @@ Volume compacted(Volume v, PooledGraph graph)
     uint64_t at = newMidStart[midOrder[k]];
     writeField(midStream, at, layout::NODE_HEADER_BITS, fold ? complementedNode(n.header) : n.header);
     writeField(midStream, at, n.count, flags);
-    for (uint32_t r = 0; r < n.count; ++r)
-      if (!((flags >> r) & 1u))
-      {
-        const uint32_t ref = leafRefs[n.first + r];
-        writeField(midStream, at, leafRefBits,
-          layout::leafRef(leafIndex[layout::leafRefIndex(ref)], layout::leafRefSymmetry(ref),
-            (ref & 1u) ^ (fold ? 1u : 0u)));
-      }
-    for (uint32_t r = 0; r < n.count; ++r)
-      if ((flags >> r) & 1u)
-      {
-        const uint32_t ref = leafRefs[n.first + r];
-        uint64_t mask = v.leafMask(ref);
-        if ((ref & 1u) != (fold ? 1u : 0u))
-          mask = ~mask;
-        writeField(midStream, at, 32, mask);
-        writeField(midStream, at, 32, mask >> 32);
-      }
+    const uint64_t flip = fold ? ~uint64_t(0) : 0;
+    for (uint32_t shared = ~flags & layout::lowMask(n.count); shared; shared &= shared - 1)
+    {
+      const uint32_t ref = leafRefs[n.first + uint32_t(__builtin_ctz(shared))];
+      writeField(midStream, at, leafRefBits,
+        layout::leafRef(leafIndex[layout::leafRefIndex(ref)], layout::leafRefSymmetry(ref),
+          (ref & 1u) ^ uint32_t(flip & 1u)));
+    }
+    for (uint32_t inlined = flags; inlined; inlined &= inlined - 1)
+    {
+      const uint32_t ref = leafRefs[n.first + uint32_t(__builtin_ctz(inlined))];
+      const uint64_t mask = v.leafMask(ref) ^ (uint64_t(0) - (ref & 1u)) ^ flip;
+      writeField(midStream, at, 32, mask);
+      writeField(midStream, at, 32, mask >> 32);
+    }
   }
   const uint32_t midRefBits = refWidth(lastMid, 1);
   std::vector<uint32_t>().swap(leafRefs);

@@ -89,6 +89,10 @@ using bits::storeLE;
 
 // Files are read and written at most this many bytes per stdio call: a single read or write of
 // more than 2 GiB fails on some systems (macOS's write, for one).
+// A 4.0 load compacts the volume beside its last checks up to this size, from a copy of the
+// pooled form: there a load is too short for its loops' halves to pay, and the copy is cheap.
+// Larger volumes split each loop instead and free the pooled streams before compacting.
+constexpr uint64_t CompactAlongsideBytes = uint64_t(4) << 20;
 constexpr size_t IoChunk = size_t(1) << 30;
 
 // Appends fields in little-endian order, byte by byte, whatever the host's byte order.
@@ -558,6 +562,21 @@ void inflate(DecompressionContext ctx, const uint8_t* src, size_t stored, uint64
   };
   grow(std::min<uint64_t>(
     rawElements, std::max<uint64_t>(4 * uint64_t(stored), 1 << 16) / sizeof(T)));
+  if (out.size() == rawElements)
+  {
+    // All of it fits the first step: one call (a streaming pass costs a small section's frame
+    // about a third more), which fails where the frame would yield more.
+    const size_t frame = ZSTD_findFrameCompressedSize(src, stored);
+    if (!ZSTD_isError(frame) && frame != stored)
+      fail(part + ": data after the end of the zstd frame");
+    const size_t produced = ZSTD_decompressDCtx(ctx, out.data(), size_t(raw), src, stored);
+    if (ZSTD_isError(produced))
+      fail(part + ": corrupt zstd data (" + ZSTD_getErrorName(produced) + ")");
+    if (produced != raw)
+      fail(part + " decompresses to fewer bytes than declared");
+    out.resize(out.size() + padding); // inside the capacity reserved
+    return;
+  }
   size_t produced = 0; // bytes
   uint8_t scratch = 0; // catches a frame that goes on past the declared size
   ZSTD_inBuffer in = { src, stored, 0 };
@@ -729,8 +748,17 @@ Volume readDagStreams(const SectionEntry& e, const uint8_t* data, uint64_t label
   {
     Volume v = dagstreams::decode(streams, shape);
     PooledGraph graph; // what validation reads, compaction needs: the streams are walked once
-    v.deriveBoundsAndValidate(parallel, &graph);
-    return compacted(std::move(v), std::move(graph));
+    if (v.memory().total() > CompactAlongsideBytes)
+    {
+      v.deriveBoundsAndValidate(parallel, &graph);
+      return compacted(std::move(v), std::move(graph));
+    }
+    // Compacted beside the last checks, from a copy (the checks read the pooled form): the
+    // labels' counts and bounds come from the checks.
+    Volume compact;
+    v.deriveBoundsAndValidate(parallel, &graph, [&] { compact = compacted(v, std::move(graph)); });
+    compact.labels = std::move(v.labels);
+    return compact;
   }
   catch (const std::bad_alloc&)
   {

@@ -2,64 +2,13 @@
 
 #include "svdag/Layout.h"
 
+#include <stdexcept>
+#include <string>
+
 namespace svdag
 {
 namespace
 {
-// Whole masks through one table per symmetry and byte: built once from Layout.h's definition,
-// the one the shaders use.
-struct Tables
-{
-  uint64_t bytes[layout::LEAF_SYMMETRY_COUNT][8][256];
-  uint32_t inverse[layout::LEAF_SYMMETRY_COUNT];
-
-  Tables()
-  {
-    for (uint32_t s = 0; s < layout::LEAF_SYMMETRY_COUNT; ++s)
-    {
-      // Bit x of the stored mask lands on every child bit y whose voxel reads it.
-      uint32_t destination[64];
-      for (uint32_t y = 0; y < 64; ++y)
-        destination[layout::leafSymmetryBit(s, y % 4, (y / 4) % 4, y / 16)] = y;
-      for (uint32_t b = 0; b < 8; ++b)
-        for (uint32_t v = 0; v < 256; ++v)
-        {
-          uint64_t out = 0;
-          for (uint32_t k = 0; k < 8; ++k)
-            if ((v >> k) & 1u)
-              out |= uint64_t(1) << destination[8 * b + k];
-          bytes[s][b][v] = out;
-        }
-    }
-    for (uint32_t s = 0; s < layout::LEAF_SYMMETRY_COUNT; ++s)
-      for (uint32_t t = 0; t < layout::LEAF_SYMMETRY_COUNT; ++t)
-      {
-        bool undoes = true;
-        for (uint32_t b = 0; b < 64 && undoes; ++b)
-          undoes = apply(t, apply(s, uint64_t(1) << b)) == uint64_t(1) << b;
-        if (undoes)
-        {
-          inverse[s] = t;
-          break;
-        }
-      }
-  }
-
-  uint64_t apply(uint32_t s, uint64_t mask) const
-  {
-    uint64_t out = 0;
-    for (uint32_t b = 0; b < 8; ++b)
-      out |= bytes[s][b][(mask >> (8 * b)) & 0xFFu];
-    return out;
-  }
-};
-
-const Tables& tables()
-{
-  static const Tables t; // 786 KiB, built on first use
-  return t;
-}
-
 // Mirrors of a whole mask along one axis (bit x + 4 y + 16 z), by swapping bit groups.
 uint64_t swapGroups(uint64_t m, uint64_t low, uint32_t shift)
 {
@@ -77,17 +26,93 @@ uint64_t mirrorZ(uint64_t m)
 {
   return swapGroups(swapGroups(m, 0x0000FFFF0000FFFFull, 16), 0x00000000FFFFFFFFull, 32);
 }
+// `mirrored` where `yes` (0 or 1), else `m`: without a branch, as symmetries change from leaf
+// to leaf.
+uint64_t select(uint32_t yes, uint64_t mirrored, uint64_t m)
+{
+  return m ^ ((m ^ mirrored) & (uint64_t(0) - yes));
+}
+
+// Symmetry 8 p + m reads child voxel (x, y, z) from the stored voxel whose coordinate j is child
+// coordinate p_j, mirrored where bit j of m is set: the stored mask mirrored along its axes j,
+// then its axes permuted by p. The six permutations move whole masks through a table per byte
+// (96 KiB, built from Layout.h's definition, the one the shaders use); mirrors are shifts.
+struct Tables
+{
+  uint64_t permuted[layout::LEAF_SYMMETRY_COUNT / 8][8][256];
+  uint32_t inverse[layout::LEAF_SYMMETRY_COUNT];
+
+  Tables()
+  {
+    for (uint32_t p = 0; p < layout::LEAF_SYMMETRY_COUNT / 8; ++p)
+    {
+      // Bit x of the stored mask lands on the child bit y whose voxel reads it.
+      uint32_t destination[64];
+      for (uint32_t y = 0; y < 64; ++y)
+        destination[layout::leafSymmetryBit(8 * p, y % 4, (y / 4) % 4, y / 16)] = y;
+      for (uint32_t b = 0; b < 8; ++b)
+        for (uint32_t v = 0; v < 256; ++v)
+        {
+          uint64_t out = 0;
+          for (uint32_t k = 0; k < 8; ++k)
+            out |= uint64_t((v >> k) & 1u) << destination[8 * b + k];
+          this->permuted[p][b][v] = out;
+        }
+    }
+    // The composition above must be the definition for every symmetry: checked bit by bit.
+    for (uint32_t s = 0; s < layout::LEAF_SYMMETRY_COUNT; ++s)
+      for (uint32_t y = 0; y < 64; ++y)
+        if (apply(s, uint64_t(1) << layout::leafSymmetryBit(s, y % 4, (y / 4) % 4, y / 16)) !=
+          uint64_t(1) << y)
+          throw std::logic_error(
+            "leaf symmetry " + std::to_string(s) + " is not a permutation after mirrors");
+    for (uint32_t s = 0; s < layout::LEAF_SYMMETRY_COUNT; ++s)
+      for (uint32_t t = 0; t < layout::LEAF_SYMMETRY_COUNT; ++t)
+      {
+        bool undoes = true;
+        for (uint32_t b = 0; b < 64 && undoes; ++b)
+          undoes = apply(t, apply(s, uint64_t(1) << b)) == uint64_t(1) << b;
+        if (undoes)
+        {
+          this->inverse[s] = t;
+          break;
+        }
+      }
+  }
+
+  uint64_t permute(uint32_t p, uint64_t mask) const
+  {
+    uint64_t out = 0;
+    for (uint32_t b = 0; b < 8; ++b)
+      out |= this->permuted[p][b][(mask >> (8 * b)) & 0xFFu];
+    return out;
+  }
+
+  uint64_t apply(uint32_t s, uint64_t mask) const
+  {
+    mask = select(s & 1u, mirrorX(mask), mask);
+    mask = select((s >> 1) & 1u, mirrorY(mask), mask);
+    mask = select((s >> 2) & 1u, mirrorZ(mask), mask);
+    return permute(s >> 3, mask);
+  }
+};
+
+const Tables& tables()
+{
+  static const Tables t;
+  return t;
+}
 } // namespace
 
 void leafImages(uint64_t mask, uint64_t images[layout::LEAF_SYMMETRY_COUNT])
 {
   // Symmetry 8 p + m: stored coordinate j is child coordinate p_j (permutation p), mirrored when
-  // bit j of m is set. So its image is the permuted mask (the table's row for m = 0) mirrored
-  // along child axis p_j for every set bit j: a few shifts instead of a table walk each.
+  // bit j of m is set. So its image is the permuted mask (symmetry 8 p) mirrored along child
+  // axis p_j for every set bit j: one permutation per p, then a mirror per image.
   const Tables& t = tables();
   for (uint32_t p = 0; p < layout::LEAF_SYMMETRY_COUNT / 8; ++p)
   {
-    const uint64_t permuted = t.apply(8 * p, mask);
+    const uint64_t permuted = t.permute(p, mask);
     uint32_t childAxis[3];
     for (uint32_t j = 0; j < 3; ++j)
       childAxis[j] = layout::leafSymmetryCoordinate(8 * p, j, 0, 1, 2);

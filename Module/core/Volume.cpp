@@ -10,6 +10,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstring>
+#include <exception>
 #include <limits>
 #include <memory>
 #include <stdexcept>
@@ -481,25 +482,31 @@ public:
     for (uint32_t s = 0; s < layout::LEAF_SYMMETRY_COUNT; ++s)
       for (uint32_t j = 0; j < 3; ++j)
         this->Shift[s][j] = uint8_t(8 * layout::leafSymmetryCoordinate(s & ~7u, j, 0, 1, 2));
-    for (uint32_t v = 0; v < 16; ++v)
-      this->Reversed[v] = uint8_t(((v & 1u) << 3) | ((v & 2u) << 1) | ((v & 4u) >> 1) | (v >> 3));
-  }
-  uint32_t apply(uint32_t s, uint32_t lanes) const
-  {
-    uint32_t out = 0;
-    for (uint32_t j = 0; j < 3; ++j)
+    auto reversed = [](uint32_t v) {
+      return ((v & 1u) << 3) | ((v & 2u) << 1) | ((v & 4u) >> 1) | (v >> 3);
+    };
+    for (uint32_t v = 0; v < 256; ++v)
     {
-      uint32_t lane = (lanes >> (8 * j)) & 0xFu;
-      if ((s >> j) & 1u)
-        lane = this->Reversed[lane];
-      out |= lane << this->Shift[s][j];
+      this->Lanes[0][v] = uint8_t(v);
+      this->Lanes[1][v] = uint8_t(reversed(v & 0xFu) | (reversed(v >> 4) << 4));
     }
-    return out;
+  }
+  // Both polarities of a child at once: `lanes` and `complementLanes` moved to `out` and
+  // `complementOut` (lanes in bits 0-3, 8-11, 16-19 of each).
+  void apply(uint32_t s, uint32_t lanes, uint32_t complementLanes, uint32_t& out,
+    uint32_t& complementOut) const
+  {
+    const uint32_t both = (lanes & 0x0F0F0Fu) | ((complementLanes & 0x0F0F0Fu) << 4);
+    uint32_t moved = 0;
+    for (uint32_t j = 0; j < 3; ++j) // a lookup, not a branch: s varies from leaf to leaf
+      moved |= uint32_t(this->Lanes[(s >> j) & 1u][(both >> (8 * j)) & 0xFFu]) << this->Shift[s][j];
+    out = moved & 0x0F0F0Fu;
+    complementOut = (moved >> 4) & 0x0F0F0Fu;
   }
 
 private:
   uint8_t Shift[layout::LEAF_SYMMETRY_COUNT][3];
-  uint8_t Reversed[16];
+  uint8_t Lanes[2][256]; // two lanes a byte: as they are, each reversed
 };
 
 // The full mask of a node read with polarity p (complemented: empty and full children swap).
@@ -653,38 +660,37 @@ NodePool walkNodeStream(const std::vector<uint32_t>& stream, uint64_t count, uin
   pool.summaries.reset(new uint64_t[size_t(2 * count)]);
   uint64_t* summary = pool.summaries.get();
   std::atomic<uint64_t> firstBad{ count }; // the first node with a bad reference, as in order
-  parallel(0, count, 1024, [&](uint64_t begin, uint64_t end) {
+  parallel(0, count, 256, [&](uint64_t begin, uint64_t end) {
     for (uint64_t n = begin; n < end; ++n)
     {
       const uint64_t at = pool.index.start(n);
       const uint32_t header = fieldAt(words, at, layout::NODE_HEADER_BITS);
       const uint32_t mixed = layout::nodeMixedMask(header), full = layout::nodeFullMask(header);
+      // Solid children first, then the mixed ones bit by bit: no branch per child, whose
+      // pattern changes from node to node.
       uint64_t acc0[8], acc1[8];
-      uint64_t refAt = at + layout::NODE_HEADER_BITS;
-      uint32_t* resolved = refs ? refs->data() + (*nodes)[size_t(n)].first : nullptr;
       for (uint32_t c = 0; c < 8; ++c)
       {
-        const uint32_t bit = 1u << c;
-        if (mixed & bit)
+        const uint64_t isFull = uint64_t(0) - ((full >> c) & 1u);
+        acc0[c] = solid & isFull;
+        acc1[c] = solid & ~isFull;
+      }
+      uint64_t refAt = at + layout::NODE_HEADER_BITS;
+      uint32_t* resolved = refs ? refs->data() + (*nodes)[size_t(n)].first : nullptr;
+      for (uint32_t left = mixed; left; left &= left - 1, refAt += refBits)
+      {
+        const uint32_t c = uint32_t(__builtin_ctz(left));
+        uint32_t target;
+        if (!child(fieldAt(words, refAt, refBits), acc0[c], acc1[c], target))
         {
-          uint32_t target;
-          if (!child(fieldAt(words, refAt, refBits), acc0[c], acc1[c], target))
+          uint64_t seen = firstBad.load();
+          while (n < seen && !firstBad.compare_exchange_weak(seen, n))
           {
-            uint64_t seen = firstBad.load();
-            while (n < seen && !firstBad.compare_exchange_weak(seen, n))
-            {
-            }
-            return;
           }
-          if (resolved)
-            *resolved++ = target;
-          refAt += refBits;
+          return;
         }
-        else
-        {
-          acc0[c] = (full & bit) ? solid : 0;
-          acc1[c] = (full & bit) ? 0 : solid;
-        }
+        if (resolved)
+          *resolved++ = target;
       }
       summary[2 * n] = combine(acc0);
       summary[2 * n + 1] = combine(acc1);
@@ -719,8 +725,10 @@ NodePool checkMidPool(const Volume& v, const ParallelFor& parallel, PooledGraph*
         return false;
       const uint32_t m = stored[2 * size_t(leaf) + (ref & 1u)];
       const uint32_t c = stored[(2 * size_t(leaf) + (ref & 1u)) ^ 1u];
-      a0 = symmetries.apply(s, m) | (m & 0xFF000000u);
-      a1 = symmetries.apply(s, c) | (c & 0xFF000000u);
+      uint32_t moved, complementMoved;
+      symmetries.apply(s, m, c, moved, complementMoved);
+      a0 = moved | (m & 0xFF000000u);
+      a1 = complementMoved | (c & 0xFF000000u);
       target = ref;
       return true;
     },
@@ -871,21 +879,17 @@ private:
       const uint32_t mixed = layout::nodeMixedMask(ce.header);
       if (!(mixed & shared))
         continue;
-      uint64_t refAt = layout::refTarget(ce.root) + layout::NODE_HEADER_BITS;
-      for (uint32_t o = 0; o < 8; ++o)
+      const uint64_t refsAt = layout::refTarget(ce.root) + layout::NODE_HEADER_BITS;
+      for (uint32_t both = mixed & shared; both; both &= both - 1) // set bits: few branches
       {
-        if (!(mixed & (1u << o)))
-          continue;
-        if (shared & (1u << o))
-        {
-          const uint32_t midRef = fieldAt(this->V.roots.data(), refAt, refBits);
-          MidEntry me;
-          me.entry = e;
-          me.offset = layout::refTarget(midRef);
-          me.inverted = layout::refComplement(ce.root) != layout::refComplement(midRef);
-          this->Octants[o].push_back(me);
-        }
-        refAt += refBits;
+        const uint32_t o = uint32_t(__builtin_ctz(both));
+        const uint32_t midRef =
+          fieldAt(this->V.roots.data(), refsAt + uint64_t(layout::childRank(mixed, o)) * refBits, refBits);
+        MidEntry me;
+        me.entry = e;
+        me.offset = layout::refTarget(midRef);
+        me.inverted = layout::refComplement(ce.root) != layout::refComplement(midRef);
+        this->Octants[o].push_back(me);
       }
     }
   }
@@ -925,49 +929,39 @@ private:
     bool firstInverted[8] = {}, pending[8] = {};
     for (const MidEntry& me : list)
     {
-      if (!(me.mixed & midShared))
-        continue;
-      uint64_t refAt = me.offset + layout::NODE_HEADER_BITS;
-      for (uint32_t c = 0; c < 8; ++c)
+      const uint64_t refsAt = me.offset + layout::NODE_HEADER_BITS;
+      for (uint32_t both = me.mixed & midShared; both; both &= both - 1)
       {
-        if (!(me.mixed & (1u << c)))
-          continue;
-        if (midShared & (1u << c))
+        const uint32_t c = uint32_t(__builtin_ctz(both));
+        const uint32_t leafRef =
+          fieldAt(midWords, refsAt + uint64_t(layout::childRank(me.mixed, c)) * refBits, refBits);
+        const bool inverted = me.inverted != layout::refComplement(leafRef);
+        const uint32_t stored = leafRef & ~1u;
+        if (!acc[c] && !pending[c])
         {
-          const uint32_t leafRef = fieldAt(midWords, refAt, refBits);
-          const bool inverted = me.inverted != layout::refComplement(leafRef);
-          const uint32_t stored = leafRef & ~1u;
-          if (!acc[c] && !pending[c])
+          pending[c] = true;
+          firstRef[c] = stored;
+          firstInverted[c] = inverted;
+          owner[c] = me.entry;
+          continue;
+        }
+        if (pending[c])
+        {
+          pending[c] = false;
+          if (firstRef[c] == stored && firstInverted[c] != inverted)
           {
-            pending[c] = true;
-            firstRef[c] = stored;
-            firstInverted[c] = inverted;
+            acc[c] = ~uint64_t(0);
             owner[c] = me.entry;
-            refAt += refBits;
             continue;
           }
-          if (pending[c])
-          {
-            pending[c] = false;
-            if (firstRef[c] == stored && firstInverted[c] != inverted)
-            {
-              acc[c] = ~uint64_t(0);
-              owner[c] = me.entry;
-              refAt += refBits;
-              continue;
-            }
-            const uint64_t first = this->V.leafMask(firstRef[c]);
-            acc[c] = firstInverted[c] ? ~first : first;
-          }
-          uint64_t m = this->V.leafMask(leafRef);
-          if (inverted)
-            m = ~m;
-          if (acc[c] & m)
-            this->overlap(owner[c], me.entry, cell);
-          acc[c] |= m;
-          owner[c] = me.entry;
+          const uint64_t first = this->V.leafMask(firstRef[c]);
+          acc[c] = firstInverted[c] ? ~first : first;
         }
-        refAt += refBits;
+        const uint64_t m = this->V.leafMask(leafRef) ^ (uint64_t(0) - uint64_t(inverted));
+        if (acc[c] & m)
+          this->overlap(owner[c], me.entry, cell);
+        acc[c] |= m;
+        owner[c] = me.entry;
       }
     }
   }
@@ -1143,7 +1137,8 @@ void Volume::validate(const ParallelFor& parallel) const
   roots.checkAllUsed("root");
 }
 
-void Volume::deriveBoundsAndValidate(const ParallelFor& parallel, PooledGraph* graph)
+void Volume::deriveBoundsAndValidate(
+  const ParallelFor& parallel, PooledGraph* graph, const std::function<void()>& alongside)
 {
   if (form != DagForm::Pooled)
     throw std::logic_error("Volume: validation reads the pooled form (svdag::pooled)");
@@ -1175,7 +1170,31 @@ void Volume::deriveBoundsAndValidate(const ParallelFor& parallel, PooledGraph* g
     }
     bits::replaceBits(this->blocks, i * recordBits + boundsAt, layout::BLOCK_BOUNDS_BITS, box);
   }
-  const LabelTotals totals = checkBlocks(*this, roots, parallel);
+  LabelTotals totals;
+  if (alongside)
+  {
+    // Two tasks: the checks (their own loops then run on their task's thread) and `alongside`.
+    std::exception_ptr errors[2];
+    parallel(0, 2, 1, [&](uint64_t begin, uint64_t end) {
+      for (uint64_t task = begin; task < end; ++task)
+        try
+        {
+          if (task == 0)
+            totals = checkBlocks(*this, roots, parallel);
+          else if (!errors[0]) // done in order, a failed check spares it
+            alongside();
+        }
+        catch (...)
+        {
+          errors[task] = std::current_exception();
+        }
+    });
+    for (const std::exception_ptr& error : errors)
+      if (error)
+        std::rethrow_exception(error);
+  }
+  else
+    totals = checkBlocks(*this, roots, parallel);
   for (size_t l = 0; l < this->labels.size(); ++l)
   {
     if (totals.voxels[l] == 0)

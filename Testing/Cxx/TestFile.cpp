@@ -4,6 +4,7 @@
 #include "Bits.h"
 #include "CodedVolume.h"
 #include "DagStreams.h"
+#include "PooledGraph.h"
 #include "RangeCoder.h"
 #include "svdag/Builder.h"
 #include "svdag/Decoder.h"
@@ -1508,6 +1509,125 @@ TEST(StreamsFile, CorruptStreamsFailCleanly)
   svdag::Volume back = svdag::dagstreams::decode(encoded.streams, encoded.shape);
   back.deriveBoundsAndValidate();
   EXPECT_TRUE(svdag::compacted(back) == svdag::compacted(v));
+}
+
+namespace
+{
+// A 4.0 file whose DAG streams section holds `streams` uncompressed (as a writer stores a stream
+// that zstd would not make smaller), checksums resealed: edits reach the decoder and the checks.
+Bytes withStreams(const Bytes& good, const svdag::dagstreams::Streams& streams)
+{
+  Bytes section;
+  for (const std::vector<uint8_t>& stream : streams)
+  {
+    svdag::bits::putVarint(section, stream.size()); // stored
+    svdag::bits::putVarint(section, stream.size()); // raw
+  }
+  for (const std::vector<uint8_t>& stream : streams)
+    section.insert(section.end(), stream.begin(), stream.end());
+  Bytes b = good;
+  const size_t e = entryOf(b, 7);
+  const size_t at = size_t(getLE(b, e + Offset, 8));
+  EXPECT_EQ(at + getLE(b, e + Stored, 8), b.size()) << "the streams section ends the file";
+  b.resize(at);
+  b.insert(b.end(), section.begin(), section.end());
+  putLE(b, e + Stored, section.size(), 8);
+  putLE(b, e + Raw, section.size(), 8);
+  putLE(b, e + Crc, crc32(0, section.data(), uInt(section.size())), 4);
+  resealHeader(b);
+  return b;
+}
+} // namespace
+
+// A small volume's load checks its blocks and cells beside its compaction (File.cpp): on two
+// threads, edited streams load as they do in order, to the same volume or the same error.
+TEST(StreamsFile, CorruptStreamsLoadAlikeInOrderAndOnThreads)
+{
+  const svdag::Volume v = svdag::pooled(spheres(ScalarType::UInt16, 30)); // as files hold it
+  const Bytes good = svdag::serialize(v);
+  const svdag::dagstreams::Encoded encoded = svdag::dagstreams::encode(v);
+  ASSERT_TRUE(svdag::deserialize(withStreams(good, encoded.streams)) == svdag::deserialize(good));
+  std::mt19937_64 rng(31);
+  size_t failed = 0, loaded = 0, overlaps = 0;
+  for (uint32_t s = 0; s < svdag::dagstreams::StreamCount; ++s)
+  {
+    SCOPED_TRACE(svdag::dagstreams::streamName(s));
+    for (int i = 0; i < 40 && !encoded.streams[s].empty(); ++i)
+    {
+      svdag::dagstreams::Streams bad = encoded.streams;
+      std::vector<uint8_t>& stream = bad[s];
+      stream[rng() % stream.size()] ^= uint8_t(1u << (rng() % 8));
+      const Bytes file = withStreams(good, bad);
+      std::string inOrder, onTwo;
+      svdag::Volume a, b;
+      try
+      {
+        a = svdag::deserialize(file);
+      }
+      catch (const FileError& e)
+      {
+        inOrder = e.what();
+      }
+      try
+      {
+        b = svdag::deserialize(file.data(), file.size(), onThreads(2));
+      }
+      catch (const FileError& e)
+      {
+        onTwo = e.what();
+      }
+      EXPECT_EQ(onTwo, inOrder);
+      if (inOrder.empty())
+      {
+        EXPECT_TRUE(a == b);
+        ++loaded;
+      }
+      else
+        ++failed;
+      overlaps += inOrder.find("overlap") != std::string::npos;
+    }
+  }
+  EXPECT_GT(failed, 100u);
+  EXPECT_GT(overlaps, 0u) << "no edit reached the cell checks that run beside the compaction";
+}
+
+// deriveBoundsAndValidate's `alongside` runs once the graph and bounds are there, beside the
+// last checks; their error comes first, its own otherwise.
+TEST(StreamsFile, ChecksBesideATaskKeepTheirErrorFirst)
+{
+  const svdag::Volume v = svdag::pooled(spheres(ScalarType::UInt16, 30));
+  svdag::Volume overlapping = v;
+  uint64_t pair = 0;
+  while (pair + 1 < v.blockCount && v.block(pair).cell != v.block(pair + 1).cell)
+    ++pair;
+  ASSERT_LT(pair + 1, v.blockCount) << "no cell with two blocks";
+  setBlockRoot(overlapping, pair + 1, v.block(pair).root);
+  auto error = [](svdag::Volume volume, const svdag::ParallelFor& parallel,
+                 const std::function<void()>& alongside) -> std::string {
+    try
+    {
+      svdag::PooledGraph graph;
+      volume.deriveBoundsAndValidate(parallel, &graph, alongside);
+    }
+    catch (const std::runtime_error& e)
+    {
+      return e.what();
+    }
+    return "";
+  };
+  const auto fails = [] { throw std::runtime_error("beside"); };
+  for (const svdag::ParallelFor& parallel : { svdag::ParallelFor(svdag::sequentialFor), onThreads(2) })
+  {
+    EXPECT_NE(error(overlapping, parallel, fails).find("overlap"), std::string::npos);
+    EXPECT_EQ(error(overlapping, parallel, {}), error(overlapping, parallel, fails));
+    EXPECT_EQ(error(v, parallel, fails), "beside");
+    // What it sees: the graph complete, the blocks with their bounds.
+    svdag::Volume checked = v, beside;
+    svdag::PooledGraph graph;
+    checked.deriveBoundsAndValidate(parallel, &graph, [&] { beside = svdag::compacted(checked, graph); });
+    beside.labels = checked.labels;
+    EXPECT_TRUE(beside == svdag::compacted(v));
+  }
 }
 
 TEST(StreamsFile, HeaderValuesThatDisagreeWithTheStreamsFail)

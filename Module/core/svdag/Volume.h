@@ -8,6 +8,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -181,9 +182,12 @@ public:
   // stores neither: they are derived from the same once-per-node summaries that validate() uses).
   // Throws std::runtime_error as validate() does, and for a label no block holds; pooled form
   // only (std::logic_error otherwise). `graph`, where given, receives the nodes as validation
-  // read them, for compaction (PooledGraph.h, private to the core).
-  void deriveBoundsAndValidate(
-    const ParallelFor& parallel = sequentialFor, PooledGraph* graph = nullptr);
+  // read them, for compaction (PooledGraph.h, private to the core). `alongside`, where given,
+  // runs through `parallel` beside the last checks (the blocks and cells), once `graph` is
+  // complete and the blocks hold their bounds; it may read the volume but not change it. The
+  // checks' error comes first, then its own.
+  void deriveBoundsAndValidate(const ParallelFor& parallel = sequentialFor,
+    PooledGraph* graph = nullptr, const std::function<void()>& alongside = {});
   bool operator==(const Volume& o) const;
 };
 
