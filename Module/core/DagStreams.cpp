@@ -343,6 +343,7 @@ Volume decode(const Streams& s, const Shape& shape)
     Reader r(s[LabelValues], LabelValues);
     const uint64_t lowest = keyOf(type, scalarMin(type)), highest = keyOf(type, scalarMax(type));
     uint64_t key = lowest;
+    v.labels.reserve(size_t(std::min<uint64_t>(shape.labelCount, s[LabelValues].size()))); // a byte each at least
     for (uint64_t l = 0; l < shape.labelCount; ++l)
     {
       const uint64_t distance = r.varint();
@@ -358,6 +359,7 @@ Volume decode(const Streams& s, const Shape& shape)
 
   { // leaves
     Reader r(s[Leaves], Leaves);
+    v.leaves.reserve(size_t(std::min<uint64_t>(shape.leafCount, s[Leaves].size() / 8)));
     for (uint64_t l = 0; l < shape.leafCount; ++l)
       v.leaves.push_back(r.u64le());
     r.finish();

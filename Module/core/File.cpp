@@ -18,6 +18,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <exception>
 #include <functional>
 #include <memory>
 
@@ -733,17 +734,34 @@ Volume readDagStreams(const SectionEntry& e, const uint8_t* data, uint64_t label
   }
   if (total != uint64_t(end - at))
     fail("DAG streams section: bytes after its last stream");
-  dagstreams::Streams streams;
-  const DecompressionContext ctx = decompressionContext();
+  // The streams side by side (each frame's tables cost a small stream as much as its bytes);
+  // the error is the first stream's, as in order.
+  const uint8_t* starts[dagstreams::StreamCount];
   for (uint32_t i = 0; i < dagstreams::StreamCount; ++i)
   {
-    if (storedSizes[i] == rawSizes[i])
-      streams[i].assign(at, at + storedSizes[i]);
-    else
-      inflate(ctx, at, size_t(storedSizes[i]), rawSizes[i],
-        std::string(dagstreams::streamName(i)) + " stream", streams[i], 0);
+    starts[i] = at;
     at += storedSizes[i];
   }
+  dagstreams::Streams streams;
+  std::exception_ptr errors[dagstreams::StreamCount];
+  parallel(0, dagstreams::StreamCount, 1, [&](uint64_t begin, uint64_t end) {
+    for (uint64_t i = begin; i < end; ++i)
+      try
+      {
+        if (storedSizes[i] == rawSizes[i])
+          streams[i].assign(starts[i], starts[i] + storedSizes[i]);
+        else
+          inflate(decompressionContext(), starts[i], size_t(storedSizes[i]), rawSizes[i],
+            std::string(dagstreams::streamName(uint32_t(i))) + " stream", streams[i], 0);
+      }
+      catch (...)
+      {
+        errors[i] = std::current_exception();
+      }
+  });
+  for (const std::exception_ptr& error : errors)
+    if (error)
+      std::rethrow_exception(error);
   try
   {
     Volume v = dagstreams::decode(streams, shape);

@@ -784,6 +784,8 @@ public:
   explicit CellBlocks(const Volume& v)
     : V(v)
   {
+    for (std::vector<MidEntry>& list : this->Octants)
+      list.reserve(64); // one entry a block of the cell: most cells need no more
   }
 
   void add(uint64_t index, uint32_t label, uint32_t rootRef)

@@ -1589,6 +1589,48 @@ TEST(StreamsFile, CorruptStreamsLoadAlikeInOrderAndOnThreads)
   }
   EXPECT_GT(failed, 100u);
   EXPECT_GT(overlaps, 0u) << "no edit reached the cell checks that run beside the compaction";
+
+  // The streams' zstd frames, decompressed side by side: the first bad stream's error.
+  const size_t e = entryOf(good, 7);
+  const size_t at = size_t(getLE(good, e + Offset, 8)), size = size_t(getLE(good, e + Stored, 8));
+  size_t frameErrors = 0;
+  for (int i = 0; i < 200; ++i)
+  {
+    Bytes bad = good;
+    for (int k = 0; k < 3; ++k) // three frames or three places in one
+      bad[at + rng() % size] ^= uint8_t(1u << (rng() % 8));
+    resealCoded(bad, 7);
+    const std::string inOrder = loadError(bad, svdag::sequentialFor);
+    EXPECT_EQ(loadError(bad, onThreads(3)), inOrder);
+    frameErrors += inOrder.find("zstd") != std::string::npos;
+  }
+  EXPECT_GT(frameErrors, 20u);
+  // Two broken frames: the error names the first of them on any schedule.
+  const uint8_t* table = good.data() + at;
+  const uint8_t* const end = good.data() + at + size;
+  uint64_t stored[svdag::dagstreams::StreamCount], raw[svdag::dagstreams::StreamCount];
+  for (uint32_t s = 0; s < svdag::dagstreams::StreamCount; ++s)
+    ASSERT_TRUE(svdag::bits::getVarint(table, end, stored[s]) && svdag::bits::getVarint(table, end, raw[s]));
+  std::vector<uint32_t> compressed; // streams held as zstd frames, and where each starts
+  std::vector<size_t> frameAt;
+  size_t offset = size_t(table - good.data());
+  for (uint32_t s = 0; s < svdag::dagstreams::StreamCount; offset += size_t(stored[s]), ++s)
+    if (stored[s] != raw[s])
+    {
+      compressed.push_back(s);
+      frameAt.push_back(offset);
+    }
+  ASSERT_GE(compressed.size(), 3u);
+  Bytes twoBad = good;
+  for (size_t k : { size_t(1), compressed.size() - 1 })
+    twoBad[frameAt[k]] ^= 0xFF; // the frame's magic number
+  resealCoded(twoBad, 7);
+  const std::string first = svdag::dagstreams::streamName(compressed[1]);
+  for (const svdag::ParallelFor& parallel : { svdag::ParallelFor(svdag::sequentialFor), onThreads(3), onThreads(12) })
+  {
+    const std::string message = loadError(twoBad, parallel);
+    EXPECT_NE(message.find(first + " stream is not a valid zstd frame"), std::string::npos) << message;
+  }
 }
 
 // deriveBoundsAndValidate's `alongside` runs once the graph and bounds are there, beside the
