@@ -18,7 +18,6 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
-#include <exception>
 #include <functional>
 #include <memory>
 
@@ -743,25 +742,13 @@ Volume readDagStreams(const SectionEntry& e, const uint8_t* data, uint64_t label
     at += storedSizes[i];
   }
   dagstreams::Streams streams;
-  std::exception_ptr errors[dagstreams::StreamCount];
-  parallel(0, dagstreams::StreamCount, 1, [&](uint64_t begin, uint64_t end) {
-    for (uint64_t i = begin; i < end; ++i)
-      try
-      {
-        if (storedSizes[i] == rawSizes[i])
-          streams[i].assign(starts[i], starts[i] + storedSizes[i]);
-        else
-          inflate(decompressionContext(), starts[i], size_t(storedSizes[i]), rawSizes[i],
-            std::string(dagstreams::streamName(uint32_t(i))) + " stream", streams[i], 0);
-      }
-      catch (...)
-      {
-        errors[i] = std::current_exception();
-      }
+  parallelTasks(parallel, dagstreams::StreamCount, [&](uint64_t i) {
+    if (storedSizes[i] == rawSizes[i])
+      streams[i].assign(starts[i], starts[i] + storedSizes[i]);
+    else
+      inflate(decompressionContext(), starts[i], size_t(storedSizes[i]), rawSizes[i],
+        std::string(dagstreams::streamName(uint32_t(i))) + " stream", streams[i], 0);
   });
-  for (const std::exception_ptr& error : errors)
-    if (error)
-      std::rethrow_exception(error);
   try
   {
     Volume v = dagstreams::decode(streams, shape);

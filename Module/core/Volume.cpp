@@ -10,7 +10,6 @@
 #include <atomic>
 #include <cmath>
 #include <cstring>
-#include <exception>
 #include <limits>
 #include <memory>
 #include <stdexcept>
@@ -1173,28 +1172,13 @@ void Volume::deriveBoundsAndValidate(
     bits::replaceBits(this->blocks, i * recordBits + boundsAt, layout::BLOCK_BOUNDS_BITS, box);
   }
   LabelTotals totals;
-  if (alongside)
-  {
-    // Two tasks: the checks (their own loops then run on their task's thread) and `alongside`.
-    std::exception_ptr errors[2];
-    parallel(0, 2, 1, [&](uint64_t begin, uint64_t end) {
-      for (uint64_t task = begin; task < end; ++task)
-        try
-        {
-          if (task == 0)
-            totals = checkBlocks(*this, roots, parallel);
-          else if (!errors[0]) // done in order, a failed check spares it
-            alongside();
-        }
-        catch (...)
-        {
-          errors[task] = std::current_exception();
-        }
+  if (alongside) // two tasks: the checks (their loops then run on their task's thread), and it
+    parallelTasks(parallel, 2, [&](uint64_t task) {
+      if (task == 0)
+        totals = checkBlocks(*this, roots, parallel);
+      else
+        alongside();
     });
-    for (const std::exception_ptr& error : errors)
-      if (error)
-        std::rethrow_exception(error);
-  }
   else
     totals = checkBlocks(*this, roots, parallel);
   for (size_t l = 0; l < this->labels.size(); ++l)
