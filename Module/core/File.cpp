@@ -87,8 +87,6 @@ uint32_t crc32Of(const uint8_t* data, size_t size)
 
 using bits::storeLE;
 
-// Files are read and written at most this many bytes per stdio call: a single read or write of
-// more than 2 GiB fails on some systems (macOS's write, for one).
 // A 4.0 load compacts the volume beside its last checks up to this size, from a copy of the
 // pooled form: there a load is too short for its loops' halves to pay, and the copy is cheap.
 // Larger volumes split each loop instead and free the pooled streams before compacting.
@@ -97,6 +95,9 @@ constexpr uint64_t CompactAlongsideBytes = uint64_t(4) << 20;
 // of microseconds, less than waking a second thread costs, and a second thread left spinning
 // slows the first on a shared machine (dvid_fib19_64's 5 KB: 0.13 ms alone, 0.15 ms on two).
 constexpr uint64_t SplitLoadBytes = 8192;
+
+// Files are read and written at most this many bytes per stdio call: a single read or write of
+// more than 2 GiB fails on some systems (macOS's write, for one).
 constexpr size_t IoChunk = size_t(1) << 30;
 
 // Appends fields in little-endian order, byte by byte, whatever the host's byte order.
@@ -710,7 +711,8 @@ Volume readCoded(const SectionEntry& e, const uint8_t* data, uint64_t labelCount
 Volume readDagStreams(const SectionEntry& e, const uint8_t* data, uint64_t labelCount,
   uint64_t leafCount, const Volume& header, const ParallelFor& given)
 {
-  const ParallelFor parallel = e.stored >= SplitLoadBytes ? given : ParallelFor(sequentialFor);
+  const bool split = e.stored >= SplitLoadBytes;
+  const ParallelFor parallel = split ? given : ParallelFor(sequentialFor);
   const uint8_t* stored = data + e.offset;
   if (crc32Of(stored, size_t(e.stored)) != e.crc)
     fail("DAG streams section checksum mismatch (the data is corrupt)");
@@ -758,7 +760,7 @@ Volume readDagStreams(const SectionEntry& e, const uint8_t* data, uint64_t label
   {
     Volume v = dagstreams::decode(streams, shape);
     PooledGraph graph; // what validation reads, compaction needs: the streams are walked once
-    if (v.memory().total() > CompactAlongsideBytes)
+    if (!split || v.memory().total() > CompactAlongsideBytes)
     {
       v.deriveBoundsAndValidate(parallel, &graph);
       return compacted(std::move(v), std::move(graph));
