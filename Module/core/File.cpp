@@ -87,9 +87,10 @@ uint32_t crc32Of(const uint8_t* data, size_t size)
 
 using bits::storeLE;
 
-// A 4.0 load compacts the volume beside its last checks up to this size, from a copy of the
-// pooled form: there a load is too short for its loops' halves to pay, and the copy is cheap.
-// Larger volumes split each loop instead and free the pooled streams before compacting.
+// A 4.0 load on two threads (SplitLoadBytes and up) compacts the volume beside its last checks
+// up to this size, from a copy of the pooled form: there a load is too short for its loops'
+// halves to pay, and the copy is cheap. Larger volumes split each loop instead and free the
+// pooled streams before compacting.
 constexpr uint64_t CompactAlongsideBytes = uint64_t(4) << 20;
 // A 4.0 load of a smaller streams section runs on the calling thread alone: its steps take tens
 // of microseconds, less than waking a second thread costs, and a second thread left spinning
@@ -532,7 +533,7 @@ bool readAll(std::FILE* f, uint8_t* data, size_t size)
 // ---- reading ----
 
 // One per thread, kept between loads: making one costs a small file's load a twentieth of its
-// time. inflate() resets it before each frame.
+// time. inflate() starts each frame afresh.
 using DecompressionContext = ZSTD_DCtx*;
 DecompressionContext decompressionContext()
 {
@@ -557,7 +558,6 @@ void inflate(DecompressionContext ctx, const uint8_t* src, size_t stored, uint64
     fail(part + " is not a valid zstd frame");
   if (declared == ZSTD_CONTENTSIZE_UNKNOWN || declared != raw)
     fail(part + ": the zstd frame's size does not match the declared raw size");
-  ZSTD_DCtx_reset(ctx, ZSTD_reset_session_only);
 
   const uint64_t rawElements = raw / sizeof(T);
   // Reserving the padding with each step makes the last step's allocation the final one.
@@ -582,6 +582,7 @@ void inflate(DecompressionContext ctx, const uint8_t* src, size_t stored, uint64
     out.resize(out.size() + padding); // inside the capacity reserved
     return;
   }
+  ZSTD_DCtx_reset(ctx, ZSTD_reset_session_only); // one call above starts afresh by itself
   size_t produced = 0; // bytes
   uint8_t scratch = 0; // catches a frame that goes on past the declared size
   ZSTD_inBuffer in = { src, stored, 0 };

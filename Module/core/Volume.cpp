@@ -878,8 +878,6 @@ private:
     {
       const Entry& ce = this->Entries[e];
       const uint32_t mixed = layout::nodeMixedMask(ce.header);
-      if (!(mixed & shared))
-        continue;
       const uint64_t refsAt = layout::refTarget(ce.root) + layout::NODE_HEADER_BITS;
       for (uint32_t both = mixed & shared; both; both &= both - 1) // set bits: few branches
       {
