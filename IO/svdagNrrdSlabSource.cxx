@@ -202,11 +202,9 @@ struct svdagNrrdSlabSource::Impl
   std::unique_ptr<svdagVoxelStream> voxels;
 };
 
-bool svdagNrrdSlabSource::hasMagic(const std::string& fileName)
+bool svdagNrrdSlabSource::hasSignature(const uint8_t* head, size_t size)
 {
-  FilePtr f(std::fopen(fileName.c_str(), "rb"));
-  char magic[8] = {};
-  return f && std::fread(magic, 1, 7, f.get()) == 7 && std::memcmp(magic, "NRRD000", 7) == 0;
+  return size >= 7 && std::memcmp(head, "NRRD000", 7) == 0;
 }
 
 svdagNrrdSlabSource::svdagNrrdSlabSource(const std::string& fileName, bool allowFloat)

@@ -23,8 +23,8 @@ public:
   const char* formatName() const override { return "NRRD"; }
   void readSlab(int32_t z0, int32_t nz, void* dst) override;
 
-  // True if the file starts with the NRRD magic ("NRRD000").
-  static bool hasMagic(const std::string& fileName);
+  // True if a file's first `size` bytes start with the NRRD magic ("NRRD000").
+  static bool hasSignature(const uint8_t* head, size_t size);
 
 private:
   struct Impl;

@@ -6,6 +6,8 @@
 #include "svdag/Decoder.h"
 #include "svdag/File.h"
 
+#include <cstring>
+
 struct svdagSVDAGFileSlabSource::Impl
 {
   std::shared_ptr<const svdag::Volume> volume;
@@ -59,14 +61,7 @@ void svdagSVDAGFileSlabSource::readSlab(int32_t z0, int32_t nz, void* dst)
   svdag::decodeSlab(*impl->volume, z0, nz, dst);
 }
 
-bool svdagSVDAGFileSlabSource::hasMagic(const std::string& fileName)
+bool svdagSVDAGFileSlabSource::hasSignature(const uint8_t* head, size_t size)
 {
-  try
-  {
-    return svdag::isSVDAGFile(fileName);
-  }
-  catch (const std::exception&)
-  {
-    return false;
-  }
+  return size >= svdag::FileMagicSize && std::memcmp(head, svdag::FileMagic, svdag::FileMagicSize) == 0;
 }

@@ -18,7 +18,8 @@ public:
   const char* formatName() const override { return "SVDAG"; }
   void readSlab(int32_t z0, int32_t nz, void* dst) override;
   std::shared_ptr<const svdag::Volume> compressedVolume() const override;
-  static bool hasMagic(const std::string& fileName);
+  // True if a file's first `size` bytes start with the .svdag magic.
+  static bool hasSignature(const uint8_t* head, size_t size);
 
 private:
   struct Impl;

@@ -12,18 +12,25 @@
 
 #include "vtkErrorCode.h"
 
+#include <cerrno>
+
+#include <fcntl.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 namespace
 {
 // One entry per format: its name (GetFileFormat()), how its files are recognised from their
 // content, and how they are opened. Detection tries the entries in this order: binary
 // signatures first, text headers last. To add a format, add its source and one line here.
-// `open` opens the format's own source: with options.castFloatLabels, one that may hand out
-// floats (svdagOpenSlabSource then casts them).
+// A format is recognised by `hasSignature`, from the file's first bytes (read once for all of
+// them), or else by `detect`, which reads the file itself. `open` opens the format's own source:
+// with options.castFloatLabels, one that may hand out floats (svdagOpenSlabSource then casts
+// them).
 struct Format
 {
   const char* name;
+  bool (*hasSignature)(const uint8_t* head, size_t size);
   bool (*detect)(const std::string& fileName);
   std::unique_ptr<svdagSlabSource> (*open)(
     const std::string& fileName, const svdagSlabSourceOptions& options);
@@ -56,26 +63,41 @@ std::unique_ptr<svdagSlabSource> openHdf5(
 }
 
 const Format Formats[] = {
-  { "NRRD", svdagNrrdSlabSource::hasMagic, openPlain<svdagNrrdSlabSource> },
-  { "SVDAG", svdagSVDAGFileSlabSource::hasMagic, openSvdag },
-  { "HDF5", svdagHdf5SlabSource::hasMagic, openHdf5 },
-  { "TIFF", svdagTiffSlabSource::hasMagic, openPlain<svdagTiffSlabSource> },
-  { "NIfTI", svdagNiftiSlabSource::canRead, openPlain<svdagNiftiSlabSource> },
-  { "VTKImageData", svdagVTIImageSlabSource::canRead, openPlain<svdagVTIImageSlabSource> },
-  { "MetaImage", svdagMetaImageSlabSource::canRead, openPlain<svdagMetaImageSlabSource> },
+  { "NRRD", svdagNrrdSlabSource::hasSignature, nullptr, openPlain<svdagNrrdSlabSource> },
+  { "SVDAG", svdagSVDAGFileSlabSource::hasSignature, nullptr, openSvdag },
+  { "HDF5", nullptr, svdagHdf5SlabSource::hasMagic, openHdf5 },
+  { "TIFF", svdagTiffSlabSource::hasSignature, nullptr, openPlain<svdagTiffSlabSource> },
+  { "NIfTI", nullptr, svdagNiftiSlabSource::canRead, openPlain<svdagNiftiSlabSource> },
+  { "VTKImageData", nullptr, svdagVTIImageSlabSource::canRead, openPlain<svdagVTIImageSlabSource> },
+  { "MetaImage", nullptr, svdagMetaImageSlabSource::canRead, openPlain<svdagMetaImageSlabSource> },
 };
 
-// The entry for the file's content, or null. Never throws.
-const Format* detect(const std::string& fileName)
+// The most bytes a signature needs (.svdag's).
+constexpr size_t SignatureBytes = 8;
+
+// The entry for the content of a regular file, or null. Never throws.
+const Format* detectRegularFile(const std::string& fileName)
 {
   try
   {
-    struct stat st;
-    if (stat(fileName.c_str(), &st) != 0 || !S_ISREG(st.st_mode))
+    uint8_t head[SignatureBytes] = {};
+    size_t size = 0;
+    const int fd = ::open(fileName.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+    if (fd < 0)
       return nullptr;
+    while (size < SignatureBytes)
+    {
+      const ssize_t got = ::read(fd, head + size, SignatureBytes - size);
+      if (got < 0 && errno == EINTR)
+        continue;
+      if (got <= 0)
+        break;
+      size += size_t(got);
+    }
+    ::close(fd);
     for (const Format& format : Formats)
     {
-      if (format.detect(fileName))
+      if (format.hasSignature ? format.hasSignature(head, size) : format.detect(fileName))
         return &format;
     }
   }
@@ -83,6 +105,15 @@ const Format* detect(const std::string& fileName)
   {
   }
   return nullptr;
+}
+
+// The entry for the file's content, or null. Never throws.
+const Format* detect(const std::string& fileName)
+{
+  struct stat st;
+  if (stat(fileName.c_str(), &st) != 0 || !S_ISREG(st.st_mode))
+    return nullptr;
+  return detectRegularFile(fileName);
 }
 }
 
@@ -100,7 +131,7 @@ std::unique_ptr<svdagSlabSource> svdagOpenSlabSource(
     throw svdagReadError(vtkErrorCode::FileNotFoundError, "file not found: " + fileName);
   if (!S_ISREG(st.st_mode))
     throw svdagReadError(vtkErrorCode::CannotOpenFileError, fileName + " is not a regular file");
-  const Format* format = detect(fileName);
+  const Format* format = detectRegularFile(fileName);
   if (!format)
     throw svdagReadError(vtkErrorCode::UnrecognizedFileTypeError,
       fileName + " is not a label volume in a known format (NRRD, MetaImage, VTK image data, "

@@ -178,15 +178,9 @@ struct svdagTiffSlabSource::Impl
   }
 };
 
-bool svdagTiffSlabSource::hasMagic(const std::string& fileName)
+bool svdagTiffSlabSource::hasSignature(const uint8_t* m, size_t size)
 {
-  std::FILE* f = std::fopen(fileName.c_str(), "rb");
-  if (!f)
-    return false;
-  unsigned char m[4] = {};
-  const size_t n = std::fread(m, 1, 4, f);
-  std::fclose(f);
-  if (n != 4)
+  if (size < 4)
     return false;
   // "II" little-endian or "MM" big-endian, then 42 (classic) or 43 (BigTIFF).
   return (m[0] == 'I' && m[1] == 'I' && (m[2] == 42 || m[2] == 43) && m[3] == 0) ||

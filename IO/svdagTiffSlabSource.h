@@ -18,8 +18,8 @@ public:
   ~svdagTiffSlabSource() override;
   const char* formatName() const override { return "TIFF"; }
   void readSlab(int32_t z0, int32_t nz, void* dst) override;
-  // True if the file starts with a TIFF or BigTIFF signature.
-  static bool hasMagic(const std::string& fileName);
+  // True if a file's first `size` bytes start with a TIFF or BigTIFF signature.
+  static bool hasSignature(const uint8_t* head, size_t size);
 
 private:
   struct Impl;

@@ -24,6 +24,7 @@
 #include <iterator>
 #include <new>
 #include <random>
+#include <sys/stat.h>
 #include <thread>
 #include <unistd.h>
 
@@ -289,7 +290,22 @@ TEST(File, WritesAndReadsFiles)
   EXPECT_THROW(svdag::readFile(text), FileError);
   EXPECT_FALSE(svdag::isSVDAGFile(dir + "/does-not-exist.svdag"));
   EXPECT_THROW(svdag::readFile(dir + "/does-not-exist.svdag"), FileError);
-  EXPECT_THROW(svdag::readFile(dir), FileError); // a directory
+  // A directory and a FIFO are refused; the FIFO is not waited on (nothing writes to it).
+  const std::string fifo = dir + "/svdag_file_test_fifo_" + std::to_string(::getpid());
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  for (const std::string& notAFile : { dir, fifo })
+  {
+    try
+    {
+      svdag::readFile(notAFile);
+      ADD_FAILURE() << notAFile << " was read";
+    }
+    catch (const FileError& e)
+    {
+      EXPECT_NE(std::string(e.what()).find("not a regular file"), std::string::npos) << e.what();
+    }
+  }
+  std::remove(fifo.c_str());
   EXPECT_THROW(svdag::writeFile(v, dir + "/no-such-dir/x.svdag"), svdag::FileOpenError);
   EXPECT_THROW(svdag::writeFile(v, path, { 23, 2 }), FileError);
   EXPECT_THROW(svdag::writeFile(v, path, { -1, 2 }), FileError);
