@@ -63,5 +63,6 @@ void svdagSVDAGFileSlabSource::readSlab(int32_t z0, int32_t nz, void* dst)
 
 bool svdagSVDAGFileSlabSource::hasSignature(const uint8_t* head, size_t size)
 {
-  return size >= svdag::FileMagicSize && std::memcmp(head, svdag::FileMagic, svdag::FileMagicSize) == 0;
+  return size >= svdag::FileMagicSize &&
+    std::memcmp(head, svdag::FileMagic, svdag::FileMagicSize) == 0;
 }

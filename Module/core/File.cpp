@@ -1072,7 +1072,8 @@ std::vector<uint8_t> fileBytes(const std::string& path)
   const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
   if (fd < 0)
     throw FileError("cannot open '" + path + "': " + std::strerror(errno));
-  const std::unique_ptr<const int, void (*)(const int*)> closer(&fd, [](const int* f) { ::close(*f); });
+  const std::unique_ptr<const int, void (*)(const int*)> closer(
+    &fd, [](const int* f) { ::close(*f); });
   // The size the file has once opened, then one read; a file that changes meanwhile shows up as
   // a short read or is caught by the checksums.
   struct stat info;

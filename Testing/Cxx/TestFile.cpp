@@ -292,6 +292,7 @@ TEST(File, WritesAndReadsFiles)
   EXPECT_THROW(svdag::readFile(dir + "/does-not-exist.svdag"), FileError);
   // A directory and a FIFO are refused; the FIFO is not waited on (nothing writes to it).
   const std::string fifo = dir + "/svdag_file_test_fifo_" + std::to_string(::getpid());
+  std::remove(fifo.c_str()); // left by a run that stopped here
   ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
   for (const std::string& notAFile : { dir, fifo })
   {
