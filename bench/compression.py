@@ -746,9 +746,10 @@ def print_report(rows, anchors):
           r["ours_over_crackle"]] for r in rows],
     )
     print_table(
-        "Time and memory (measured; build = compress an in-memory array, file = read + compress "
-        "the gzip NRRD file, medians of at least `runs`; peak = a subprocess reading + compressing the "
-        "file; model = one slab + 1.5 x output)",
+        "Time and memory (measured; build = compress an in-memory array, medians of `runs` "
+        f"(short ones repeated for {MIN_MEASURED_S} s); file = read + compress the gzip NRRD "
+        "file, medians of --repeats; peak = a subprocess reading + compressing the file; model = "
+        "one slab + 1.5 x output)",
         ["volume", "build s", "runs", "Mvox/s", "file s", "cseg s", "zstd19 s", "gzip9 s",
          "peak MB", "baseline MB", "peak-base MB", "model MB", "file via"],
         [[r["volume"], r["build_s"], r["build_runs"], r["voxels_per_s"] / 1e6, r["file_s"],
