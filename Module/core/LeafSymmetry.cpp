@@ -35,11 +35,14 @@ uint64_t select(uint32_t yes, uint64_t mirrored, uint64_t m)
 
 // Symmetry 8 p + m reads child voxel (x, y, z) from the stored voxel whose coordinate j is child
 // coordinate p_j, mirrored where bit j of m is set: the stored mask mirrored along its axes j,
-// then its axes permuted by p. The six permutations move whole masks through a table per byte
-// (96 KiB, built from Layout.h's definition, the one the shaders use); mirrors are shifts.
+// then its axes permuted by p. Mirrors are shifts. A permutation moves stored bit i to a child
+// bit linear in i's coordinates, so byte b of a mask lands where byte 0 would, shifted by where
+// bit 8 b lands: one table of byte 0's images per permutation (12 KiB in all, small enough to
+// stay in the first-level cache), built from Layout.h's definition, the one the shaders use.
 struct Tables
 {
-  uint64_t permuted[layout::LEAF_SYMMETRY_COUNT / 8][8][256];
+  uint64_t permuted[layout::LEAF_SYMMETRY_COUNT / 8][256];
+  uint8_t byteShift[layout::LEAF_SYMMETRY_COUNT / 8][8];
   uint32_t inverse[layout::LEAF_SYMMETRY_COUNT];
 
   Tables()
@@ -50,14 +53,15 @@ struct Tables
       uint32_t destination[64];
       for (uint32_t y = 0; y < 64; ++y)
         destination[layout::leafSymmetryBit(8 * p, y % 4, (y / 4) % 4, y / 16)] = y;
+      for (uint32_t v = 0; v < 256; ++v)
+      {
+        uint64_t out = 0;
+        for (uint32_t k = 0; k < 8; ++k)
+          out |= uint64_t((v >> k) & 1u) << destination[k];
+        this->permuted[p][v] = out;
+      }
       for (uint32_t b = 0; b < 8; ++b)
-        for (uint32_t v = 0; v < 256; ++v)
-        {
-          uint64_t out = 0;
-          for (uint32_t k = 0; k < 8; ++k)
-            out |= uint64_t((v >> k) & 1u) << destination[8 * b + k];
-          this->permuted[p][b][v] = out;
-        }
+        this->byteShift[p][b] = uint8_t(destination[8 * b]);
     }
     // The composition above must be the definition for every symmetry: checked bit by bit.
     for (uint32_t s = 0; s < layout::LEAF_SYMMETRY_COUNT; ++s)
@@ -84,7 +88,7 @@ struct Tables
   {
     uint64_t out = 0;
     for (uint32_t b = 0; b < 8; ++b)
-      out |= this->permuted[p][b][(mask >> (8 * b)) & 0xFFu];
+      out |= this->permuted[p][(mask >> (8 * b)) & 0xFFu] << this->byteShift[p][b];
     return out;
   }
 
