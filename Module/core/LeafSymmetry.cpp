@@ -2,6 +2,7 @@
 
 #include "svdag/Layout.h"
 
+#include <algorithm>
 #include <stdexcept>
 #include <string>
 
@@ -35,33 +36,50 @@ uint64_t select(uint32_t yes, uint64_t mirrored, uint64_t m)
 
 // Symmetry 8 p + m reads child voxel (x, y, z) from the stored voxel whose coordinate j is child
 // coordinate p_j, mirrored where bit j of m is set: the stored mask mirrored along its axes j,
-// then its axes permuted by p. Mirrors are shifts. A permutation moves stored bit i to a child
-// bit linear in i's coordinates, so byte b of a mask lands where byte 0 would, shifted by where
-// bit 8 b lands: one table of byte 0's images per permutation (12 KiB in all, small enough to
-// stay in the first-level cache), built from Layout.h's definition, the one the shaders use.
-struct Tables
+// then its axes permuted by p. Mirrors are shifts. A permutation of the axes permutes the six
+// bits of a voxel's index, which a few exchanges of two index bits do (delta swaps: no table to
+// miss the cache), found from Layout.h's definition, the one the shaders use.
+struct Symmetries
 {
-  uint64_t permuted[layout::LEAF_SYMMETRY_COUNT / 8][256];
-  uint8_t byteShift[layout::LEAF_SYMMETRY_COUNT / 8][8];
+  // Each exchange puts one index bit where it belongs for good, so five sort all six.
+  static constexpr uint32_t Steps = 5;
+  struct Exchange
+  {
+    uint64_t lower = 0; // voxels whose index has bit a set and bit b clear (a < b)
+    uint32_t distance = 0; // 2^b - 2^a: where each goes
+  };
+  Exchange exchanges[layout::LEAF_SYMMETRY_COUNT / 8][Steps];
   uint32_t inverse[layout::LEAF_SYMMETRY_COUNT];
 
-  Tables()
+  Symmetries()
   {
     for (uint32_t p = 0; p < layout::LEAF_SYMMETRY_COUNT / 8; ++p)
     {
-      // Bit x of the stored mask lands on the child bit y whose voxel reads it.
-      uint32_t destination[64];
-      for (uint32_t y = 0; y < 64; ++y)
-        destination[layout::leafSymmetryBit(8 * p, y % 4, (y / 4) % 4, y / 16)] = y;
-      for (uint32_t v = 0; v < 256; ++v)
+      // Index bit k of a stored voxel is index bit target[k] of the child voxel it lands on.
+      uint32_t target[6];
+      for (uint32_t k = 0; k < 6; ++k)
       {
-        uint64_t out = 0;
-        for (uint32_t k = 0; k < 8; ++k)
-          out |= uint64_t((v >> k) & 1u) << destination[k];
-        this->permuted[p][v] = out;
+        const uint32_t i = 1u << k;
+        uint32_t y = 0;
+        while (layout::leafSymmetryBit(8 * p, y % 4, (y / 4) % 4, y / 16) != i)
+          ++y;
+        target[k] = uint32_t(__builtin_ctz(y));
       }
-      for (uint32_t b = 0; b < 8; ++b)
-        this->byteShift[p][b] = uint8_t(destination[8 * b]);
+      uint32_t at[6] = { 0, 1, 2, 3, 4, 5 }; // where stored index bit k is after the exchanges
+      uint32_t step = 0;
+      for (uint32_t k = 0; k < 6; ++k)
+      {
+        if (at[k] == target[k])
+          continue;
+        const uint32_t a = std::min(at[k], target[k]), b = std::max(at[k], target[k]);
+        for (uint32_t& position : at)
+          position = position == a ? b : position == b ? a : position;
+        Exchange& e = this->exchanges[p][step++];
+        e.distance = (1u << b) - (1u << a);
+        for (uint32_t q = 0; q < 64; ++q)
+          if (((q >> a) & 1u) && !((q >> b) & 1u))
+            e.lower |= uint64_t(1) << q;
+      }
     }
     // The composition above must be the definition for every symmetry: checked bit by bit.
     for (uint32_t s = 0; s < layout::LEAF_SYMMETRY_COUNT; ++s)
@@ -86,10 +104,12 @@ struct Tables
 
   uint64_t permute(uint32_t p, uint64_t mask) const
   {
-    uint64_t out = 0;
-    for (uint32_t b = 0; b < 8; ++b)
-      out |= this->permuted[p][(mask >> (8 * b)) & 0xFFu] << this->byteShift[p][b];
-    return out;
+    for (const Exchange& e : this->exchanges[p])
+    {
+      const uint64_t t = ((mask >> e.distance) ^ mask) & e.lower;
+      mask ^= t ^ (t << e.distance);
+    }
+    return mask;
   }
 
   uint64_t apply(uint32_t s, uint64_t mask) const
@@ -101,9 +121,9 @@ struct Tables
   }
 };
 
-const Tables& tables()
+const Symmetries& symmetries()
 {
-  static const Tables t;
+  static const Symmetries t;
   return t;
 }
 } // namespace
@@ -113,7 +133,7 @@ void leafImages(uint64_t mask, uint64_t images[layout::LEAF_SYMMETRY_COUNT])
   // Symmetry 8 p + m: stored coordinate j is child coordinate p_j (permutation p), mirrored when
   // bit j of m is set. So its image is the permuted mask (symmetry 8 p) mirrored along child
   // axis p_j for every set bit j: one permutation per p, then a mirror per image.
-  const Tables& t = tables();
+  const Symmetries& t = symmetries();
   for (uint32_t p = 0; p < layout::LEAF_SYMMETRY_COUNT / 8; ++p)
   {
     const uint64_t permuted = t.permute(p, mask);
@@ -133,12 +153,12 @@ void leafImages(uint64_t mask, uint64_t images[layout::LEAF_SYMMETRY_COUNT])
 
 uint64_t leafUnderSymmetry(uint32_t s, uint64_t stored)
 {
-  return tables().apply(s, stored);
+  return symmetries().apply(s, stored);
 }
 
 uint32_t inverseLeafSymmetry(uint32_t s)
 {
-  return tables().inverse[s];
+  return symmetries().inverse[s];
 }
 
 CanonicalLeaf canonicalLeaf(uint64_t mask)
@@ -161,7 +181,7 @@ CanonicalLeaf canonicalLeaf(uint64_t mask)
       bestImage = u;
     }
   }
-  best.symmetry = tables().inverse[bestImage];
+  best.symmetry = symmetries().inverse[bestImage];
   return best;
 }
 
