@@ -2,6 +2,7 @@
 #include "DagStreams.h"
 
 #include "Bits.h"
+#include "PooledGraph.h"
 
 #include <algorithm>
 #include <stdexcept>
@@ -119,6 +120,13 @@ private:
   uint32_t Stream;
 };
 
+// A reference as a decoded stream holds it (`field`) and as the graph does (`node`, PooledGraph).
+struct Reference
+{
+  uint64_t field;
+  uint64_t node;
+};
+
 // One pool as it is decoded: the nodes' start offsets (known once their headers are read) and
 // how many of them references reached so far.
 struct DecodedPool
@@ -140,13 +148,14 @@ struct DecodedPool
     return this->referenced++;
   }
   // A root or mid reference from its flag byte (complement, shared): the node's start, shifted,
-  // with the complement bit.
-  uint64_t nodeReference(uint8_t flags, Reader& indices, const char* what)
+  // with the complement bit (the stream's field), and the node, shifted, with it (the graph's).
+  Reference nodeReference(uint8_t flags, Reader& indices, const char* what)
   {
     if (flags & ~(ComplementFlag | SharedNodeFlag))
       fail(std::string(what) + " reference with unknown flags");
     const uint64_t node = this->take((flags & SharedNodeFlag) != 0, indices, what);
-    return (this->starts[size_t(node)] << 1) | (flags & ComplementFlag);
+    return { (this->starts[size_t(node)] << 1) | (flags & ComplementFlag),
+      (node << 1) | (flags & ComplementFlag) };
   }
   void checkAllReferenced(const char* what) const
   {
@@ -166,17 +175,29 @@ void writeField(std::vector<uint32_t>& words, uint64_t offset, uint32_t width, u
 }
 
 // Fills in the child references of a pool's nodes, whose headers are in place: one flag byte a
-// mixed child, in child order, which reference(flags) turns into the field's value.
-template <typename Reference>
+// mixed child, in child order, which reference(flags) turns into the field's value and the
+// graph's. Where `nodes` is given, it and `graphRefs` receive the pool's graph.
+template <typename ReferenceOf>
 void readReferences(std::vector<uint32_t>& words, const DecodedPool& pool, uint32_t refBits,
-  Reader& refs, const char* what, const Reference& reference)
+  Reader& refs, const char* what, const ReferenceOf& reference,
+  std::vector<PooledGraph::Node>* nodes, std::vector<uint32_t>* graphRefs)
 {
+  if (nodes)
+    nodes->reserve(pool.starts.size());
   for (const uint64_t start : pool.starts)
   {
-    const uint32_t mixed = layout::nodeMixedMask(Volume::nodeHeader(words, start));
+    const uint32_t header = Volume::nodeHeader(words, start);
+    const uint32_t mixed = layout::nodeMixedMask(header);
+    if (nodes)
+      nodes->push_back({ header, popcount8(mixed), uint32_t(graphRefs->size()) });
     for (uint32_t k = 0; k < popcount8(mixed); ++k)
+    {
+      const Reference r = reference(refs.byte());
       writeField(words, start + layout::NODE_HEADER_BITS + uint64_t(k) * refBits, refBits,
-        reference(refs.byte()), what);
+        r.field, what);
+      if (graphRefs)
+        graphRefs->push_back(uint32_t(r.node)); // no wider than the field just written
+    }
   }
   refs.finish();
 }
@@ -334,7 +355,7 @@ uint64_t maxStreamBytes(uint32_t stream, const Shape& shape)
   }
 }
 
-Volume decode(const Streams& s, const Shape& shape)
+Volume decode(const Streams& s, const Shape& shape, PooledGraph* graph)
 {
   Volume v = shape.frame; // labels, blocks and pools filled in below
   const ScalarType type = v.scalarType;
@@ -370,13 +391,17 @@ Volume decode(const Streams& s, const Shape& shape)
   { // mids: headers, then each mixed child's leaf reference
     v.mids = readHeaders(s[MidHeaders], MidHeaders, v.midCount, v.widths.leafRefBits, mids, "mid");
     Reader refs(s[MidRefs], MidRefs), indices(s[LeafIndices], LeafIndices);
-    readReferences(v.mids, mids, v.widths.leafRefBits, refs, "a leaf reference", [&](uint8_t flags) {
-      const uint32_t symmetry = (flags >> 1) & 0x3Fu;
-      if (symmetry >= layout::LEAF_SYMMETRY_COUNT)
-        fail("leaf reference with an unknown symmetry");
-      const uint64_t leaf = leaves.take((flags & SharedLeafFlag) != 0, indices, "leaf");
-      return (leaf << (layout::LEAF_SYMMETRY_BITS + 1)) | (symmetry << 1) | (flags & ComplementFlag);
-    });
+    readReferences(v.mids, mids, v.widths.leafRefBits, refs, "a leaf reference",
+      [&](uint8_t flags) {
+        const uint32_t symmetry = (flags >> 1) & 0x3Fu;
+        if (symmetry >= layout::LEAF_SYMMETRY_COUNT)
+          fail("leaf reference with an unknown symmetry");
+        const uint64_t leaf = leaves.take((flags & SharedLeafFlag) != 0, indices, "leaf");
+        const uint64_t ref =
+          (leaf << (layout::LEAF_SYMMETRY_BITS + 1)) | (symmetry << 1) | (flags & ComplementFlag);
+        return Reference{ ref, ref };
+      },
+      graph ? &graph->mids : nullptr, graph ? &graph->leafRefs : nullptr);
     indices.finish();
     leaves.checkAllReferenced("leaf");
   }
@@ -384,7 +409,8 @@ Volume decode(const Streams& s, const Shape& shape)
     v.roots = readHeaders(s[RootHeaders], RootHeaders, v.rootCount, v.widths.midRefBits, roots, "root");
     Reader refs(s[RootRefs], RootRefs), indices(s[MidIndices], MidIndices);
     readReferences(v.roots, roots, v.widths.midRefBits, refs, "a mid reference",
-      [&](uint8_t flags) { return mids.nodeReference(flags, indices, "mid"); });
+      [&](uint8_t flags) { return mids.nodeReference(flags, indices, "mid"); },
+      graph ? &graph->roots : nullptr, graph ? &graph->midRefs : nullptr);
     indices.finish();
     mids.checkAllReferenced("mid");
   }
@@ -396,6 +422,8 @@ Volume decode(const Streams& s, const Shape& shape)
       refs(s[BlockRoots], BlockRoots), indices(s[RootIndices], RootIndices);
     if (s[BlockRoots].size() != v.blockCount)
       fail("block roots stream does not hold the block count");
+    if (graph)
+      graph->blockRoots.reserve(size_t(v.blockCount)); // a stream byte each
     const uint64_t totalBits = v.blockCount * recordBits; // one stream byte a block: no overflow
     v.blocks.assign(size_t(totalBits / 32 + (totalBits % 32 ? 1 : 0) + 1), 0u);
     uint64_t cell = 0;
@@ -408,13 +436,15 @@ Volume decode(const Streams& s, const Shape& shape)
       const uint64_t label = labels.varint();
       if (label >= v.labels.size())
         fail("block label index out of range");
-      const uint64_t rootRef = roots.nodeReference(refs.byte(), indices, "root");
+      const Reference rootRef = roots.nodeReference(refs.byte(), indices, "root");
       const uint64_t base = i * recordBits;
       writeField(v.blocks, base, w.cellBits, cell, "a block's cell");
       writeField(v.blocks, base + layout::blockLabelOffset(w.cellBits), w.labelBits, label,
         "a block's label");
       writeField(v.blocks, base + layout::blockRootOffset(w.cellBits, w.labelBits), w.rootRefBits,
-        rootRef, "a root reference");
+        rootRef.field, "a root reference");
+      if (graph)
+        graph->blockRoots.push_back(uint32_t(rootRef.node));
     }
     cellsIn.finish();
     labels.finish();

@@ -30,6 +30,7 @@
 #pragma once
 
 #include "svdag/Volume.h"
+#include "PooledGraph.h"
 
 #include <array>
 #include <cstddef>
@@ -92,7 +93,10 @@ uint64_t maxStreamBytes(uint32_t stream, const Shape& shape);
 // std::runtime_error naming the problem for streams that do not fit the shape: every field read
 // is checked, and the memory used is bounded by the streams' sizes (a count the shape gives is
 // allocated only once a stream holds that many entries).
-Volume decode(const Streams& streams, const Shape& shape);
+// Where `graph` is given (empty), it receives the volume's node graph as the streams give it
+// (PooledGraph.h), which Volume::deriveBoundsAndValidate then reads instead of walking the node
+// streams once more.
+Volume decode(const Streams& streams, const Shape& shape, PooledGraph* graph = nullptr);
 
 } // namespace dagstreams
 } // namespace svdag

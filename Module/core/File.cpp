@@ -426,8 +426,9 @@ StoredSection storeDagStreams(const Volume& v, Volume& rebuilt)
     frames.insert(frames.end(), frame.begin(), frame.begin() + std::ptrdiff_t(size));
   }
   rebuilt = decodedAgain(v, "the DAG streams do", [&] {
-    Volume decoded = dagstreams::decode(encoded.streams, encoded.shape);
-    decoded.deriveBoundsAndValidate();
+    PooledGraph graph;
+    Volume decoded = dagstreams::decode(encoded.streams, encoded.shape, &graph);
+    decoded.deriveBoundsAndValidate(sequentialFor, &graph);
     return decoded;
   });
   table.insert(table.end(), frames.begin(), frames.end());
@@ -768,17 +769,17 @@ Volume readDagStreams(const SectionEntry& e, const uint8_t* data, uint64_t label
   });
   try
   {
-    Volume v = dagstreams::decode(streams, shape);
-    PooledGraph graph; // what validation reads, compaction needs: the streams are walked once
+    PooledGraph graph; // what validation reads, compaction needs: the streams are read once
+    Volume v = dagstreams::decode(streams, shape, &graph);
     if (!split || v.memory().total() > CompactAlongsideBytes)
     {
       v.deriveBoundsAndValidate(parallel, &graph);
       return compacted(std::move(v), std::move(graph));
     }
-    // Compacted beside the last checks, from a copy (the checks read the pooled form): the
-    // labels' counts and bounds come from the checks.
+    // Compacted beside the last checks, from copies (the checks read the pooled form and the
+    // graph): the labels' counts and bounds come from the checks.
     Volume compact;
-    v.deriveBoundsAndValidate(parallel, &graph, [&] { compact = compacted(v, std::move(graph)); });
+    v.deriveBoundsAndValidate(parallel, &graph, [&] { compact = compacted(v, graph); });
     compact.labels = std::move(v.labels);
     return compact;
   }

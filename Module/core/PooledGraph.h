@@ -1,6 +1,7 @@
-// A pooled volume's nodes as one walk of its streams reads them: what compaction (Compact.cpp)
-// rewrites, and what validation (Volume::deriveBoundsAndValidate) reads anyway, so that a load
-// walks each stream once (private to the core).
+// A pooled volume's nodes as a graph, each reference resolved to the index of its node: what a
+// 4.0 file's decoder (DagStreams.h) or one walk of the node streams gives, what validation
+// (Volume::deriveBoundsAndValidate) checks and summarises, and what compaction (Compact.cpp)
+// rewrites, so that a load reads each stream once (private to the core).
 #pragma once
 
 #include "svdag/Volume.h"

@@ -584,14 +584,13 @@ void checkLabelTable(const Volume& v)
   }
 }
 
-// A node pool once walked: where its nodes start, and each node's occupancy summary in both
-// polarities (entries 2 n and 2 n + 1 for node n, the second as read complemented).
+// A node pool's occupancy summaries in both polarities (entries 2 n and 2 n + 1 for node n, the
+// second as read complemented), and which nodes a reference reached: every stored node must be
+// used, so that no node can hide in a stream's padding bits (a zero header is a well-formed
+// empty node).
 struct NodePool
 {
-  NodeIndex index;
   std::unique_ptr<uint64_t[]> summaries;
-  // Which nodes a reference reached: every stored node must be used, so that no node can hide
-  // in a stream's padding bits (a zero header is a well-formed empty node).
   std::vector<uint8_t> used;
   void checkAllUsed(const char* what) const
   {
@@ -608,29 +607,33 @@ uint32_t leafSummary(uint64_t mask)
   return leafLanes(mask) | (popcount64(mask) << 24);
 }
 
-// Walks one node stream: every node well formed and every child reference at a node start (a
-// reference into the middle of a node would read its references as a header and run past the
-// checked nodes) or an existing leaf. child(ref, acc0, acc1) checks the reference of a mixed
-// child and stores the child's summary in both polarities (a solid child is `solid`);
-// combine(acc) summarises a node from its 8 children. Summarising once per distinct node lets
-// the block checks bound and count voxels without expanding any. Where nodes start is found in
-// order; the children are then checked and summarised node by node through `parallel`, so
-// `child` may be called from several threads at once. Where `nodes` and `refs` are given they
-// receive the nodes and, per mixed child, what child() resolved its reference to (PooledGraph).
-template <typename Child, typename Combine>
-NodePool walkNodeStream(const std::vector<uint32_t>& stream, uint64_t count, uint32_t refBits,
-  const char* what, uint64_t solid, const Child& child, const Combine& combine,
-  const ParallelFor& parallel, std::vector<PooledGraph::Node>* nodes = nullptr,
-  std::vector<uint32_t>* refs = nullptr)
+// Records node n as the first, in order, to fail a check run through `parallel`.
+void keepFirst(std::atomic<uint64_t>& firstBad, uint64_t n)
+{
+  uint64_t seen = firstBad.load();
+  while (n < seen && !firstBad.compare_exchange_weak(seen, n))
+  {
+  }
+}
+
+// Walks one node stream into `nodes` and `refs` (PooledGraph): every node well formed and every
+// child reference at a node start (a reference into the middle of a node would read its
+// references as a header and run past the checked nodes) or an existing leaf. resolve(ref,
+// target) checks the reference of a mixed child and sets what the graph keeps of it. Where nodes
+// start is found in order; the references are then resolved node by node through `parallel`, so
+// `resolve` may run on several threads at once. Returns where the nodes start.
+template <typename Resolve>
+NodeIndex walkNodeStream(const std::vector<uint32_t>& stream, uint64_t count, uint32_t refBits,
+  const char* what, const Resolve& resolve, const ParallelFor& parallel,
+  std::vector<PooledGraph::Node>& nodes, std::vector<uint32_t>& refs)
 {
   const uint32_t* words = stream.data();
   const uint64_t total = uint64_t(stream.size() - 1) * 32;
   const uint64_t expected = std::min<uint64_t>(count, total / layout::NODE_HEADER_BITS + 1);
-  NodePool pool;
-  pool.index.reset(total, expected);
+  NodeIndex index;
+  index.reset(total, expected);
   uint64_t offset = 0, children = 0;
-  if (nodes)
-    nodes->resize(size_t(expected));
+  nodes.resize(size_t(expected));
   for (uint64_t n = 0; n < count; ++n)
   {
     if (offset + layout::NODE_HEADER_BITS > total)
@@ -642,29 +645,115 @@ NodePool walkNodeStream(const std::vector<uint32_t>& stream, uint64_t count, uin
     const uint64_t end = offset + layout::NODE_HEADER_BITS + uint64_t(popcount8(mixed)) * refBits;
     if (end > total)
       fail(std::string(what) + " node runs past the end of its stream");
-    if (nodes)
-      (*nodes)[size_t(n)] = { header, popcount8(mixed), uint32_t(children) };
+    nodes[size_t(n)] = { header, popcount8(mixed), uint32_t(children) };
     children += popcount8(mixed);
-    if (nodes && children > 0xFFFFFFFFull)
+    if (children > 0xFFFFFFFFull)
       fail(std::string(what) + " stream: more than 2^32 references");
-    pool.index.add(offset);
+    index.add(offset);
     offset = end;
   }
-  if (refs)
-    refs->resize(size_t(children));
   if (total - offset >= 32)
     fail(std::string(what) + " stream longer than its nodes");
-  pool.index.finish();
-
-  pool.summaries.reset(new uint64_t[size_t(2 * count)]);
-  uint64_t* summary = pool.summaries.get();
-  std::atomic<uint64_t> firstBad{ count }; // the first node with a bad reference, as in order
+  index.finish();
+  refs.resize(size_t(children));
+  std::atomic<uint64_t> firstBad{ count };
   parallel(0, count, 256, [&](uint64_t begin, uint64_t end) {
     for (uint64_t n = begin; n < end; ++n)
     {
-      const uint64_t at = pool.index.start(n);
-      const uint32_t header = fieldAt(words, at, layout::NODE_HEADER_BITS);
-      const uint32_t mixed = layout::nodeMixedMask(header), full = layout::nodeFullMask(header);
+      const PooledGraph::Node& node = nodes[size_t(n)];
+      uint64_t refAt = index.start(n) + layout::NODE_HEADER_BITS;
+      for (uint32_t k = 0; k < node.count; ++k, refAt += refBits)
+        if (!resolve(fieldAt(words, refAt, refBits), refs[node.first + k]))
+        {
+          keepFirst(firstBad, n);
+          return;
+        }
+    }
+  });
+  if (firstBad.load() < count)
+    fail(std::string(what) + " node at bit " + str(index.start(firstBad.load())) +
+      ": child reference does not point at a node");
+  return index;
+}
+
+// The graph of a pooled volume's node streams and blocks, every reference checked.
+PooledGraph graphOfStreams(const Volume& v, const ParallelFor& parallel)
+{
+  PooledGraph g;
+  const NodeIndex mids = walkNodeStream(v.mids, v.midCount, v.widths.leafRefBits, "mid",
+    [&](uint32_t ref, uint32_t& target) {
+      target = ref;
+      return layout::leafRefIndex(ref) < v.leaves.size() &&
+        layout::leafRefSymmetry(ref) < layout::LEAF_SYMMETRY_COUNT;
+    },
+    parallel, g.mids, g.leafRefs);
+  const NodeIndex roots = walkNodeStream(v.roots, v.rootCount, v.widths.midRefBits, "root",
+    [&](uint32_t ref, uint32_t& target) {
+      const int64_t mid = mids.find(layout::refTarget(ref));
+      target = uint32_t(mid << 1) | (ref & 1u);
+      return mid >= 0;
+    },
+    parallel, g.roots, g.midRefs);
+  const uint64_t recordBits = v.widths.blockBits();
+  const uint32_t rootAt = layout::blockRootOffset(v.widths.cellBits, v.widths.labelBits);
+  g.blockRoots.resize(size_t(v.blockCount)); // checkHeader matched the count to the blocks
+  for (uint64_t i = 0; i < v.blockCount; ++i)
+  {
+    const uint32_t rootRef = fieldAt(v.blocks.data(), i * recordBits + rootAt, v.widths.rootRefBits);
+    const int64_t root = roots.find(layout::refTarget(rootRef));
+    if (root < 0)
+      fail("block " + str(i) + ": root reference does not point at a root node");
+    g.blockRoots[size_t(i)] = uint32_t(root << 1) | (rootRef & 1u);
+  }
+  return g;
+}
+
+// A graph as the checks below read it: one node per node of the volume, each with its references
+// where the one before left off, one root per block. A decoder's graph is checked here too.
+void checkGraphShape(const Volume& v, const PooledGraph& g)
+{
+  auto checkLevel = [](const std::vector<PooledGraph::Node>& nodes, uint64_t count,
+                      const std::vector<uint32_t>& refs, const char* what) {
+    if (nodes.size() != count)
+      fail(std::string(what) + " graph does not hold the node count");
+    uint64_t first = 0;
+    for (const PooledGraph::Node& n : nodes)
+    {
+      const uint32_t mixed = layout::nodeMixedMask(n.header);
+      if (n.first != first || n.count != popcount8(mixed) || (mixed & layout::nodeFullMask(n.header)))
+        fail(std::string(what) + " graph: a node's children do not match its masks");
+      first += n.count;
+    }
+    if (first != refs.size())
+      fail(std::string(what) + " graph: references beyond its nodes'");
+  };
+  checkLevel(g.mids, v.midCount, g.leafRefs, "mid");
+  checkLevel(g.roots, v.rootCount, g.midRefs, "root");
+  if (g.blockRoots.size() != v.blockCount)
+    fail("the graph does not hold a root per block");
+}
+
+// Summarises one level's nodes from the graph, node by node through `parallel`:
+// child(ref, acc0, acc1) stores the summary of a mixed child in both polarities (a solid child
+// is `solid`), or returns false for a reference outside its pool (neither the walk nor a
+// decoder lets one through); combine(acc) summarises a node from its 8 children. Summarising
+// once per distinct node lets the block checks bound and count voxels without expanding any.
+template <typename Child, typename Combine>
+NodePool summarise(const std::vector<PooledGraph::Node>& nodes, const std::vector<uint32_t>& refs,
+  const char* what, uint64_t solid, const Child& child, const Combine& combine,
+  const ParallelFor& parallel)
+{
+  const uint64_t count = nodes.size();
+  NodePool pool;
+  pool.summaries.reset(new uint64_t[size_t(2 * count)]);
+  uint64_t* summary = pool.summaries.get();
+  std::atomic<uint64_t> firstBad{ count };
+  parallel(0, count, 256, [&](uint64_t begin, uint64_t end) {
+    for (uint64_t n = begin; n < end; ++n)
+    {
+      const PooledGraph::Node& node = nodes[size_t(n)];
+      const uint32_t mixed = layout::nodeMixedMask(node.header);
+      const uint32_t full = layout::nodeFullMask(node.header);
       // Solid children first, then the mixed ones bit by bit: no branch per child, whose
       // pattern changes from node to node.
       uint64_t acc0[8], acc1[8];
@@ -674,37 +763,29 @@ NodePool walkNodeStream(const std::vector<uint32_t>& stream, uint64_t count, uin
         acc0[c] = solid & isFull;
         acc1[c] = solid & ~isFull;
       }
-      uint64_t refAt = at + layout::NODE_HEADER_BITS;
-      uint32_t* resolved = refs ? refs->data() + (*nodes)[size_t(n)].first : nullptr;
-      for (uint32_t left = mixed; left; left &= left - 1, refAt += refBits)
+      const uint32_t* ref = refs.data() + node.first;
+      for (uint32_t left = mixed; left; left &= left - 1)
       {
         const uint32_t c = uint32_t(__builtin_ctz(left));
-        uint32_t target;
-        if (!child(fieldAt(words, refAt, refBits), acc0[c], acc1[c], target))
+        if (!child(*ref++, acc0[c], acc1[c]))
         {
-          uint64_t seen = firstBad.load();
-          while (n < seen && !firstBad.compare_exchange_weak(seen, n))
-          {
-          }
+          keepFirst(firstBad, n);
           return;
         }
-        if (resolved)
-          *resolved++ = target;
       }
       summary[2 * n] = combine(acc0);
       summary[2 * n + 1] = combine(acc1);
     }
   });
   if (firstBad.load() < count)
-    fail(std::string(what) + " node at bit " + str(pool.index.start(firstBad.load())) +
-      ": child reference does not point at a node");
+    fail(std::string(what) + " node " + str(firstBad.load()) + ": child reference outside its pool");
   pool.used.assign(size_t(count), 0);
   return pool;
 }
 
-// The mid pool: references to existing leaves. Summary: lanes x bits 0-7, y 8-15, z 16-23;
+// The mid pool, from references to existing leaves. Summary: lanes x bits 0-7, y 8-15, z 16-23;
 // voxels from bit 32.
-NodePool checkMidPool(const Volume& v, const ParallelFor& parallel, PooledGraph* graph = nullptr)
+NodePool summariseMids(const Volume& v, const PooledGraph& g, const ParallelFor& parallel)
 {
   // Each stored leaf's summary in both polarities, once; a reference moves its lanes.
   static const LaneSymmetries symmetries;
@@ -716,9 +797,8 @@ NodePool checkMidPool(const Volume& v, const ParallelFor& parallel, PooledGraph*
       stored[2 * l + 1] = leafSummary(~v.leaves[l]);
     }
   });
-  return walkNodeStream(v.mids, v.midCount, v.widths.leafRefBits, "mid",
-    uint64_t(0x0F0F0Fu | (64u << 24)),
-    [&](uint32_t ref, uint64_t& a0, uint64_t& a1, uint32_t& target) {
+  return summarise(g.mids, g.leafRefs, "mid", uint64_t(0x0F0F0Fu | (64u << 24)),
+    [&](uint32_t ref, uint64_t& a0, uint64_t& a1) {
       const uint32_t leaf = layout::leafRefIndex(ref), s = layout::leafRefSymmetry(ref);
       if (leaf >= v.leaves.size() || s >= layout::LEAF_SYMMETRY_COUNT)
         return false;
@@ -728,7 +808,6 @@ NodePool checkMidPool(const Volume& v, const ParallelFor& parallel, PooledGraph*
       symmetries.apply(s, m, c, moved, complementMoved);
       a0 = moved | (m & 0xFF000000u);
       a1 = complementMoved | (c & 0xFF000000u);
-      target = ref;
       return true;
     },
     [](const uint64_t* a) {
@@ -740,26 +819,23 @@ NodePool checkMidPool(const Volume& v, const ParallelFor& parallel, PooledGraph*
       return (xlo & 0xFu) | ((xhi & 0xFu) << 4) | (ylo & 0xF00u) | ((yhi & 0xF00u) << 4) |
         (zlo & 0xF0000u) | ((zhi & 0xF0000u) << 4) | (voxels << 32);
     },
-    parallel, graph ? &graph->mids : nullptr, graph ? &graph->leafRefs : nullptr);
+    parallel);
 }
 
-// The root pool: references at mid node starts. Summary: lanes x bits 0-15, y 16-31, z 32-47;
-// voxels from bit 48.
-NodePool checkRootPool(
-  const Volume& v, NodePool& mids, const ParallelFor& parallel, PooledGraph* graph = nullptr)
+// The root pool, from references to mids. Summary: lanes x bits 0-15, y 16-31, z 32-47; voxels
+// from bit 48.
+NodePool summariseRoots(const PooledGraph& g, NodePool& mids, const ParallelFor& parallel)
 {
-  return walkNodeStream(v.roots, v.rootCount, v.widths.midRefBits, "root",
-    uint64_t(0xFFFFFFu) | (uint64_t(512) << 32),
-    [&](uint32_t ref, uint64_t& a0, uint64_t& a1, uint32_t& target) {
-      const int64_t mid = mids.index.find(layout::refTarget(ref));
-      if (mid < 0)
+  return summarise(g.roots, g.midRefs, "root", uint64_t(0xFFFFFFu) | (uint64_t(512) << 32),
+    [&](uint32_t ref, uint64_t& a0, uint64_t& a1) {
+      const uint32_t mid = ref >> 1;
+      if (mid >= g.mids.size())
         return false;
-      // Roots are walked in parallel and share mids: the one write is an atomic store.
-      __atomic_store_n(&mids.used[size_t(mid)], uint8_t(1), __ATOMIC_RELAXED);
+      // Roots are summarised in parallel and share mids: the one write is an atomic store.
+      __atomic_store_n(&mids.used[mid], uint8_t(1), __ATOMIC_RELAXED);
       const size_t at = 2 * size_t(mid) + (ref & 1u);
       a0 = mids.summaries[at];
       a1 = mids.summaries[at ^ 1u];
-      target = uint32_t(mid << 1) | (ref & 1u);
       return true;
     },
     [](const uint64_t* a) {
@@ -772,7 +848,7 @@ NodePool checkRootPool(
         ((yhi & 0xFF00u) << 16) | ((zlo & 0xFF0000u) << 16) | ((zhi & 0xFF0000u) << 24) |
         (voxels << 48);
     },
-    parallel, graph ? &graph->roots : nullptr, graph ? &graph->midRefs : nullptr);
+    parallel);
 }
 
 // The blocks of one cell, gathered while the blocks are checked in order: no label twice, and
@@ -780,18 +856,19 @@ NodePool checkRootPool(
 class CellBlocks
 {
 public:
-  explicit CellBlocks(const Volume& v)
+  CellBlocks(const Volume& v, const PooledGraph& g)
     : V(v)
+    , G(g)
   {
     for (std::vector<MidEntry>& list : this->Octants)
       list.reserve(64); // one entry a block of the cell: most cells need no more
   }
 
-  void add(uint64_t index, uint32_t label, uint32_t rootRef)
+  // `root`: the block's root in the graph, index << 1 | complement.
+  void add(uint64_t index, uint32_t label, uint32_t root)
   {
     this->Labels.push_back(label);
-    this->Entries.push_back(
-      { index, rootRef, fieldAt(this->V.roots.data(), layout::refTarget(rootRef), 16) });
+    this->Entries.push_back({ index, root, this->G.roots[root >> 1].header });
   }
 
   // Checks the cell's blocks added since the last call, then forgets them.
@@ -806,13 +883,13 @@ private:
   struct Entry
   {
     uint64_t index;  // block
-    uint32_t root;   // its root reference
+    uint32_t root;   // its root, index << 1 | complement
     uint32_t header; // the root node's header
   };
   struct MidEntry
   {
     size_t entry; // in Entries
-    uint64_t offset;
+    uint32_t mid; // index in the mid pool
     bool inverted;
     uint32_t mixed, full; // full as read with `inverted`
   };
@@ -871,22 +948,20 @@ private:
   // The mid references of the shared octants, read in one sequential pass per block.
   void gatherSharedOctants(uint32_t shared)
   {
-    const uint32_t refBits = this->V.widths.midRefBits;
     for (std::vector<MidEntry>& list : this->Octants)
       list.clear();
     for (size_t e = 0; e < this->Entries.size(); ++e)
     {
       const Entry& ce = this->Entries[e];
       const uint32_t mixed = layout::nodeMixedMask(ce.header);
-      const uint64_t refsAt = layout::refTarget(ce.root) + layout::NODE_HEADER_BITS;
+      const uint32_t* refs = this->G.midRefs.data() + this->G.roots[ce.root >> 1].first;
       for (uint32_t both = mixed & shared; both; both &= both - 1) // set bits: few branches
       {
         const uint32_t o = uint32_t(__builtin_ctz(both));
-        const uint32_t midRef =
-          fieldAt(this->V.roots.data(), refsAt + uint64_t(layout::childRank(mixed, o)) * refBits, refBits);
+        const uint32_t midRef = refs[layout::childRank(mixed, o)];
         MidEntry me;
         me.entry = e;
-        me.offset = layout::refTarget(midRef);
+        me.mid = midRef >> 1;
         me.inverted = layout::refComplement(ce.root) != layout::refComplement(midRef);
         this->Octants[o].push_back(me);
       }
@@ -899,14 +974,13 @@ private:
     // Two blocks splitting the octant between them refer to one node with opposite polarity
     // (the common case: the two sides of a boundary share their node, complemented).
     if (list.size() < 2 ||
-      (list.size() == 2 && list[0].offset == list[1].offset && list[0].inverted != list[1].inverted))
+      (list.size() == 2 && list[0].mid == list[1].mid && list[0].inverted != list[1].inverted))
       return;
-    const uint32_t* midWords = this->V.mids.data();
     uint32_t midNonEmpty = 0, midFullAcc = 0, midMixedAcc = 0, midShared = 0;
     for (size_t k = 0; k < list.size(); ++k)
     {
       MidEntry& me = list[k];
-      const uint32_t header = fieldAt(midWords, me.offset, layout::NODE_HEADER_BITS);
+      const uint32_t header = this->G.mids[me.mid].header;
       me.mixed = layout::nodeMixedMask(header);
       me.full = fullAs(header, me.inverted);
       if ((midNonEmpty & me.full) | (midFullAcc & (me.mixed | me.full)))
@@ -918,7 +992,6 @@ private:
     }
     if (!midShared)
       return;
-    const uint32_t refBits = this->V.widths.leafRefBits;
     uint64_t acc[8] = {};
     size_t owner[8] = {};
     // The first leaf of each child as a reference (read as complemented or not) until a second
@@ -928,12 +1001,11 @@ private:
     bool firstInverted[8] = {}, pending[8] = {};
     for (const MidEntry& me : list)
     {
-      const uint64_t refsAt = me.offset + layout::NODE_HEADER_BITS;
+      const uint32_t* refs = this->G.leafRefs.data() + this->G.mids[me.mid].first;
       for (uint32_t both = me.mixed & midShared; both; both &= both - 1)
       {
         const uint32_t c = uint32_t(__builtin_ctz(both));
-        const uint32_t leafRef =
-          fieldAt(midWords, refsAt + uint64_t(layout::childRank(me.mixed, c)) * refBits, refBits);
+        const uint32_t leafRef = refs[layout::childRank(me.mixed, c)];
         const bool inverted = me.inverted != layout::refComplement(leafRef);
         const uint32_t stored = leafRef & ~1u;
         if (!acc[c] && !pending[c])
@@ -966,6 +1038,7 @@ private:
   }
 
   const Volume& V;
+  const PooledGraph& G;
   std::vector<Entry> Entries;
   std::vector<MidEntry> Octants[8];
   std::vector<uint32_t> Labels; // the labels of the current cell's blocks
@@ -981,21 +1054,19 @@ struct LabelTotals
 // The blocks of every cell disjoint and of distinct labels (CellBlocks), for blocks whose
 // fields checkBlocks has checked; cells side by side through `parallel` (a range of blocks
 // takes the cells that start in it). The error is the first failing cell's, as in order.
-void checkCells(const Volume& v, const ParallelFor& parallel)
+void checkCells(const Volume& v, const PooledGraph& g, const ParallelFor& parallel)
 {
   const FieldWidths& w = v.widths;
   const uint32_t* blockWords = v.blocks.data();
   const uint32_t recordBits = w.blockBits();
   const uint32_t labelFieldAt = layout::blockLabelOffset(w.cellBits);
-  const uint32_t rootAt = layout::blockRootOffset(w.cellBits, w.labelBits);
   auto cellOf = [&](uint64_t i) { return fieldAt(blockWords, i * recordBits, w.cellBits); };
   // The cell starting at block `first` through `cells`; returns the block after it.
   auto checkCell = [&](uint64_t first, CellBlocks& cells) {
     const uint32_t cell = cellOf(first);
     uint64_t i = first;
     for (; i < v.blockCount && cellOf(i) == cell; ++i)
-      cells.add(i, fieldAt(blockWords, i * recordBits + labelFieldAt, w.labelBits),
-        fieldAt(blockWords, i * recordBits + rootAt, w.rootRefBits));
+      cells.add(i, fieldAt(blockWords, i * recordBits + labelFieldAt, w.labelBits), g.blockRoots[i]);
     cells.check(cell);
     return i;
   };
@@ -1004,7 +1075,7 @@ void checkCells(const Volume& v, const ParallelFor& parallel)
     uint64_t i = begin;
     while (i > 0 && i < end && cellOf(i) == cellOf(i - 1))
       ++i;
-    CellBlocks cells(v);
+    CellBlocks cells(v, g);
     while (i < end)
     {
       const uint64_t first = i;
@@ -1024,7 +1095,7 @@ void checkCells(const Volume& v, const ParallelFor& parallel)
   });
   if (firstBad.load() < v.blockCount)
   {
-    CellBlocks cells(v);
+    CellBlocks cells(v, g);
     checkCell(firstBad.load(), cells); // throws its error on this thread
   }
 }
@@ -1033,7 +1104,8 @@ void checkCells(const Volume& v, const ParallelFor& parallel)
 // its bounds (decoders write only inside the bounds, the traversal reads the whole cell: both
 // must agree), the blocks of a cell disjoint (checkCells); returns each label's voxel count and
 // bounds as the blocks hold them.
-LabelTotals checkBlocks(const Volume& v, NodePool& roots, const ParallelFor& parallel)
+LabelTotals checkBlocks(
+  const Volume& v, const PooledGraph& g, NodePool& roots, const ParallelFor& parallel)
 {
   const FieldWidths& w = v.widths;
   const auto& d = v.geometry.dims;
@@ -1047,7 +1119,6 @@ LabelTotals checkBlocks(const Volume& v, NodePool& roots, const ParallelFor& par
   const uint32_t recordBits = w.blockBits();
   const uint32_t boundsAt = layout::blockBoundsOffset(w.cellBits);
   const uint32_t labelFieldAt = layout::blockLabelOffset(w.cellBits);
-  const uint32_t rootAt = layout::blockRootOffset(w.cellBits, w.labelBits);
   uint32_t previousCell = 0;
   for (uint64_t i = 0; i < v.blockCount; ++i)
   {
@@ -1055,7 +1126,6 @@ LabelTotals checkBlocks(const Volume& v, NodePool& roots, const ParallelFor& par
     const uint32_t cell = fieldAt(blockWords, base, w.cellBits);
     const uint32_t box = fieldAt(blockWords, base + boundsAt, layout::BLOCK_BOUNDS_BITS);
     const uint32_t label = fieldAt(blockWords, base + labelFieldAt, w.labelBits);
-    const uint32_t rootRef = fieldAt(blockWords, base + rootAt, w.rootRefBits);
     auto name = [&]() { return "block " + str(i); };
     if (cell >= cells)
       fail(name() + ": cell outside the grid");
@@ -1066,11 +1136,11 @@ LabelTotals checkBlocks(const Volume& v, NodePool& roots, const ParallelFor& par
     if (i > 0 && cell < previousCell)
       fail("blocks not sorted by cell (" + name() + ")");
     previousCell = cell;
-    const int64_t root = roots.index.find(layout::refTarget(rootRef));
-    if (root < 0)
-      fail(name() + ": root reference does not point at a root node");
-    roots.used[size_t(root)] = 1;
-    const uint64_t summary = roots.summaries[2 * size_t(root) + (rootRef & 1u)];
+    const uint32_t root = g.blockRoots[i] >> 1;
+    if (root >= roots.used.size())
+      fail(name() + ": root outside its pool");
+    roots.used[root] = 1;
+    const uint64_t summary = roots.summaries[2 * size_t(root) + (g.blockRoots[i] & 1u)];
     const uint32_t voxels = uint32_t(summary >> 48);
     if (voxels == 0)
       fail(name() + ": empty occupancy");
@@ -1096,7 +1166,7 @@ LabelTotals checkBlocks(const Volume& v, NodePool& roots, const ParallelFor& par
     }
     totals.voxels[label] += voxels;
   }
-  checkCells(v, parallel);
+  checkCells(v, g, parallel);
   return totals;
 }
 
@@ -1129,10 +1199,11 @@ void Volume::validate(const ParallelFor& parallel) const
   }
   checkHeader(*this);
   checkLabelTable(*this);
-  NodePool mids = checkMidPool(*this, parallel);
-  NodePool roots = checkRootPool(*this, mids, parallel);
+  const PooledGraph graph = graphOfStreams(*this, parallel);
+  NodePool mids = summariseMids(*this, graph, parallel);
+  NodePool roots = summariseRoots(graph, mids, parallel);
   mids.checkAllUsed("mid");
-  checkLabelTotals(*this, checkBlocks(*this, roots, parallel));
+  checkLabelTotals(*this, checkBlocks(*this, graph, roots, parallel));
   roots.checkAllUsed("root");
 }
 
@@ -1142,24 +1213,24 @@ void Volume::deriveBoundsAndValidate(
   if (form != DagForm::Pooled)
     throw std::logic_error("Volume: validation reads the pooled form (svdag::pooled)");
   checkHeader(*this);
-  NodePool mids = checkMidPool(*this, parallel, graph);
-  NodePool roots = checkRootPool(*this, mids, parallel, graph);
+  PooledGraph walked;
+  const bool decoded =
+    graph && !(graph->mids.empty() && graph->roots.empty() && graph->blockRoots.empty());
+  if (!decoded)
+    (graph ? *graph : walked) = graphOfStreams(*this, parallel);
+  const PooledGraph& g = graph ? *graph : walked;
+  checkGraphShape(*this, g);
+  NodePool mids = summariseMids(*this, g, parallel);
+  NodePool roots = summariseRoots(g, mids, parallel);
   mids.checkAllUsed("mid");
   const uint64_t recordBits = this->widths.blockBits();
   const uint32_t boundsAt = layout::blockBoundsOffset(this->widths.cellBits);
-  const uint32_t rootAt = layout::blockRootOffset(this->widths.cellBits, this->widths.labelBits);
-  if (graph)
-    graph->blockRoots.reserve(size_t(this->blockCount)); // checkHeader matched it to the blocks
   for (uint64_t i = 0; i < this->blockCount; ++i)
   {
-    const uint32_t rootRef = fieldAt(this->blocks.data(), i * recordBits + rootAt,
-      this->widths.rootRefBits);
-    const int64_t root = roots.index.find(layout::refTarget(rootRef));
-    if (root < 0)
-      fail("block " + str(i) + ": root reference does not point at a root node");
-    if (graph)
-      graph->blockRoots.push_back(uint32_t(root << 1) | (rootRef & 1u));
-    const uint64_t summary = roots.summaries[2 * size_t(root) + (rootRef & 1u)];
+    const uint32_t root = g.blockRoots[size_t(i)];
+    if ((root >> 1) >= this->rootCount)
+      fail("block " + str(i) + ": root outside its pool");
+    const uint64_t summary = roots.summaries[2 * size_t(root >> 1) + (root & 1u)];
     uint32_t box = 0; // an empty occupancy keeps 0 (checkBlocks refuses it)
     for (uint32_t a = 0; a < 3 && (summary >> 48) != 0; ++a)
     {
@@ -1173,12 +1244,12 @@ void Volume::deriveBoundsAndValidate(
   if (alongside) // two tasks: the checks (their loops then run on their task's thread), and it
     parallelTasks(parallel, 2, [&](uint64_t task) {
       if (task == 0)
-        totals = checkBlocks(*this, roots, parallel);
+        totals = checkBlocks(*this, g, roots, parallel);
       else
         alongside();
     });
   else
-    totals = checkBlocks(*this, roots, parallel);
+    totals = checkBlocks(*this, g, roots, parallel);
   for (size_t l = 0; l < this->labels.size(); ++l)
   {
     if (totals.voxels[l] == 0)

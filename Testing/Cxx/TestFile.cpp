@@ -21,6 +21,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <functional>
 #include <iterator>
 #include <new>
 #include <random>
@@ -1484,8 +1485,39 @@ TEST(StreamsFile, CorruptionFailsCleanly)
   }
 }
 
+namespace
+{
+// What a load makes of DAG streams: their volume, compacted, or the error. `decodersGraph`: the
+// checks read the graph the decoder gives (as a file's load does), else a walk of the node
+// streams the decoder wrote.
+struct StreamsOutcome
+{
+  std::string error;
+  svdag::Volume volume;
+};
+StreamsOutcome loadStreams(const svdag::dagstreams::Streams& streams,
+  const svdag::dagstreams::Shape& shape, bool decodersGraph)
+{
+  StreamsOutcome out;
+  try
+  {
+    svdag::PooledGraph graph;
+    svdag::Volume back =
+      svdag::dagstreams::decode(streams, shape, decodersGraph ? &graph : nullptr);
+    back.deriveBoundsAndValidate(svdag::sequentialFor, &graph);
+    out.volume = svdag::compacted(std::move(back), std::move(graph));
+  }
+  catch (const std::runtime_error& e)
+  {
+    out.error = e.what();
+  }
+  return out;
+}
+} // namespace
+
 // The streams' bytes themselves, edited one at a time: every decision the decoder reads is
-// checked (a wrong flag, index, symmetry, cell or label fails or gives a valid volume).
+// checked (a wrong flag, index, symmetry, cell or label fails or gives a valid volume). The
+// checks reach the same verdict on the decoder's graph as on a walk of the streams it wrote.
 TEST(StreamsFile, CorruptStreamsFailCleanly)
 {
   const svdag::Volume v = svdag::pooled(spheres(ScalarType::UInt16, 30)); // as files hold it
@@ -1507,25 +1539,28 @@ TEST(StreamsFile, CorruptStreamsFailCleanly)
         case 2: stream.pop_back(); break;
         default: stream.push_back(uint8_t(rng()));
       }
-      try
+      const StreamsOutcome walked = loadStreams(bad, encoded.shape, false);
+      const StreamsOutcome read = loadStreams(bad, encoded.shape, true);
+      EXPECT_EQ(read.error, walked.error);
+      EXPECT_TRUE(read.volume == walked.volume);
+      if (walked.error.empty())
       {
-        svdag::Volume back = svdag::dagstreams::decode(bad, encoded.shape);
-        back.deriveBoundsAndValidate();
-        std::vector<uint8_t> out(size_t(back.geometry.voxelCount()) * 2);
-        svdag::decode(back, out.data());
+        std::vector<uint8_t> out(size_t(walked.volume.geometry.voxelCount()) * 2);
+        svdag::decode(walked.volume, out.data());
         ++decoded;
       }
-      catch (const std::runtime_error&)
-      {
+      else
         ++failed;
-      }
     }
   }
   EXPECT_GT(failed, 4 * decoded);
-  // Unchanged, they decode to the volume.
-  svdag::Volume back = svdag::dagstreams::decode(encoded.streams, encoded.shape);
-  back.deriveBoundsAndValidate();
-  EXPECT_TRUE(svdag::compacted(back) == svdag::compacted(v));
+  // Unchanged, they decode to the volume, either way.
+  for (bool decodersGraph : { false, true })
+  {
+    const StreamsOutcome back = loadStreams(encoded.streams, encoded.shape, decodersGraph);
+    EXPECT_EQ(back.error, "");
+    EXPECT_TRUE(back.volume == svdag::compacted(v));
+  }
 }
 
 namespace
@@ -1651,6 +1686,56 @@ TEST(StreamsFile, CorruptStreamsLoadAlikeInOrderAndOnThreads)
     const std::string message = loadError(twoBad, parallel);
     EXPECT_NE(message.find(first + " stream is not a valid zstd frame"), std::string::npos) << message;
   }
+}
+
+// A graph handed to the checks (a decoder's) is checked against its volume too: no node, child
+// or block it names can be outside its pool, and its nodes' children match their masks.
+TEST(StreamsFile, AGraphThatDoesNotFitItsVolumeIsRefused)
+{
+  const svdag::Volume v = svdag::pooled(spheres(ScalarType::UInt16, 30));
+  const svdag::dagstreams::Encoded encoded = svdag::dagstreams::encode(v);
+  svdag::PooledGraph good;
+  const svdag::Volume decoded = svdag::dagstreams::decode(encoded.streams, encoded.shape, &good);
+  ASSERT_FALSE(good.mids.empty());
+  ASSERT_FALSE(good.roots.empty());
+  const uint32_t leaves = uint32_t(decoded.leaves.size());
+  const std::vector<std::pair<std::string, std::function<void(svdag::PooledGraph&)>>> edits = {
+    { "mid graph: a node's children do not match its masks",
+      [](svdag::PooledGraph& g) { g.mids[0].count += 1; } },
+    { "root graph: a node's children do not match its masks",
+      [](svdag::PooledGraph& g) { g.roots.back().first += 1; } },
+    { "mid graph does not hold the node count", [](svdag::PooledGraph& g) { g.mids.pop_back(); } },
+    { "root graph: references beyond its nodes'",
+      [](svdag::PooledGraph& g) { g.midRefs.push_back(0); } },
+    { "the graph does not hold a root per block",
+      [](svdag::PooledGraph& g) { g.blockRoots.pop_back(); } },
+    { "mid node 0: child reference outside its pool",
+      [&](svdag::PooledGraph& g) { g.leafRefs[0] = svdag::layout::leafRef(leaves, 0, 0); } },
+    { "root node 0: child reference outside its pool",
+      [](svdag::PooledGraph& g) { g.midRefs[0] = uint32_t(g.mids.size() << 1); } },
+    { "block 0: root outside its pool",
+      [](svdag::PooledGraph& g) { g.blockRoots[0] = uint32_t(g.roots.size() << 1); } },
+  };
+  for (const auto& edit : edits)
+  {
+    SCOPED_TRACE(edit.first);
+    svdag::PooledGraph graph = good;
+    edit.second(graph);
+    svdag::Volume volume = decoded;
+    try
+    {
+      volume.deriveBoundsAndValidate(svdag::sequentialFor, &graph);
+      ADD_FAILURE() << "accepted";
+    }
+    catch (const std::runtime_error& e)
+    {
+      EXPECT_EQ(std::string(e.what()), "invalid SVDAG: " + edit.first);
+    }
+  }
+  svdag::PooledGraph graph = good;
+  svdag::Volume volume = decoded;
+  volume.deriveBoundsAndValidate(svdag::sequentialFor, &graph);
+  EXPECT_TRUE(svdag::compacted(std::move(volume), std::move(graph)) == svdag::compacted(v));
 }
 
 // deriveBoundsAndValidate's `alongside` runs once the graph and bounds are there, beside the

@@ -181,11 +181,13 @@ public:
   // bounds to what its blocks hold, then checks the rest as validate() does (a .svdag 4.0 file
   // stores neither: they are derived from the same once-per-node summaries that validate() uses).
   // Throws std::runtime_error as validate() does, and for a label no block holds; pooled form
-  // only (std::logic_error otherwise). `graph`, where given, receives the nodes as validation
-  // read them, for compaction (PooledGraph.h, private to the core). `alongside`, where given,
+  // only (std::logic_error otherwise). `graph` (PooledGraph.h, private to the core), where
+  // given: where it holds nodes, they are the volume's as its decoder read them
+  // (dagstreams::decode), and the checks read them instead of walking the node streams again;
+  // otherwise it receives the nodes the walk read, for compaction. `alongside`, where given,
   // runs through `parallel` beside the last checks (the blocks and cells), once `graph` is
-  // complete and the blocks hold their bounds; it may read the volume but not change it. The
-  // checks' error comes first, then its own.
+  // complete and the blocks hold their bounds; it may read the volume and the graph but change
+  // neither. The checks' error comes first, then its own.
   void deriveBoundsAndValidate(const ParallelFor& parallel = sequentialFor,
     PooledGraph* graph = nullptr, const std::function<void()>& alongside = {});
   bool operator==(const Volume& o) const;
