@@ -94,10 +94,12 @@ using bits::storeLE;
 // halves to pay, and the copy is cheap. Larger volumes split each loop instead and free the
 // pooled streams before compacting.
 constexpr uint64_t CompactAlongsideBytes = uint64_t(4) << 20;
-// A 4.0 load of a smaller streams section runs on the calling thread alone: its steps take tens
-// of microseconds, less than waking a second thread costs, and a second thread left spinning
-// slows the first on a shared machine (dvid_fib19_64's 5 KB: 0.13 ms alone, 0.15 ms on two).
-constexpr uint64_t SplitLoadBytes = 8192;
+// A 4.0 load of a smaller streams section runs on the calling thread alone. On a shared machine
+// a second thread is sometimes fast and sometimes slower than none, for seconds at a time, and
+// below this size the slow phases cost more than the fast ones save: fib25_64's 18.6 KB took
+// 0.25 ms or 0.42 ms on two threads and 0.32 ms on one, totalseg_ct's 11 KB 0.17 or 0.26 against
+// 0.20; gala_train_gt's 47 KB took 0.66 or 0.98 ms on two and 1.05 ms on one.
+constexpr uint64_t SplitLoadBytes = 32768;
 
 // Files are read and written at most this many bytes per call: a single read or write of
 // more than 2 GiB fails on some systems (macOS's write, for one).

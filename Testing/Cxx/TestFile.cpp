@@ -1599,8 +1599,10 @@ TEST(StreamsFile, CorruptStreamsLoadAlikeInOrderAndOnThreads)
   const svdag::Volume v = svdag::pooled(build(ScalarType::UInt16, geometry(64, 48, 40),
     [&](int x, int y, int z) { return uint64_t((x / 5 + y / 7 + z / 3 + (noise() % 9 == 0)) % 40); }));
   const Bytes good = svdag::serialize(v);
-  ASSERT_GT(good.size(), size_t(10000)) << "a smaller load runs on one thread (File.cpp)";
   const svdag::dagstreams::Encoded encoded = svdag::dagstreams::encode(v);
+  const Bytes asIs = withStreams(good, encoded.streams); // what the edits below load
+  ASSERT_GE(getLE(asIs, entryOf(asIs, 7) + Stored, 8), 32768u)
+    << "a smaller streams section loads on one thread (File.cpp: SplitLoadBytes)";
   ASSERT_TRUE(svdag::deserialize(withStreams(good, encoded.streams)) == svdag::deserialize(good));
   std::mt19937_64 rng(31);
   size_t failed = 0, loaded = 0, overlaps = 0;
