@@ -3,6 +3,7 @@
 #include "svdag/Layout.h"
 
 #include <algorithm>
+#include <array>
 #include <stdexcept>
 #include <string>
 
@@ -49,6 +50,7 @@ struct Symmetries
     uint32_t distance = 0; // 2^b - 2^a: where each goes
   };
   Exchange exchanges[layout::LEAF_SYMMETRY_COUNT / 8][Steps];
+  uint8_t composition[layout::LEAF_SYMMETRY_COUNT][layout::LEAF_SYMMETRY_COUNT]; // [a][b]: a after b
   uint32_t inverse[layout::LEAF_SYMMETRY_COUNT];
 
   Symmetries()
@@ -81,24 +83,43 @@ struct Symmetries
             e.lower |= uint64_t(1) << q;
       }
     }
-    // The composition above must be the definition for every symmetry: checked bit by bit.
+    // Bit y of a child's mask under symmetry s reads bit source[s][y] of the stored mask.
+    uint8_t source[layout::LEAF_SYMMETRY_COUNT][64];
     for (uint32_t s = 0; s < layout::LEAF_SYMMETRY_COUNT; ++s)
       for (uint32_t y = 0; y < 64; ++y)
-        if (apply(s, uint64_t(1) << layout::leafSymmetryBit(s, y % 4, (y / 4) % 4, y / 16)) !=
-          uint64_t(1) << y)
+        source[s][y] = uint8_t(layout::leafSymmetryBit(s, y % 4, (y / 4) % 4, y / 16));
+    // The exchanges and mirrors above must be the definition for every symmetry: checked bit by
+    // bit.
+    for (uint32_t s = 0; s < layout::LEAF_SYMMETRY_COUNT; ++s)
+      for (uint32_t y = 0; y < 64; ++y)
+        if (apply(s, uint64_t(1) << source[s][y]) != uint64_t(1) << y)
           throw std::logic_error(
             "leaf symmetry " + std::to_string(s) + " is not a permutation after mirrors");
+    // A symmetry moves voxel coordinates by an affine map, so where the voxels (0,0,0), (1,0,0),
+    // (0,1,0) and (0,0,1) (bits 0, 1, 4 and 16) read from tells the 48 apart.
+    auto key = [](const auto& sourceOf) {
+      return uint32_t(sourceOf(0)) | (uint32_t(sourceOf(1)) << 6) |
+        (uint32_t(sourceOf(4)) << 12) | (uint32_t(sourceOf(16)) << 18);
+    };
+    std::array<std::pair<uint32_t, uint32_t>, layout::LEAF_SYMMETRY_COUNT> byKey; // key, symmetry
     for (uint32_t s = 0; s < layout::LEAF_SYMMETRY_COUNT; ++s)
-      for (uint32_t t = 0; t < layout::LEAF_SYMMETRY_COUNT; ++t)
+      byKey[s] = { key([&](uint32_t y) { return source[s][y]; }), s };
+    std::sort(byKey.begin(), byKey.end());
+    for (size_t i = 1; i < byKey.size(); ++i)
+      if (byKey[i].first == byKey[i - 1].first)
+        throw std::logic_error("two leaf symmetries move the same voxels");
+    // a after b: bit y reads bit source[a][y] of b's image, which reads bit source[b][that].
+    for (uint32_t a = 0; a < layout::LEAF_SYMMETRY_COUNT; ++a)
+      for (uint32_t b = 0; b < layout::LEAF_SYMMETRY_COUNT; ++b)
       {
-        bool undoes = true;
-        for (uint32_t b = 0; b < 64 && undoes; ++b)
-          undoes = apply(t, apply(s, uint64_t(1) << b)) == uint64_t(1) << b;
-        if (undoes)
-        {
-          this->inverse[s] = t;
-          break;
-        }
+        const uint32_t k = key([&](uint32_t y) { return source[b][source[a][y]]; });
+        const auto found = std::lower_bound(
+          byKey.begin(), byKey.end(), std::make_pair(k, uint32_t(0)));
+        if (found == byKey.end() || found->first != k)
+          throw std::logic_error("leaf symmetries not closed under composition");
+        this->composition[a][b] = uint8_t(found->second);
+        if (found->second == 0) // symmetry 0 moves nothing
+          this->inverse[b] = a;
       }
   }
 
@@ -159,6 +180,11 @@ uint64_t leafUnderSymmetry(uint32_t s, uint64_t stored)
 uint32_t inverseLeafSymmetry(uint32_t s)
 {
   return symmetries().inverse[s];
+}
+
+uint32_t composeLeafSymmetries(uint32_t a, uint32_t b)
+{
+  return symmetries().composition[a][b];
 }
 
 CanonicalLeaf canonicalLeaf(uint64_t mask)

@@ -996,8 +996,11 @@ private:
     size_t owner[8] = {};
     // The first leaf of each child as a reference (read as complemented or not) until a second
     // one needs its voxels: two blocks splitting a leaf refer to it with opposite polarity, and
-    // together fill it without expanding either.
-    uint32_t firstRef[8] = {};
+    // together fill it without expanding either. Then a child's leaves are compared as the first
+    // one is stored (a symmetry moves voxels one to one, so two leaves overlap there where they
+    // overlap in the child): the first one as it is, each next one under the symmetry that does
+    // its own and then undoes the first's.
+    uint32_t firstRef[8] = {}, undoFirst[8] = {};
     bool firstInverted[8] = {}, pending[8] = {};
     for (const MidEntry& me : list)
     {
@@ -1025,10 +1028,14 @@ private:
             owner[c] = me.entry;
             continue;
           }
-          const uint64_t first = this->V.leafMask(firstRef[c]);
+          undoFirst[c] = inverseLeafSymmetry(layout::leafRefSymmetry(firstRef[c]));
+          const uint64_t first = this->V.leaves[layout::leafRefIndex(firstRef[c])];
           acc[c] = firstInverted[c] ? ~first : first;
         }
-        const uint64_t m = this->V.leafMask(leafRef) ^ (uint64_t(0) - uint64_t(inverted));
+        const uint64_t m = leafUnderSymmetry(
+                             composeLeafSymmetries(undoFirst[c], layout::leafRefSymmetry(leafRef)),
+                             this->V.leaves[layout::leafRefIndex(leafRef)]) ^
+          (uint64_t(0) - uint64_t(inverted));
         if (acc[c] & m)
           this->overlap(owner[c], me.entry, cell);
         acc[c] |= m;

@@ -957,6 +957,75 @@ TEST(FileContent, ParallelValidationAgreesWithTheOrderedOne)
     EXPECT_EQ(loadError(twice, onThreads(pieces)), overlap);
 }
 
+// Blocks that share a leaf's space are compared voxel by voxel: a leaf reference given another
+// symmetry (the same voxel count, other voxels) is refused as an overlap exactly where two blocks
+// of a cell then hold one voxel, by a brute-force look at every block's occupancy.
+TEST(FileContent, LeavesUnderAnotherSymmetryOverlapWhereTheirVoxelsDo)
+{
+  std::mt19937 noise(7); // labels in slabs, some voxels flipped: leaves shared by several blocks
+  const svdag::Volume v = svdag::pooled(build(ScalarType::UInt16, geometry(40, 36, 32),
+    [&](int x, int y, int z) { return uint64_t((x / 3 + y / 4 + z / 5 + (noise() % 7 == 0)) % 9); }));
+  std::vector<uint64_t> refAt; // where each mid's leaf references lie in the mid stream
+  uint64_t offset = 0;
+  for (uint64_t n = 0; n < v.midCount; ++n)
+  {
+    const uint32_t mixed = svdag::layout::nodeMixedMask(svdag::Volume::nodeHeader(v.mids, offset));
+    for (uint32_t k = 0; k < uint32_t(__builtin_popcount(mixed)); ++k)
+      refAt.push_back(offset + svdag::layout::NODE_HEADER_BITS + uint64_t(k) * v.widths.leafRefBits);
+    offset += svdag::Volume::nodeBits(v.mids, offset, v.widths.leafRefBits);
+  }
+  ASSERT_GT(refAt.size(), 200u);
+  auto collides = [](const svdag::Volume& volume) {
+    std::vector<uint8_t> held(4096), occupancy(4096);
+    for (uint64_t first = 0; first < volume.blockCount;)
+    {
+      const uint32_t cell = volume.block(first).cell;
+      std::fill(held.begin(), held.end(), uint8_t(0));
+      uint64_t i = first;
+      for (; i < volume.blockCount && volume.block(i).cell == cell; ++i)
+      {
+        volume.occupancy(i, occupancy.data());
+        for (size_t x = 0; x < held.size(); ++x)
+        {
+          if (held[x] && occupancy[x])
+            return true;
+          held[x] |= occupancy[x];
+        }
+      }
+      first = i;
+    }
+    return false;
+  };
+  std::mt19937_64 rng(5);
+  size_t overlaps = 0, accepted = 0;
+  for (int trial = 0; trial < 300; ++trial)
+  {
+    svdag::Volume edited = v;
+    const uint64_t at = refAt[rng() % refAt.size()];
+    const uint32_t ref = uint32_t(svdag::bits::readBits(edited.mids, at, edited.widths.leafRefBits));
+    const uint32_t symmetry = uint32_t(rng() % svdag::layout::LEAF_SYMMETRY_COUNT);
+    writeBits(edited.mids, at, edited.widths.leafRefBits,
+      svdag::layout::leafRef(svdag::layout::leafRefIndex(ref), symmetry, ref & 1u));
+    const bool bruteForce = collides(edited);
+    std::string error;
+    try
+    {
+      svdag::Volume checked = edited;
+      checked.deriveBoundsAndValidate();
+    }
+    catch (const std::runtime_error& e)
+    {
+      error = e.what();
+    }
+    EXPECT_EQ(error.find("overlap") != std::string::npos, bruteForce) << error;
+    EXPECT_TRUE(error.empty() || error.find("overlap") != std::string::npos) << error;
+    overlaps += bruteForce;
+    accepted += error.empty();
+  }
+  EXPECT_GT(overlaps, 30u);
+  EXPECT_GT(accepted, 10u);
+}
+
 TEST(FileContent, LabelTableMustMatchTheBlocks)
 {
   const svdag::Volume v = threeLabels();

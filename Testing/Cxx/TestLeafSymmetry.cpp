@@ -90,6 +90,26 @@ TEST(LeafSymmetry, WholeMasksAgreeWithTheBitDefinitionAndFormAGroup)
   EXPECT_EQ(distinct.size(), size_t(Count));
 }
 
+// composeLeafSymmetries names the one symmetry that does two in turn, for every pair, against
+// the bit-by-bit definition (slowly).
+TEST(LeafSymmetry, ComposingTwoSymmetriesIsDoingThemInTurn)
+{
+  const std::vector<uint64_t> masks = randomMasks();
+  for (uint32_t a = 0; a < Count; ++a)
+    for (uint32_t b = 0; b < Count; ++b)
+    {
+      const uint32_t c = svdag::composeLeafSymmetries(a, b);
+      ASSERT_LT(c, Count);
+      for (uint64_t m : masks)
+        ASSERT_EQ(slowly(c, m), slowly(a, slowly(b, m))) << a << " after " << b;
+    }
+  for (uint32_t s = 0; s < Count; ++s)
+  {
+    EXPECT_EQ(svdag::composeLeafSymmetries(svdag::inverseLeafSymmetry(s), s), 0u);
+    EXPECT_EQ(svdag::composeLeafSymmetries(s, 0), s);
+  }
+}
+
 TEST(LeafSymmetry, CanonicalLeafIsTheSmallestImageAndGivesTheMaskBack)
 {
   for (uint64_t m : randomMasks())
