@@ -690,8 +690,10 @@ PooledGraph graphOfStreams(const Volume& v, const ParallelFor& parallel)
   const NodeIndex roots = walkNodeStream(v.roots, v.rootCount, v.widths.midRefBits, "root",
     [&](uint32_t ref, uint32_t& target) {
       const int64_t mid = mids.find(layout::refTarget(ref));
+      if (mid < 0)
+        return false;
       target = uint32_t(mid << 1) | (ref & 1u);
-      return mid >= 0;
+      return true;
     },
     parallel, g.roots, g.midRefs);
   const uint64_t recordBits = v.widths.blockBits();
