@@ -711,7 +711,8 @@ PooledGraph graphOfStreams(const Volume& v, const ParallelFor& parallel)
 }
 
 // A graph as the checks below read it: one node per node of the volume, each with its references
-// where the one before left off, one root per block. A decoder's graph is checked here too.
+// where the one before left off, one root per block and inside the root pool. A decoder's graph is
+// checked here too.
 void checkGraphShape(const Volume& v, const PooledGraph& g)
 {
   auto checkLevel = [](const std::vector<PooledGraph::Node>& nodes, uint64_t count,
@@ -733,6 +734,9 @@ void checkGraphShape(const Volume& v, const PooledGraph& g)
   checkLevel(g.roots, v.rootCount, g.midRefs, "root");
   if (g.blockRoots.size() != v.blockCount)
     fail("the graph does not hold a root per block");
+  for (size_t i = 0; i < g.blockRoots.size(); ++i)
+    if ((g.blockRoots[i] >> 1) >= v.rootCount)
+      fail("block " + str(i) + ": root outside its pool");
 }
 
 // Summarises one level's nodes from the graph, node by node through `parallel`:
@@ -1094,10 +1098,7 @@ void checkCells(const Volume& v, const PooledGraph& g, const ParallelFor& parall
       }
       catch (const std::runtime_error&)
       {
-        uint64_t seen = firstBad.load();
-        while (first < seen && !firstBad.compare_exchange_weak(seen, first))
-        {
-        }
+        keepFirst(firstBad, first);
         return;
       }
     }
@@ -1145,9 +1146,7 @@ LabelTotals checkBlocks(
     if (i > 0 && cell < previousCell)
       fail("blocks not sorted by cell (" + name() + ")");
     previousCell = cell;
-    const uint32_t root = g.blockRoots[i] >> 1;
-    if (root >= roots.used.size())
-      fail(name() + ": root outside its pool");
+    const uint32_t root = g.blockRoots[i] >> 1; // inside its pool (checkGraphShape, the walk)
     roots.used[root] = 1;
     const uint64_t summary = roots.summaries[2 * size_t(root) + (g.blockRoots[i] & 1u)];
     const uint32_t voxels = uint32_t(summary >> 48);
@@ -1237,8 +1236,6 @@ void Volume::deriveBoundsAndValidate(
   for (uint64_t i = 0; i < this->blockCount; ++i)
   {
     const uint32_t root = g.blockRoots[size_t(i)];
-    if ((root >> 1) >= this->rootCount)
-      fail("block " + str(i) + ": root outside its pool");
     const uint64_t summary = roots.summaries[2 * size_t(root >> 1) + (root & 1u)];
     uint32_t box = 0; // an empty occupancy keeps 0 (checkBlocks refuses it)
     for (uint32_t a = 0; a < 3 && (summary >> 48) != 0; ++a)
