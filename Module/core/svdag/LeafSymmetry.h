@@ -16,8 +16,9 @@ void leafImages(uint64_t mask, uint64_t images[48]);
 // The symmetry that undoes s: leafUnderSymmetry(inverseLeafSymmetry(s), leafUnderSymmetry(s, m))
 // == m for every mask m.
 uint32_t inverseLeafSymmetry(uint32_t s);
-// The symmetry that does b, then a: leafUnderSymmetry(composeLeafSymmetries(a, b), m) ==
-// leafUnderSymmetry(a, leafUnderSymmetry(b, m)) for every mask m.
+// The symmetry that does b, then a (both 0..47):
+// leafUnderSymmetry(composeLeafSymmetries(a, b), m) == leafUnderSymmetry(a, leafUnderSymmetry(b, m))
+// for every mask m.
 uint32_t composeLeafSymmetries(uint32_t a, uint32_t b);
 
 struct CanonicalLeaf
