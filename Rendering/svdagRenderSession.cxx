@@ -4,6 +4,7 @@
 #include "vtkSegmentationSVDAGRenderSettings.h"
 
 #include <svdag/Volume.h>
+#include <svdag_render/CompileAhead.h>
 #include <svdag_render/Material.h>
 #include <svdag_render/Renderer.h>
 
@@ -62,6 +63,24 @@ bool RenderSession::initialize()
     this->Error = e.what();
     return false;
   }
+}
+
+void RenderSession::compileAhead(const render::RenderSettings& settings)
+{
+  if (!this->Core || this->Ahead.valid())
+    return;
+  this->Ahead = std::async(std::launch::async,
+    [settings]()
+    {
+      try
+      {
+        render::compileAhead(settings);
+      }
+      catch (const std::exception&)
+      {
+        // The first frame compiles the same pipelines and reports what fails.
+      }
+    });
 }
 
 render::Renderer& RenderSession::prepare(const std::shared_ptr<const Volume>& volume)

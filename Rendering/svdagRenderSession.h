@@ -6,6 +6,7 @@
 #include "vtkSmartPointer.h"
 #include "vtkType.h"
 
+#include <future>
 #include <memory>
 #include <string>
 
@@ -18,6 +19,7 @@ class Volume;
 namespace render
 {
 class Renderer;
+struct RenderSettings;
 }
 
 namespace vtkglue
@@ -40,6 +42,11 @@ public:
   // Creates the core renderer if needed; false when no Vulkan device qualifies (error() says
   // which devices were found and what each lacks).
   bool initialize();
+  // After a successful initialize(): has the pipelines that a first frame with these settings
+  // needs compiled on a thread of its own (svdag::render::compileAhead), once per session, so
+  // that reading a volume meanwhile hides their compilation. A failure there is left for the
+  // first frame, which meets it again and reports it. The session waits for it when destroyed.
+  void compileAhead(const render::RenderSettings& settings);
   const std::string& error() const { return this->Error; }
   // The core renderer, or null before a successful initialize().
   render::Renderer* renderer() const { return this->Core.get(); }
@@ -68,6 +75,7 @@ private:
   std::string Error;
   std::shared_ptr<const Volume> Uploaded;
   vtkMTimeType MaterialsTime = 0;
+  std::future<void> Ahead; // compileAhead's (last: waited for before anything else goes)
 };
 
 } // namespace vtkglue

@@ -565,7 +565,7 @@ void vtkSegmentationSVDAGVolumeMapper::Render(vtkRenderer* renderer, vtkVolume* 
     return;
   }
   vtkSegmentationSVDAG* input = this->GetInput();
-  if (!input || !input->HasVolume() || !this->InitializeDevice())
+  if (!input || !input->HasVolume() || !this->CreateRenderer())
     return;
   this->InvokeEvent(vtkCommand::VolumeMapperRenderStartEvent, nullptr);
   const auto start = Clock::now();
@@ -916,6 +916,27 @@ void vtkSegmentationSVDAGVolumeMapper::SetCroppingRegionPlanes(
 }
 
 bool vtkSegmentationSVDAGVolumeMapper::InitializeDevice()
+{
+  if (!this->CreateRenderer())
+    return false;
+  // What the first frame traces with, as far as its pipelines go: the settings, and whether the
+  // mapper clips (where is for the frame to say).
+  core::RenderSettings first = this->Internal->Session.settings()->GetCoreSettings();
+  const Matrix identity = svdag::vtkglue::identityMatrix();
+  try
+  {
+    svdag::vtkglue::setClipping(first, this->ClippingPlanes, identity, identity, this->Cropping,
+      this->CroppingRegionPlanes);
+  }
+  catch (const std::exception&)
+  {
+    return true; // bad planes: the first frame reports them
+  }
+  this->Internal->Session.compileAhead(first);
+  return true;
+}
+
+bool vtkSegmentationSVDAGVolumeMapper::CreateRenderer()
 {
   if (this->Internal->Session.initialize())
     return true;

@@ -173,7 +173,10 @@ public:
 
   /** Creates the Vulkan renderer now (else on the first render): returns false and reports the
    * reason (no usable device: every device found and what it lacks) with
-   * vtkErrorMacro. */
+   * vtkErrorMacro. It also starts compiling, on a thread of its own, the pipelines that the
+   * current settings' first frame needs, so that a caller that sets the settings, calls this and
+   * then reads its volume has them compiled meanwhile (the compilation is most of a first
+   * image's wait on a CPU driver with empty caches). */
   bool InitializeDevice();
 
   /** Renders the window until the view has converged (TargetSamplesPerPixel or ErrorTarget) or
@@ -308,6 +311,9 @@ protected:
 private:
   vtkSegmentationSVDAGVolumeMapper(const vtkSegmentationSVDAGVolumeMapper&) = delete;
   void operator=(const vtkSegmentationSVDAGVolumeMapper&) = delete;
+
+  // InitializeDevice without compiling ahead: what every render does first.
+  bool CreateRenderer();
 
   struct Internals;
   std::unique_ptr<Internals> Internal;

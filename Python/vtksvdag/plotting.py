@@ -522,6 +522,10 @@ def add_segmentation(
     _apply_sun(settings, sun)
     _apply_environment(settings, environment)
     _apply_clipping(mapper, clipping_planes, crop)
+    # The device before the volume: its pipelines compile on another thread while the volume is
+    # read or built (most of a first image's wait where the driver compiles on the CPU).
+    with vtk_errors_raised(mapper, RuntimeError):
+        mapper.InitializeDevice()
 
     # The options are checked before the volume is built or read (the costly part).
     volume = _segmentation_volume(data, scalars=scalars, spacing=spacing, origin=origin,
@@ -545,9 +549,6 @@ def add_segmentation(
     style = _label_style(volume, props, attributes, colors, hidden_labels, color_by, cmap, clim,
                          nan_color, query, highlight, dim, highlight_color, highlight_intensity,
                          others_opacity)
-
-    with vtk_errors_raised(mapper, RuntimeError):
-        mapper.InitializeDevice()
 
     from .actor import SegmentationActor
 

@@ -4,6 +4,7 @@
 // no other renderer exists), and the byte counts it has alone.
 #include <svdag/Builder.h>
 #include <svdag_render/Camera.h>
+#include <svdag_render/CompileAhead.h>
 #include <svdag_render/Context.h>
 #include <svdag_render/PipelineCacheFile.h>
 #include <svdag_render/Renderer.h>
@@ -533,5 +534,55 @@ TEST(DeviceSharing, APreviewKeepsTheClipping)
     plain.reset();
     whole.reset();
     ASSERT_EQ(svdag::render::Renderer::deviceUsers(), 0u);
+  }
+}
+
+// Compiling ahead (CompileAhead.h): a renderer's first frame with the settings compiled ahead
+// creates no pipeline and no shader, whether compileAhead ran before the frame or runs beside it
+// on another thread; and the frame is the one a renderer renders without it.
+TEST(DeviceSharing, AFirstFrameCompiledAheadCompilesNothing)
+{
+  for (const auto backend : Backends)
+  {
+    const TemporaryCacheHome cache("svdag-ahead");
+    ASSERT_EQ(svdag::render::Renderer::deviceUsers(), 0u); // a new device: nothing compiled
+    const auto volume = randomVolume(5);
+    auto created = [](const svdag::render::Renderer& r) {
+      const auto status = r.pipelineCache();
+      return r.pipelineCompilations() + status.shadersCompiled + status.shaderBinariesLoaded;
+    };
+    svdag::render::Image alone;
+    uint64_t createdAlone = 0;
+    {
+      auto r = makeRenderer(volume, backend);
+      alone = r->render();
+      createdAlone = created(*r);
+      ASSERT_GT(createdAlone, 0u);
+    }
+
+    // Before: the first frame finds everything made.
+    {
+      auto r = makeRenderer(volume, backend); // holds the device (a new one)
+      ASSERT_EQ(created(*r), 0u);
+      const svdag::render::RenderSettings settings = r->settings();
+      std::thread ahead([&settings] { svdag::render::compileAhead(settings); });
+      ahead.join();
+      EXPECT_EQ(svdag::render::Renderer::deviceUsers(), 1u) << "compileAhead's renderer is gone";
+      EXPECT_EQ(created(*r), createdAlone) << "what the first frame needs, and nothing else";
+      expectSameImage(r->render(), alone, 0);
+      EXPECT_EQ(created(*r), createdAlone) << "the first frame compiled something";
+    }
+
+    // Beside: both ask for the same pipelines at once, and each is made once.
+    {
+      auto r = makeRenderer(volume, backend);
+      ASSERT_EQ(created(*r), 0u);
+      const svdag::render::RenderSettings settings = r->settings();
+      std::thread ahead([&settings] { svdag::render::compileAhead(settings); });
+      const svdag::render::Image image = r->render();
+      ahead.join();
+      expectSameImage(image, alone, 1);
+      EXPECT_EQ(created(*r), createdAlone);
+    }
   }
 }
