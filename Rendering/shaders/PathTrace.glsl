@@ -211,6 +211,32 @@ bool surfaceEdge(uvec2 pixel, uint width, uint height)
   return false;
 }
 
+// The grid position of an edge pixel's k-th coverage ray: the grid's four corners first, then the
+// rest in row order. Where the four corners hit one surface a straight boundary (a half-plane)
+// leaves every ray inside their square on that surface too, so they stand for all of them
+// (GpuLayout.h, SVDAG_COVERAGE_CORNERS).
+uint coverageSubPixel(uint k)
+{
+  const uint g = SVDAG_COVERAGE_GRID;
+  const uint corners[4] = uint[4](0u, g - 1u, g * (g - 1u), g * g - 1u);
+  if (k < 4u)
+    return corners[k];
+  uint j = k - 4u; // the rest: g - 2 of the first row, the g - 2 full rows, g - 2 of the last
+  if (j < g - 2u)
+    return 1u + j;
+  j -= g - 2u;
+  if (j < g * (g - 2u))
+    return g + j;
+  return g * (g - 1u) + 1u + (j - g * (g - 2u));
+}
+
+// Whether a pixel's record after its corner rays shows one surface only (all SVDAG_COVERAGE_CORNERS
+// of them): its other rays are not traced, and that surface counts for all of them.
+bool coverageSettled(uvec4 keys)
+{
+  return (keys[0] & 0xFFu) == SVDAG_COVERAGE_CORNERS && keys[1] == 0u;
+}
+
 // A coverage ray's entry face as its record keeps it (GpuLayout.h; 0 for the background).
 uint coverageFaceBits(uint label, vec3 face)
 {
@@ -239,11 +265,13 @@ void countCoverage(inout uvec4 labels, inout uvec4 keys, uint label, uint faceBi
 
 #ifdef SVDAG_COVERAGE_SUBGROUP
 // The compute backend shares out a subgroup's coverage rays: its edge pixels are ranked (a
-// ballot), every invocation traces rays of the list in turn (ray `slot`: edge pixel slot / G,
-// sub-pixel position slot % G, G = SVDAG_COVERAGE_GRID^2), where one invocation per edge pixel
-// would keep its SIMD neighbours idle through all of them; after each round every edge pixel
-// takes its own rays' hits from the lanes that traced them (shuffles). The rays and the order in
-// which each pixel counts them are those of the per-pixel loop, so the records are the same.
+// ballot), every invocation traces rays of the list in turn (ray `slot`: edge pixel slot / R,
+// its ray number slot % R, R the rays a pixel traces in this phase), where one invocation per
+// edge pixel would keep its SIMD neighbours idle through all of them; after each round every edge
+// pixel takes its own rays' hits from the lanes that traced them (shuffles). Two phases: every
+// edge pixel's corner rays, then the other rays of the pixels whose corners did not settle them
+// (ranked by a second ballot). The rays and the order in which each pixel counts them are those
+// of the per-pixel loop, so the records are the same.
 
 // The lane of the subgroup holding the `rank`-th set bit of `ballot` (rank < its bit count).
 uint svdagBallotLane(uvec4 ballot, uint rank)
@@ -284,21 +312,25 @@ void svdagRenderPixel(uvec2 pixel)
   const uint coverageRays = SVDAG_COVERAGE_GRID * SVDAG_COVERAGE_GRID;
   bool edge = coverage && inImage && surfaceEdge(pixel, width, height);
   uvec4 coveredLabels = uvec4(0u), coveredKeys = uvec4(0u);
+  // The coverage's phase (0: the corner rays, 1: the others), its rays per pixel and its first
+  // ray number; `edge` is whether this pixel traces in the phase.
+  uint phase = 0u, phaseRays = SVDAG_COVERAGE_CORNERS, phaseFirst = 0u;
 #ifdef SVDAG_COVERAGE_SUBGROUP
   uvec4 edges = uvec4(0u);
-  uint rays = 0u, edgeRank = 0u;
+  uint rays = 0u, edgeRank = 0u, phaseStart = 0u;
   if (coverage)
   {
     // Subgroup-uniform from here: every lane runs the same rounds.
     edges = subgroupBallot(edge);
-    rays = subgroupBallotBitCount(edges) * coverageRays;
+    rays = subgroupBallotBitCount(edges) * phaseRays;
     edgeRank = subgroupBallotExclusiveBitCount(edges);
     samples = (rays + gl_SubgroupSize - 1u) / gl_SubgroupSize;
   }
 #else
   if (coverage)
-    samples = edge ? coverageRays : 0u;
+    samples = edge ? phaseRays : 0u;
 #endif
+  bool settled = false;
 
   gEnvMarginal = SvdagFloats(frame.environmentMap.xy);
   gEnvConditional = SvdagFloats(frame.environmentMap.zw);
@@ -326,14 +358,14 @@ void svdagRenderPixel(uvec2 pixel)
 #ifdef SVDAG_COVERAGE_SUBGROUP
     if (coverage)
     {
-      slot = s * gl_SubgroupSize + gl_SubgroupInvocationID;
+      slot = (s - phaseStart) * gl_SubgroupSize + gl_SubgroupInvocationID;
       traces = slot < rays;
-      rayIndex = subgroupShuffle(index, svdagBallotLane(edges, traces ? slot / coverageRays : 0u));
+      rayIndex = subgroupShuffle(index, svdagBallotLane(edges, traces ? slot / phaseRays : 0u));
     }
 #endif
     if (coverage)
     {
-      uint sub = slot % coverageRays;
+      uint sub = coverageSubPixel(phaseFirst + slot % phaseRays);
       jitter = (vec2(sub % SVDAG_COVERAGE_GRID, sub / SVDAG_COVERAGE_GRID) + 0.5) /
         float(SVDAG_COVERAGE_GRID);
     }
@@ -367,12 +399,33 @@ void svdagRenderPixel(uvec2 pixel)
       {
         uint label = subgroupShuffle(gPrimaryPayload.label, l);
         uint face = subgroupShuffle(faceBits, l);
-        uint traced = s * gl_SubgroupSize + l;
-        if (edge && traced < rays && traced / coverageRays == edgeRank)
+        uint traced = (s - phaseStart) * gl_SubgroupSize + l;
+        if (edge && traced < rays && traced / phaseRays == edgeRank)
           countCoverage(coveredLabels, coveredKeys, label, face);
+      }
+      if (phase == 0u && s + 1u == samples)
+      {
+        // The corners are in: the pixels they did not settle trace the other rays.
+        settled = edge && coverageSettled(coveredKeys);
+        edge = edge && !settled;
+        phase = 1u;
+        phaseFirst = SVDAG_COVERAGE_CORNERS;
+        phaseRays = coverageRays - SVDAG_COVERAGE_CORNERS;
+        phaseStart = s + 1u;
+        edges = subgroupBallot(edge);
+        rays = subgroupBallotBitCount(edges) * phaseRays;
+        edgeRank = subgroupBallotExclusiveBitCount(edges);
+        samples = phaseStart + (rays + gl_SubgroupSize - 1u) / gl_SubgroupSize;
       }
 #else
       countCoverage(coveredLabels, coveredKeys, gPrimaryPayload.label, faceBits);
+      if (s + 1u == SVDAG_COVERAGE_CORNERS)
+      {
+        // The corners are in: the others unless they settled the pixel (ray s is number s).
+        settled = coverageSettled(coveredKeys);
+        samples = settled ? samples : coverageRays;
+        phaseRays = coverageRays;
+      }
 #endif
       continue;
     }
@@ -387,6 +440,8 @@ void svdagRenderPixel(uvec2 pixel)
   {
     if (!inImage)
       return;
+    if (settled)
+      coveredKeys[0] += coverageRays - SVDAG_COVERAGE_CORNERS;
     SvdagUvec4Output records = SvdagUvec4Output(frame.coverage.xy);
     records.v[2u * index] = coveredLabels;
     records.v[2u * index + 1u] = coveredKeys;

@@ -299,3 +299,67 @@ def test_edge_coverage_alike_on_both_backends(two_boxes):
     # The edges are blends, not one label's color: coverage was traced.
     blended = (images["compute"][edges, 0] > 0.01) & (images["compute"][edges, 2] > 0.01)
     assert blended.sum() > 20
+
+
+def test_edge_coverage_of_a_straight_boundary_counts_every_grid_ray():
+    """An edge pixel traces its coverage grid's corners first and, where they hit one surface,
+    lets that surface count for all 16 rays (GpuLayout.h, SVDAG_COVERAGE_CORNERS). Across a
+    straight boundary that is what tracing all 16 gives. Against a brute force: the same view at
+    4x the size, whose pixel centers are the coverage rays; through emissive labels on a black
+    background (one surface, one color each), an edge pixel's denoised value is
+    own + (sum of count_k color_k / 16 - own) * 16 / 17, which gives each pixel's count back."""
+    labels = np.zeros((4, 40, 40), np.uint8)  # z, y, x: a slab split at x = 20
+    labels[1:3, 2:38, 2:20] = 1
+    labels[1:3, 2:38, 20:38] = 2
+    volume = vtksvdag.from_numpy(labels, axis_order="zyx")
+    size, tilt = 48, np.radians(20.0)  # the boundary crosses the image at 20 degrees
+
+    def render(denoise, scale, backend):
+        r = vtkSegmentationSVDAGRenderer()
+        r.SetInputData(volume.dataobject)
+        r.SetWidth(size * scale)
+        r.SetHeight(size * scale)
+        props = r.GetLabelProperties()
+        for label, emission in ((1, (1.0, 0.0, 0.0)), (2, (0.0, 0.0, 1.0))):
+            props.SetColor(label, 0.0, 0.0, 0.0)
+            props.SetSpecular(label, 0.0)
+            props.SetEmission(label, *emission)
+        s = r.GetSettings()
+        s.SetLOD("voxel")
+        s.SetBackend(backend)
+        s.SunOff()
+        s.SetEnvironmentColor(0.0, 0.0, 0.0)
+        s.SetDenoise(denoise)
+        r.SetCameraFocalPoint(20.0, 20.0, 2.0)
+        r.SetCameraPosition(20.0, 20.0, 42.0)
+        r.SetCameraViewUp(np.sin(tilt), np.cos(tilt), 0.0)
+        r.SetCameraViewAngle(30.0)
+        assert r.Render() == 1
+        return r
+
+    fine = output(render(False, 4, "compute"), "Label").reshape(size, 4, size, 4)
+    blocks = fine.transpose(0, 2, 1, 3).reshape(size, size, 16)
+    reds = (blocks == 1).sum(-1)
+    for backend in ("compute", "rt"):
+        r = render(True, 1, backend)
+        label = output(r, "Label").reshape(size, size)
+        hdr = output(r, "HDR")[:, :3].astype(np.float64).reshape(size, size, 3)
+        assert set(np.unique(label)) == {1, 2}, "the slab fills the view"
+        padded = np.pad(label, 1, mode="edge")
+        edge = np.zeros_like(label, dtype=bool)
+        for dy in (-1, 0, 1):
+            for dx in (-1, 0, 1):
+                edge |= padded[1 + dy:1 + dy + size, 1 + dx:1 + dx + size] != label
+        only_two = np.all((blocks == 1) | (blocks == 2), axis=-1)
+        check = edge & only_two
+        own = np.where((label == 1)[..., None], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0])
+        blend = own + (hdr - own) * 17.0 / 16.0
+        counted = np.rint(16.0 * blend[..., 0]).astype(int)
+        assert np.allclose(blend[check].sum(-1), 1.0, atol=1e-4), "the counts add up to 16"
+        # Settled by their corners (16 of one label) and traced in full (both labels) alike.
+        settled, split = check & ((reds == 0) | (reds == 16)), check & (reds > 0) & (reds < 16)
+        assert settled.sum() > 10 and split.sum() > 30, backend
+        # A coverage ray and the fine image's ray may round differently where a sub-pixel center
+        # lies on the boundary: at most one pixel apart by one ray.
+        wrong = counted[check] != reds[check]
+        assert wrong.sum() <= 1 and np.all(np.abs(counted[check] - reds[check]) <= 1), backend

@@ -138,6 +138,11 @@ SVDAG_GPU_CONST SVDAG_SHADING_SMOOTH = 1u;
  * untouched by that dispatch. */
 #define SVDAG_COVERAGE_GRID 4u
 #define SVDAG_COVERAGE_SLOTS 4u
+/* An edge pixel traces its grid's four corner rays first; where all four hit one surface, that
+ * surface counts for every ray of the grid and the others are not traced (a straight boundary
+ * that leaves the corners on one side leaves the whole square between them there; what the
+ * corners miss is a feature thinner than a sub-pixel inside it). */
+#define SVDAG_COVERAGE_CORNERS 4u
 
 SVDAG_UNIFORMS_BEGIN(FrameUniforms)
   vec4 rayOrigin;      // xyz: ray origin at u = v = 0 minus the scene's reference point (Scene.h:
