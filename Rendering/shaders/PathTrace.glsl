@@ -218,10 +218,12 @@ bool surfaceEdge(uvec2 pixel, uint width, uint height)
 uint coverageSubPixel(uint k)
 {
   const uint g = SVDAG_COVERAGE_GRID;
-  const uint corners[4] = uint[4](0u, g - 1u, g * (g - 1u), g * g - 1u);
-  if (k < 4u)
+  const uint corners[SVDAG_COVERAGE_CORNERS] =
+    uint[SVDAG_COVERAGE_CORNERS](0u, g - 1u, g * (g - 1u), g * g - 1u);
+  if (k < SVDAG_COVERAGE_CORNERS)
     return corners[k];
-  uint j = k - 4u; // the rest: g - 2 of the first row, the g - 2 full rows, g - 2 of the last
+  // The rest: g - 2 of the first row, the g - 2 full rows, g - 2 of the last.
+  uint j = k - SVDAG_COVERAGE_CORNERS;
   if (j < g - 2u)
     return 1u + j;
   j -= g - 2u;
@@ -312,12 +314,12 @@ void svdagRenderPixel(uvec2 pixel)
   const uint coverageRays = SVDAG_COVERAGE_GRID * SVDAG_COVERAGE_GRID;
   bool edge = coverage && inImage && surfaceEdge(pixel, width, height);
   uvec4 coveredLabels = uvec4(0u), coveredKeys = uvec4(0u);
-  // The coverage's phase (0: the corner rays, 1: the others), its rays per pixel and its first
-  // ray number; `edge` is whether this pixel traces in the phase.
-  uint phase = 0u, phaseRays = SVDAG_COVERAGE_CORNERS, phaseFirst = 0u;
+  // The coverage rays: a pixel's rays in this phase and the number of its first (the corners,
+  // then the others); `edge` is whether this pixel traces in the phase.
+  uint phaseRays = SVDAG_COVERAGE_CORNERS, phaseFirst = 0u;
 #ifdef SVDAG_COVERAGE_SUBGROUP
   uvec4 edges = uvec4(0u);
-  uint rays = 0u, edgeRank = 0u, phaseStart = 0u;
+  uint rays = 0u, edgeRank = 0u, phase = 0u, phaseStart = 0u;
   if (coverage)
   {
     // Subgroup-uniform from here: every lane runs the same rounds.
