@@ -16,7 +16,8 @@ namespace render
 // a 2 x 2 image of a one-voxel volume with a renderer of its own on the process's shared device
 // (Device). A renderer with the same settings then finds them compiled: the device keeps its
 // pipelines, and a renderer that asks for one being compiled waits for it rather than compiling
-// it again. Label materials are not known here: emission and transmission are taken as unused,
+// it again. Call it while another renderer holds the device: a device goes with its last user,
+// and its pipelines with it (the driver's disk cache, where there is one, keeps what it keeps). Label materials are not known here: emission and transmission are taken as unused,
 // as by default. Thread-safe; throws what the renderer throws (std::runtime_error).
 void compileAhead(const RenderSettings& settings);
 
