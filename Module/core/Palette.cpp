@@ -76,7 +76,8 @@ std::vector<RGB> generatePalette()
   // Greedy farthest-point selection. The first color is the candidate farthest from mid gray
   // (the most saturated one), so that the start does not depend on the grid's order; each next
   // one maximises its distance to the nearest color chosen so far (ties: the first candidate).
-  // Distances are compared squared: the same order, without a square root per candidate.
+  // Distances are compared squared, without a square root per candidate (squaring keeps their
+  // order; the palette came out the same, color for color, as with the square roots).
   const auto squared = [](const Lab& a, const Lab& b) {
     const double d0 = a[0] - b[0], d1 = a[1] - b[1], d2 = a[2] - b[2];
     return d0 * d0 + d1 * d1 + d2 * d2;
