@@ -36,6 +36,12 @@ Lab linearToLab(double r, double g, double b)
   const double fx = f(x), fy = f(y), fz = f(z);
   return { { 116 * fy - 16, 500 * (fx - fy), 200 * (fy - fz) } };
 }
+
+double squaredLabDistance(const Lab& a, const Lab& b)
+{
+  const double d0 = a[0] - b[0], d1 = a[1] - b[1], d2 = a[2] - b[2];
+  return d0 * d0 + d1 * d1 + d2 * d2;
+}
 } // namespace
 
 Lab srgbToLab(const RGB& srgb)
@@ -45,8 +51,7 @@ Lab srgbToLab(const RGB& srgb)
 
 double labDistance(const Lab& a, const Lab& b)
 {
-  const double d0 = a[0] - b[0], d1 = a[1] - b[1], d2 = a[2] - b[2];
-  return std::sqrt(d0 * d0 + d1 * d1 + d2 * d2);
+  return std::sqrt(squaredLabDistance(a, b));
 }
 
 namespace
@@ -78,14 +83,10 @@ std::vector<RGB> generatePalette()
   // one maximises its distance to the nearest color chosen so far (ties: the first candidate).
   // Distances are compared squared, without a square root per candidate (squaring keeps their
   // order; the palette came out the same, color for color, as with the square roots).
-  const auto squared = [](const Lab& a, const Lab& b) {
-    const double d0 = a[0] - b[0], d1 = a[1] - b[1], d2 = a[2] - b[2];
-    return d0 * d0 + d1 * d1 + d2 * d2;
-  };
   const Lab gray{ { 0.5 * (PaletteMinLightness + PaletteMaxLightness), 0, 0 } };
   std::vector<double> nearest(lab.size());
   for (size_t i = 0; i < lab.size(); ++i)
-    nearest[i] = squared(lab[i], gray);
+    nearest[i] = squaredLabDistance(lab[i], gray);
   std::vector<RGB> palette;
   const size_t n = std::min(PaletteSize, lab.size());
   while (palette.size() < n)
@@ -96,7 +97,7 @@ std::vector<RGB> generatePalette()
     // The first pick's distances were to gray, not to a palette color: start them afresh.
     for (size_t i = 0; i < lab.size(); ++i)
     {
-      const double d = squared(lab[i], chosen);
+      const double d = squaredLabDistance(lab[i], chosen);
       nearest[i] = palette.size() == 1 ? d : std::min(nearest[i], d);
     }
   }
