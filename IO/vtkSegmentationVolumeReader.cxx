@@ -15,6 +15,7 @@
 
 #include <algorithm>
 #include <exception>
+#include <future>
 #include <memory>
 #include <new>
 
@@ -216,37 +217,56 @@ int vtkSegmentationVolumeReader::RequestData(
       }
     }
 
-    // One slab is the reader's working memory. A volume whose slab alone exceeds the machine's
-    // memory (absurd but well-formed dimensions) is refused before anything is allocated.
+    // Two slabs are the reader's working memory: the source fills one while the builder
+    // compresses the other, so a decompressing source (gzip NRRD, .nii.gz) and the builder each
+    // keep a core busy. A volume whose two slabs alone exceed the machine's memory (absurd but
+    // well-formed dimensions) is refused before anything is allocated.
     const uint64_t slabBytes = uint64_t(geometry.dims[0]) * uint64_t(geometry.dims[1]) *
       uint64_t(std::min(svdag::Builder::SlabDepth, geometry.dims[2])) *
       uint64_t(svdag::scalarSize(type));
     const uint64_t memory = svdagPhysicalMemoryBytes();
-    if (memory > 0 && slabBytes > memory)
+    if (memory > 0 && slabBytes > memory / 2)
     {
-      vtkErrorMacro("Cannot read " << name << ": one slab of 16 z-slices takes "
-                                   << slabBytes << " bytes, more than this machine's memory.");
+      vtkErrorMacro("Cannot read " << name << ": two slabs of 16 z-slices take "
+                                   << 2 * slabBytes << " bytes, more than this machine's memory.");
       this->SetErrorCode(vtkErrorCode::OutOfDiskSpaceError);
       return 0;
     }
     svdag::Builder builder(
       geometry.zRange(zBegin, zEnd), type, options, vtkSVDAGParallelFor());
     // Not value-initialised: the source overwrites every byte.
-    std::unique_ptr<uint8_t[]> slabMemory(new uint8_t[size_t(slabBytes)]);
-    uint8_t* slab = slabMemory.get();
-    // Slabs before the piece are read and dropped: sources serve slabs in order from the first
-    // (compressed streams cannot seek), so a piece costs reading time, never more memory.
+    std::unique_ptr<uint8_t[]> slabs[2];
+    slabs[0].reset(new uint8_t[size_t(slabBytes)]);
+    if (zEnd > svdag::Builder::SlabDepth)
+      slabs[1].reset(new uint8_t[size_t(slabBytes)]);
+    // Slab z0's read, on a thread of its own. Sources serve slabs in order from the first
+    // (compressed streams cannot seek), one read at a time: the next starts once this one is
+    // taken. Its exception is rethrown where it is taken; one left pending (an abort, a failed
+    // compression) is waited for when the future goes.
+    auto readAhead = [&](int32_t z0) {
+      const int32_t nz = std::min(svdag::Builder::SlabDepth, zEnd - z0);
+      uint8_t* slab = slabs[(z0 / svdag::Builder::SlabDepth) % 2].get();
+      return std::async(
+        std::launch::async, [&source, z0, nz, slab] { source->readSlab(z0, nz, slab); });
+    };
+    // Slabs before the piece are read and dropped, so a piece costs reading time, never more
+    // memory.
+    std::future<void> next;
+    if (zEnd > 0)
+      next = readAhead(0);
     for (int32_t z0 = 0; z0 < zEnd; z0 += svdag::Builder::SlabDepth)
     {
+      const int32_t nz = std::min(svdag::Builder::SlabDepth, zEnd - z0);
+      next.get();
+      if (z0 + nz < zEnd)
+        next = readAhead(z0 + nz);
       if (this->GetAbortExecute())
       {
         vtkWarningMacro("Reading " << name << " was aborted.");
         return 0;
       }
-      const int32_t nz = std::min(svdag::Builder::SlabDepth, zEnd - z0);
-      source->readSlab(z0, nz, slab);
       if (z0 >= zBegin)
-        builder.addSlab(z0 - zBegin, nz, slab);
+        builder.addSlab(z0 - zBegin, nz, slabs[(z0 / svdag::Builder::SlabDepth) % 2].get());
       this->UpdateProgress(double(z0 + nz) / zEnd);
     }
     reportWarnings(this, *source, name, warningsReported);
