@@ -1,6 +1,7 @@
 // A label volume file seen as a sequence of z-slabs: the reader asks a source for its geometry
 // and scalar type (read from the header when the source is opened) and then for slabs of
-// z-slices in increasing order, so that only one slab is in memory at a time.
+// z-slices in increasing order, one call at a time, so that a slab or two are in memory at a
+// time (the reader reads the next while it compresses one).
 //
 // One subclass per file format (svdag<Format>SlabSource). Sources are not VTK objects: they
 // report failures by throwing svdagReadError, which carries the vtkErrorCode the reader sets.

@@ -3,8 +3,9 @@
  * @brief   reads a label volume file straight into a vtkSegmentationSVDAG
  *
  * The file is never held in memory as a whole: it is read in slabs of 16 z-slices that are fed
- * to the SVDAG builder one after the other, so peak memory stays near one slab plus the
- * compressed output (exception: NIfTI with qfac = -1, see below). Cells of a slab are scanned
+ * to the SVDAG builder one after the other, the next read on a thread of its own while the
+ * builder compresses this one, so peak memory stays near two slabs plus the compressed output
+ * (exception: NIfTI with qfac = -1, see below). Cells of a slab are scanned
  * in parallel with vtkSMPTools; the output does not depend on the thread count.
  *
  * Piece requests (UPDATE_PIECE_NUMBER of UPDATE_NUMBER_OF_PIECES, what ParaView's MPI ranks and
@@ -87,7 +88,7 @@ public:
    * the rule of vtksvdag's cast="exact". Otherwise the read fails naming the first offending
    * value and its (x, y, z) index (the least x, then y, then z) and why. The file is read twice,
    * slab by slab (a check pass in RequestInformation, then the conversion in RequestData), so
-   * memory stays one slab. Integer files read the same either way. Default off: float files
+   * memory stays two slabs. Integer files read the same either way. Default off: float files
    * are refused.
    */
   vtkSetMacro(CastFloatLabels, bool);

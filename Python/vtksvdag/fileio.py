@@ -170,8 +170,8 @@ def read(path, background=0, exclude=(), dataset=None, progress=None, *, scale=N
         negative; see :func:`from_numpy`). Works for every format: label volume files
         (``vtkSegmentationVolumeReader.CastFloatLabels``), ``.npy`` files and chunked stores.
         Files and stores are read twice, slab by slab (a check pass, then the conversion), so
-        memory stays one slab as for integer files. Integer files are read as they are either
-        way.
+        memory stays that of a slab or two, as for integer files. Integer files are read as they
+        are either way.
 
     Returns
     -------
