@@ -204,8 +204,9 @@ struct TraceImages
 
   VkDeviceAddress coverageRecords(Context& context)
   {
-    if (coverage.size() != uint64_t(pixels) * 32)
-      coverage = Buffer(context, uint64_t(pixels) * 32, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+    const uint64_t bytes = uint64_t(pixels) * SVDAG_COVERAGE_RECORD_VEC4S * 16;
+    if (coverage.size() != bytes)
+      coverage = Buffer(context, bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
         MemoryUse::Device);
     return coverage.address();
   }

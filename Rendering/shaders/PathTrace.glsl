@@ -182,9 +182,10 @@ void writePrimaryOutputs(uint index, uint width, uint height)
 }
 
 // Whether pixel (x, y)'s pixel-center surface (label and entry face, as the first pass of this
-// accumulation wrote them) differs from one of its 8 neighbours': a label edge, or a crease or
-// step within a label (a voxel staircase's), both of which one sample through the center aliases.
-bool surfaceEdge(uvec2 pixel, uint width, uint height)
+// accumulation wrote them) differs from one of its 8 neighbours': a label edge (labelEdge), or a
+// crease or step within a label (a voxel staircase's), both of which one sample through the
+// center aliases.
+bool surfaceEdge(uvec2 pixel, uint width, uint height, out bool labelEdge)
 {
   SvdagWords labels = SvdagWords(frame.sceneOutputs.zw);
   SvdagFloats normals = SvdagFloats(frame.outputs.zw);
@@ -193,6 +194,8 @@ bool surfaceEdge(uvec2 pixel, uint width, uint height)
   uint label = labels.w[i];
   vec3 face = vec3(normals.v[faces + 3u * i], normals.v[faces + 3u * i + 1u],
     normals.v[faces + 3u * i + 2u]);
+  labelEdge = false;
+  bool step = false;
   for (int dy = -1; dy <= 1; ++dy)
   {
     for (int dx = -1; dx <= 1; ++dx)
@@ -202,13 +205,16 @@ bool surfaceEdge(uvec2 pixel, uint width, uint height)
         continue;
       uint j = uint(q.x) + width * uint(q.y);
       if (labels.w[j] != label)
+      {
+        labelEdge = true;
         return true;
-      if (label != 0u && vec3(normals.v[faces + 3u * j], normals.v[faces + 3u * j + 1u],
+      }
+      if (!step && label != 0u && vec3(normals.v[faces + 3u * j], normals.v[faces + 3u * j + 1u],
             normals.v[faces + 3u * j + 2u]) != face)
-        return true;
+        step = true;
     }
   }
-  return false;
+  return step;
 }
 
 // The grid position of an edge pixel's k-th coverage ray: the grid's four corners first, then the
@@ -246,8 +252,10 @@ uint coverageFaceBits(uint label, vec3 face)
 }
 
 // Counts one coverage ray's surface (label index + 1, 0: background; coverageFaceBits) in the
-// pixel's record (GpuLayout.h): labels in `labels`, counts and packed faces in `keys`.
-void countCoverage(inout uvec4 labels, inout uvec4 keys, uint label, uint faceBits)
+// pixel's record (GpuLayout.h): labels in `labels`, counts and packed faces in `keys`, and the
+// ray's radiance and weight (`path`: 1 for a whole path, else all 0) in `paths`.
+void countCoverage(inout uvec4 labels, inout uvec4 keys, inout vec4 paths[SVDAG_COVERAGE_SLOTS],
+  uint label, uint faceBits, vec4 path)
 {
   for (uint k = 0u; k < SVDAG_COVERAGE_SLOTS; ++k)
   {
@@ -255,11 +263,13 @@ void countCoverage(inout uvec4 labels, inout uvec4 keys, uint label, uint faceBi
     {
       labels[k] = label;
       keys[k] = faceBits | 1u;
+      paths[k] = path;
       return;
     }
     if (labels[k] == label && (keys[k] & 0xFFFF0000u) == faceBits)
     {
       keys[k] += 1u;
+      paths[k] += path;
       return;
     }
   }
@@ -296,10 +306,11 @@ uint svdagBallotLane(uvec4 ballot, uint rank)
 
 // One pixel of the frame: its primary outputs (on the first pass of an accumulation) and
 // frame.sampling.y camera paths added to its sums; or, in the coverage dispatch
-// (frame.coverage.z, GpuLayout.h), the first hits of its sub-pixel rays if it is on an edge.
-// Both go through the path tracer's one trace site: a coverage ray is a path that ends at its
-// first hit (no bounces, no next-event estimation). With SVDAG_COVERAGE_SUBGROUP every invocation
-// of the subgroup must call this (the coverage dispatch shares rays across it).
+// (frame.coverage.z, GpuLayout.h), the hits of its sub-pixel rays if it is on an edge (on a
+// label edge with their paths' radiance). Both go through the path tracer's one trace site: a
+// coverage ray off label edges is a path that ends at its first hit (no bounces, no next-event
+// estimation). With SVDAG_COVERAGE_SUBGROUP every invocation of the subgroup must call this (the
+// coverage dispatch shares rays across it).
 void svdagRenderPixel(uvec2 pixel)
 {
   uint width = frame.image.x;
@@ -312,8 +323,12 @@ void svdagRenderPixel(uvec2 pixel)
   uint before = frame.sampling.x;
   uint samples = frame.sampling.y;
   const uint coverageRays = SVDAG_COVERAGE_GRID * SVDAG_COVERAGE_GRID;
-  bool edge = coverage && inImage && surfaceEdge(pixel, width, height);
+  bool labelEdge = false;
+  bool edge = coverage && inImage && surfaceEdge(pixel, width, height, labelEdge);
   uvec4 coveredLabels = uvec4(0u), coveredKeys = uvec4(0u);
+  vec4 coveredPaths[SVDAG_COVERAGE_SLOTS];
+  for (uint k = 0u; k < SVDAG_COVERAGE_SLOTS; ++k)
+    coveredPaths[k] = vec4(0.0);
   // The coverage rays: a pixel's rays in this phase and the number of its first (the corners,
   // then the others); `edge` is whether this pixel traces in the phase.
   uint phaseRays = SVDAG_COVERAGE_CORNERS, phaseFirst = 0u;
@@ -338,11 +353,11 @@ void svdagRenderPixel(uvec2 pixel)
   gEnvConditional = SvdagFloats(frame.environmentMap.zw);
   gEnvTexels = SvdagVec4s(frame.environmentMap2.xy);
   gMaterials = SvdagMaterials(frame.materials.xy);
-  uvec4 lighting = frame.lighting;
-  if (coverage)
-    lighting.zw = uvec2(0u, lighting.w & ~FLAG_NEE);
+  // A coverage ray off label edges ends at its first hit (no bounces, no next-event estimation).
+  uvec4 firstHit = frame.lighting;
+  firstHit.zw = uvec2(0u, firstHit.w & ~FLAG_NEE);
   PathTracerParams params =
-    PathTracerParams(frame.sunDirection, frame.sunRadiance, frame.environment, lighting);
+    PathTracerParams(frame.sunDirection, frame.sunRadiance, frame.environment, frame.lighting);
 
   vec4 sum = vec4(0.0);
   float squares = 0.0;
@@ -357,12 +372,15 @@ void svdagRenderPixel(uvec2 pixel)
     uint rayIndex = index;
     uint slot = s;
     bool traces = true;
+    bool wholePath = labelEdge;
 #ifdef SVDAG_COVERAGE_SUBGROUP
     if (coverage)
     {
       slot = (s - phaseStart) * gl_SubgroupSize + gl_SubgroupInvocationID;
       traces = slot < rays;
-      rayIndex = subgroupShuffle(index, svdagBallotLane(edges, traces ? slot / phaseRays : 0u));
+      uint owner = svdagBallotLane(edges, traces ? slot / phaseRays : 0u);
+      rayIndex = subgroupShuffle(index, owner);
+      wholePath = subgroupShuffle(labelEdge ? 1u : 0u, owner) != 0u;
     }
 #endif
     if (coverage)
@@ -370,6 +388,10 @@ void svdagRenderPixel(uvec2 pixel)
       uint sub = coverageSubPixel(phaseFirst + slot % phaseRays);
       jitter = (vec2(sub % SVDAG_COVERAGE_GRID, sub / SVDAG_COVERAGE_GRID) + 0.5) /
         float(SVDAG_COVERAGE_GRID);
+      // A stream of its own per (pixel, sub-pixel, seed), apart from the pixels' samples (its
+      // seed hashed differently): a path of its own, not a copy of a sample's.
+      rng = pcgHash(rayIndex ^ pcgHash(sub ^ pcgHash(frame.sampling.z ^ 0x9E3779B9u)));
+      params.config = wholePath ? frame.lighting : firstHit;
     }
     bool primary = before == 0u && s == 0u && !coverage;
     if (primary)
@@ -395,15 +417,18 @@ void svdagRenderPixel(uvec2 pixel)
     if (coverage)
     {
       uint faceBits = coverageFaceBits(gPrimaryPayload.label, gPrimaryPayload.normal);
+      vec4 path = wholePath
+        ? vec4(gCameraRayHit ? radiance : frame.background.rgb, 1.0) : vec4(0.0);
 #ifdef SVDAG_COVERAGE_SUBGROUP
       // This round's rays, in slot order: each edge pixel counts those of its own.
       for (uint l = 0u; l < gl_SubgroupSize; ++l)
       {
         uint label = subgroupShuffle(gPrimaryPayload.label, l);
         uint face = subgroupShuffle(faceBits, l);
+        vec4 lanePath = subgroupShuffle(path, l);
         uint traced = (s - phaseStart) * gl_SubgroupSize + l;
         if (edge && traced < rays && traced / phaseRays == edgeRank)
-          countCoverage(coveredLabels, coveredKeys, label, face);
+          countCoverage(coveredLabels, coveredKeys, coveredPaths, label, face, lanePath);
       }
       if (phase == 0u && s + 1u == samples)
       {
@@ -420,7 +445,8 @@ void svdagRenderPixel(uvec2 pixel)
         samples = phaseStart + (rays + gl_SubgroupSize - 1u) / gl_SubgroupSize;
       }
 #else
-      countCoverage(coveredLabels, coveredKeys, gPrimaryPayload.label, faceBits);
+      countCoverage(coveredLabels, coveredKeys, coveredPaths, gPrimaryPayload.label, faceBits,
+        path);
       if (s + 1u == SVDAG_COVERAGE_CORNERS)
       {
         // The corners are in: the others unless they settled the pixel (ray s is number s).
@@ -444,9 +470,13 @@ void svdagRenderPixel(uvec2 pixel)
       return;
     if (settled)
       coveredKeys[0] += coverageRays - SVDAG_COVERAGE_CORNERS;
+    uint record = SVDAG_COVERAGE_RECORD_VEC4S * index;
     SvdagUvec4Output records = SvdagUvec4Output(frame.coverage.xy);
-    records.v[2u * index] = coveredLabels;
-    records.v[2u * index + 1u] = coveredKeys;
+    records.v[record] = coveredLabels;
+    records.v[record + 1u] = coveredKeys;
+    SvdagVec4Output paths = SvdagVec4Output(frame.coverage.xy);
+    for (uint k = 0u; k < SVDAG_COVERAGE_SLOTS; ++k)
+      paths.v[record + 2u + k] = coveredPaths[k];
     return;
   }
 

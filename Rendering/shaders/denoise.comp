@@ -28,10 +28,14 @@ layout(buffer_reference, std430, buffer_reference_align = 16) buffer DenoiseGuid
 {
   uvec4 v[];
 };
-// Per pixel: the edge coverage record, two uvec4 (GpuLayout.h).
+// Per pixel: the edge coverage record, SVDAG_COVERAGE_RECORD_VEC4S 16-byte words (GpuLayout.h).
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer DenoiseUvec4s
 {
   uvec4 v[];
+};
+layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer DenoiseRecordVec4s
+{
+  vec4 v[];
 };
 layout(buffer_reference, std430, buffer_reference_align = 4) writeonly buffer DenoiseColor
 {
@@ -141,10 +145,15 @@ void prepare(uint x, uint y)
 // of its own label only, and nearest to the edge: there edge pixels count as much as the others
 // (preferring pixels away from the edge brightened creases, whose occlusion those do not see).
 // `own` (the pixel's value) stands for a surface of its own label where its label is not in the
-// window. The estimate gives way to the pixel's own mean as samples accumulate (weight
-// G / (G + samples), G the coverage rays), so that the accumulating image still converges to the
-// path tracer's. The window is read once for all the record's surfaces.
-vec4 resolveEdge(uint x, uint y, uvec4 labels, uvec4 keys, uint ownLabel, vec4 own)
+// window. On a label edge the coverage rays were whole paths (GpuLayout.h), whose mean is the
+// surface's radiance at the edge itself but noisy, where the window's mean is smooth but biased
+// by how fast shading changes at the edge (occlusion at a crease): a surface's color is then the
+// mean of both, the window's estimate counting as SVDAG_DENOISE_WINDOW_SAMPLES paths, or the
+// paths' mean alone where the window shows none of the surface. The estimate gives way to the pixel's own mean as
+// samples accumulate (weight G / (G + samples), G the coverage rays), so that the accumulating
+// image still converges to the path tracer's. The window is read once for all the record's
+// surfaces.
+vec4 resolveEdge(uint x, uint y, uvec4 labels, uvec4 keys, uint record, uint ownLabel, vec4 own)
 {
   uint width = p.sizes.x, height = p.sizes.y;
   DenoiseVec4s colors = DenoiseVec4s(p.colors.xy);
@@ -196,6 +205,7 @@ vec4 resolveEdge(uint x, uint y, uvec4 labels, uvec4 keys, uint ownLabel, vec4 o
       }
     }
   }
+  DenoiseRecordVec4s paths = DenoiseRecordVec4s(p.geometry.xy);
   vec4 sum = vec4(0.0);
   float counted = 0.0;
   for (uint k = 0u; k < SVDAG_COVERAGE_SLOTS; ++k)
@@ -205,6 +215,13 @@ vec4 resolveEdge(uint x, uint y, uvec4 labels, uvec4 keys, uint ownLabel, vec4 o
       continue;
     bool found = weights[k] > 0.0;
     vec4 c = found ? sums[k] / weights[k] : own;
+    vec4 path = paths.v[record + 2u + k];
+    if (path.w > 0.0 && labels[k] != 0u)
+    {
+      float window = found ? float(SVDAG_DENOISE_WINDOW_SAMPLES) : 0.0;
+      c = vec4((path.rgb + window * c.rgb) / (path.w + window), 1.0);
+      found = true;
+    }
     if (found || labels[k] == ownLabel)
     {
       sum += n * c;
@@ -286,9 +303,10 @@ void filterPixel(uint x, uint y)
   if (p.samples.y != 0u && (p.geometry.x != 0u || p.geometry.y != 0u))
   {
     DenoiseUvec4s records = DenoiseUvec4s(p.geometry.xy);
-    uvec4 keys = records.v[2u * i + 1u];
+    uint record = SVDAG_COVERAGE_RECORD_VEC4S * i;
+    uvec4 keys = records.v[record + 1u];
     if (keys != uvec4(0u))
-      result = resolveEdge(x, y, records.v[2u * i], keys, g.x, result);
+      result = resolveEdge(x, y, records.v[record], keys, record, g.x, result);
   }
   DenoiseVec4s(p.colors.zw).v[i] = result;
   DenoiseGuides(p.variances.zw).v[i] = uvec4(g.xyz, floatBitsToUint(resultVariance));

@@ -665,9 +665,9 @@ TEST(RenderBackends, ComputeHoldsNoBvh)
   EXPECT_EQ(bytes.encoding, uint64_t(volume->blocks.size() * 4 + 8) +
       volume->roots.size() * 4 + volume->mids.size() * 4 + std::max<size_t>(volume->leaves.size(), 1) * 8);
   // The outputs, sums and ray limits (20 words a pixel), and the denoiser's working images (on
-  // by default: two RGBA and two guide records, 16 words) and edge coverage records (8 words).
+  // by default: two RGBA and two guide records, 16 words) and edge coverage records (24 words).
   ASSERT_TRUE(renderer.denoise());
-  EXPECT_EQ(bytes.images, uint64_t(32 * 24) * ((1 + 1 + 6 + 4 + 1 + 1 + 4 + 1 + 1) + 16 + 8) * 4);
+  EXPECT_EQ(bytes.images, uint64_t(32 * 24) * ((1 + 1 + 6 + 4 + 1 + 1 + 4 + 1 + 1) + 16 + 24) * 4);
   EXPECT_EQ(bytes.total, renderer.deviceBytes());
   EXPECT_GE(bytes.total, bytes.encoding + bytes.acceleration + bytes.materials + bytes.images);
 

@@ -55,8 +55,9 @@ def test_render_png_and_json(volume_file, tmp_path):
     assert (info["bytes_blas"] > 0 and info["bytes_tlas"] > 0) == (info["backend"] == "rt")
     parts = info["bytes_device"]
     assert parts["encoding"] > 0 and parts["acceleration"] > 0
-    # 20 words a pixel, and the denoiser's working images (on by default, 16 words).
-    assert info["denoise"] is True and parts["images"] == WIDTH * HEIGHT * (80 + 64 + 32)
+    # 20 words a pixel, and the denoiser's working images (on by default, 16 words) and edge
+    # coverage records (24 words).
+    assert info["denoise"] is True and parts["images"] == WIDTH * HEIGHT * (80 + 64 + 96)
     assert parts["total"] >= parts["encoding"] + parts["acceleration"] + parts["materials"] + parts["images"]
     assert info["ms_per_frame"] > 0 and info["render_seconds"] > 0
     image = np.asarray(Image.open(out))

@@ -313,9 +313,9 @@ def test_outputs_are_consistent(real_volume):
     assert renderer.GetDeviceBytes() >= (renderer.GetEncodingBytes() + renderer.GetAccelerationBytes()
                                          + renderer.GetMaterialBytes() + renderer.GetImageBytes())
     # 20 floats or words a pixel, and the denoiser's working images (on by default): two RGBA
-    # and two guide records of 16 bytes, and the edge coverage record of 32.
+    # and two guide records of 16 bytes, and the edge coverage record of 96.
     assert renderer.GetSettings().GetDenoise()
-    assert renderer.GetImageBytes() == WIDTH * HEIGHT * (80 + 64 + 32)
+    assert renderer.GetImageBytes() == WIDTH * HEIGHT * (80 + 64 + 96)
     assert renderer.GetSetupSeconds() > 0 and renderer.GetLastFrameMilliseconds() > 0
     assert renderer.GetDeviceName() != ""
 
@@ -504,7 +504,7 @@ def test_command_line_renders_a_file(real_volume, tmp_path):
     parts = report["bytes_device"]
     assert parts["encoding"] > 0 and parts["acceleration"] > 0
     # with the denoiser's working images and edge coverage records
-    assert parts["images"] == 40 * 30 * (80 + 64 + 32)
+    assert parts["images"] == 40 * 30 * (80 + 64 + 96)
     assert parts["total"] == sum(v for k, v in parts.items() if k != "total")
     assert report["setup_seconds"] > 0 and report["ms_per_frame"] > 0
     image = np.asarray(Image.open(png))

@@ -128,16 +128,22 @@ SVDAG_GPU_CONST SVDAG_SHADING_SMOOTH = 1u;
  * of the trace with coverage.z = 1: every pixel whose pixel-center surface (label and entry face)
  * differs from one of its 8 neighbours' (a label edge, or a step of a voxel staircase) traces the
  * first hits of SVDAG_COVERAGE_GRID^2 camera rays through the centers of a grid of as many
- * sub-pixels (clipping, hidden labels and ray limits as for any camera ray; one trace each, no
- * shading) and counts the surfaces they hit: a surface is a label and an entry face (a groove's
- * walls and floor are lit unlike the face around them). Its record is two uvec4 per pixel (index
- * 2 i and 2 i + 1): up to SVDAG_COVERAGE_SLOTS surfaces, slot k's label index + 1 (0: background)
- * in the first, and in the second its count (bits 0..7) and its world entry face normal,
- * octahedral, as two snorm8 (bits 16..31; 0 for none); a count of 0 marks an unused slot, all
- * counts 0 any other pixel; rays beyond the slots go uncounted. Samples and accumulations are
- * untouched by that dispatch. */
+ * sub-pixels (clipping, hidden labels and ray limits as for any camera ray) and counts the
+ * surfaces they hit: a surface is a label and an entry face (a groove's walls and floor are lit
+ * unlike the face around them). On a label edge (a pixel-center label that differs from one of
+ * its 8 neighbours') each of these rays is a whole camera path (the frame's bounces, next-event
+ * estimation, sun), so that the denoiser has samples of every surface's radiance at the edge
+ * itself, where shading changes fastest (occlusion at a crease); on a step within a label, first
+ * hits only. Its record is SVDAG_COVERAGE_RECORD_VEC4S 16-byte words per pixel (from index
+ * SVDAG_COVERAGE_RECORD_VEC4S * i) for up to SVDAG_COVERAGE_SLOTS surfaces: a uvec4 of slot k's
+ * label index + 1 (0: background); a uvec4 of its count (bits 0..7) and its world entry face
+ * normal, octahedral, as two snorm8 (bits 16..31; 0 for none); then per slot a vec4: the sum of
+ * the radiance of its rays that were whole paths (rgb; a miss: the background's) and their number
+ * (w). A count of 0 marks an unused slot, all counts 0 any other pixel; rays beyond the slots go
+ * uncounted. Samples and accumulations are untouched by that dispatch. */
 #define SVDAG_COVERAGE_GRID 4u
 #define SVDAG_COVERAGE_SLOTS 4u
+#define SVDAG_COVERAGE_RECORD_VEC4S (2u + SVDAG_COVERAGE_SLOTS)
 /* An edge pixel traces its grid's four corner rays first; where all four hit one surface, that
  * surface counts for every ray of the grid and the others are not traced (a straight boundary
  * that leaves the corners on one side leaves the whole square between them there; what the
@@ -199,7 +205,7 @@ SVDAG_UNIFORMS_BEGIN(FrameUniforms)
   uvec4 stepStatistics; // addresses: xy per-pixel step counters (the statistics variant only:
                        // Traversal.h's SVDAG_STAT_COUNT uint32 per pixel, counter c of pixel i
                        // at i * SVDAG_STAT_COUNT + c, summed over the pass's rays); z, w unused
-  uvec4 coverage;      // addresses: xy the coverage records (two uvec4 per pixel, above); z: 1 = this
+  uvec4 coverage;      // addresses: xy the coverage records (above); z: 1 = this
                        // dispatch traces the coverage of edge pixels, not samples
   // Clipping (Module/core/svdag/Clipping.h): every ray, primary and secondary, is clipped to the
   // region the planes keep. x: planes used in clipPlanes (0: no clipping); y, z, w unused.
