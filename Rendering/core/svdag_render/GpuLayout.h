@@ -126,21 +126,21 @@ SVDAG_GPU_CONST SVDAG_SHADING_SMOOTH = 1u;
  * center, so a pixel on an edge shows one surface where the image should show a blend. With the
  * denoiser on, the first full-resolution pass of an accumulation is followed by a second dispatch
  * of the trace with coverage.z = 1: every pixel whose pixel-center surface (label and entry face)
- * differs from one of its 8 neighbours' (a label edge, or a step of a voxel staircase) traces the
- * first hits of SVDAG_COVERAGE_GRID^2 camera rays through the centers of a grid of as many
- * sub-pixels (clipping, hidden labels and ray limits as for any camera ray) and counts the
- * surfaces they hit: a surface is a label and an entry face (a groove's walls and floor are lit
- * unlike the face around them). On a label edge (a pixel-center label that differs from one of
- * its 8 neighbours') each of these rays is a whole camera path (the frame's bounces, next-event
- * estimation, sun), so that the denoiser has samples of every surface's radiance at the edge
- * itself, where shading changes fastest (occlusion at a crease); on a step within a label, first
- * hits only. Its record is SVDAG_COVERAGE_RECORD_VEC4S 16-byte words per pixel (from index
- * SVDAG_COVERAGE_RECORD_VEC4S * i) for up to SVDAG_COVERAGE_SLOTS surfaces: a uvec4 of slot k's
- * label index + 1 (0: background); a uvec4 of its count (bits 0..7) and its world entry face
- * normal, octahedral, as two snorm8 (bits 16..31; 0 for none); then per slot a vec4: the sum of
- * the radiance of its rays that were whole paths (rgb; a miss: the background's) and their number
- * (w). A count of 0 marks an unused slot, all counts 0 any other pixel; rays beyond the slots go
- * uncounted. Samples and accumulations are untouched by that dispatch. */
+ * differs from one of its 8 neighbours' (a label edge, or a step of a voxel staircase) traces
+ * SVDAG_COVERAGE_GRID^2 camera rays through the centers of a grid of as many sub-pixels (clipping,
+ * hidden labels and ray limits as for any camera ray) and counts the surfaces they hit: a surface
+ * is a label and an entry face (a groove's walls and floor are lit unlike the face around them). On
+ * a label edge (a pixel-center label that differs from one of its 8 neighbours') each of these rays
+ * is a whole camera path (the frame's bounces, next-event estimation, sun), so that the denoiser
+ * has samples of every surface's radiance at the edge itself, where shading changes fastest
+ * (occlusion at a crease); on a step within a label, first hits only. Its record is
+ * SVDAG_COVERAGE_RECORD_VEC4S 16-byte words per pixel (from index SVDAG_COVERAGE_RECORD_VEC4S * i)
+ * for up to SVDAG_COVERAGE_SLOTS surfaces: a uvec4 of slot k's label index + 1 (0: background); a
+ * uvec4 of its count (bits 0..7) and its world entry face normal, octahedral, as two snorm8 (bits
+ * 16..31; 0 for none); then per slot a vec4: the sum of the radiance of its rays that were whole
+ * paths (rgb; a miss: the background's) and their number (w). A count of 0 marks an unused slot,
+ * all counts 0 any other pixel; rays beyond the slots go uncounted. Samples and accumulations are
+ * untouched by that dispatch. */
 #define SVDAG_COVERAGE_GRID 4u
 #define SVDAG_COVERAGE_SLOTS 4u
 #define SVDAG_COVERAGE_RECORD_VEC4S (2u + SVDAG_COVERAGE_SLOTS)
