@@ -239,13 +239,17 @@ int vtkSegmentationVolumeReader::RequestData(
     slabs[0].reset(new uint8_t[size_t(slabBytes)]);
     if (zEnd > svdag::Builder::SlabDepth)
       slabs[1].reset(new uint8_t[size_t(slabBytes)]);
+    // Slabs alternate between the two buffers.
+    auto slabAt = [&slabs](int32_t z0) {
+      return slabs[(z0 / svdag::Builder::SlabDepth) % 2].get();
+    };
     // Slab z0's read, on a thread of its own. Sources serve slabs in order from the first
     // (compressed streams cannot seek), one read at a time: the next starts once this one is
     // taken. Its exception is rethrown where it is taken; one left pending (an abort, a failed
     // compression) is waited for when the future goes.
     auto readAhead = [&](int32_t z0) {
       const int32_t nz = std::min(svdag::Builder::SlabDepth, zEnd - z0);
-      uint8_t* slab = slabs[(z0 / svdag::Builder::SlabDepth) % 2].get();
+      uint8_t* slab = slabAt(z0);
       return std::async(
         std::launch::async, [&source, z0, nz, slab] { source->readSlab(z0, nz, slab); });
     };
@@ -266,7 +270,7 @@ int vtkSegmentationVolumeReader::RequestData(
         return 0;
       }
       if (z0 >= zBegin)
-        builder.addSlab(z0 - zBegin, nz, slabs[(z0 / svdag::Builder::SlabDepth) % 2].get());
+        builder.addSlab(z0 - zBegin, nz, slabAt(z0));
       this->UpdateProgress(double(z0 + nz) / zEnd);
     }
     reportWarnings(this, *source, name, warningsReported);

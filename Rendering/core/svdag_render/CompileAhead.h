@@ -17,8 +17,9 @@ namespace render
 // (Device). A renderer with the same settings then finds them compiled: the device keeps its
 // pipelines, and a renderer that asks for one being compiled waits for it rather than compiling
 // it again. Call it while another renderer holds the device: a device goes with its last user,
-// and its pipelines with it (the driver's disk cache, where there is one, keeps what it keeps). Label materials are not known here: emission and transmission are taken as unused,
-// as by default. Thread-safe; throws what the renderer throws (std::runtime_error).
+// and its pipelines with it (the driver's disk cache, where there is one, keeps what it keeps).
+// Label materials are not known here: emission and transmission are taken as unused, as by
+// default. Thread-safe; throws what the renderer throws (std::runtime_error).
 void compileAhead(const RenderSettings& settings);
 
 } // namespace render
