@@ -181,21 +181,24 @@ void writePrimaryOutputs(uint index, uint width, uint height)
   normals.v[faces + 3u * index + 2u] = payload.normal.z;
 }
 
-// Whether pixel (x, y)'s pixel-center surface (label and entry face, as the first pass of this
-// accumulation wrote them) differs from one of its 8 neighbours': a label edge (labelEdge), or a
-// crease or step within a label (a voxel staircase's), both of which one sample through the
-// center aliases.
-bool surfaceEdge(uvec2 pixel, uint width, uint height, out bool labelEdge)
+// How many of pixel (x, y)'s coverage rays, in coverageSubPixel's order, are whole camera paths
+// (GpuLayout.h); -1 where the pixel is not an edge. Edges are where its pixel-center surface
+// (label and entry face, as the first pass of this accumulation wrote them) differs from one of
+// its 8 neighbours', which one sample through the center aliases: a label edge (all of its rays),
+// a crease (a step within a label whose faces meet concave, where occlusion changes fastest: the
+// corner rays), or a convex step (none).
+int coveragePathRays(uvec2 pixel, uint width, uint height)
 {
   SvdagWords labels = SvdagWords(frame.sceneOutputs.zw);
+  SvdagFloats depths = SvdagFloats(frame.outputs.xy);
   SvdagFloats normals = SvdagFloats(frame.outputs.zw);
   uint faces = 3u * width * height; // where the entry face normals start (GpuLayout.h)
   uint i = pixel.x + width * pixel.y;
   uint label = labels.w[i];
   vec3 face = vec3(normals.v[faces + 3u * i], normals.v[faces + 3u * i + 1u],
     normals.v[faces + 3u * i + 2u]);
-  labelEdge = false;
-  bool step = false;
+  bool step = false, crease = false;
+  vec3 hit = vec3(0.0);
   for (int dy = -1; dy <= 1; ++dy)
   {
     for (int dx = -1; dx <= 1; ++dx)
@@ -205,16 +208,24 @@ bool surfaceEdge(uvec2 pixel, uint width, uint height, out bool labelEdge)
         continue;
       uint j = uint(q.x) + width * uint(q.y);
       if (labels.w[j] != label)
+        return int(SVDAG_COVERAGE_GRID * SVDAG_COVERAGE_GRID);
+      vec3 faceQ = vec3(normals.v[faces + 3u * j], normals.v[faces + 3u * j + 1u],
+        normals.v[faces + 3u * j + 2u]);
+      if (label == 0u || crease || faceQ == face)
+        continue;
+      // Concave where either hit lies in front of the other's face plane.
+      if (!step)
       {
-        labelEdge = true;
-        return true;
+        CameraRay ray = cameraRay(vec2(pixel) + 0.5, i, width, height);
+        hit = ray.origin + depths.v[i] * ray.direction;
       }
-      if (!step && label != 0u && vec3(normals.v[faces + 3u * j], normals.v[faces + 3u * j + 1u],
-            normals.v[faces + 3u * j + 2u]) != face)
-        step = true;
+      step = true;
+      CameraRay rayQ = cameraRay(vec2(q) + 0.5, j, width, height);
+      vec3 hitQ = rayQ.origin + depths.v[j] * rayQ.direction;
+      crease = dot(face, hitQ - hit) > 0.0 || dot(faceQ, hit - hitQ) > 0.0;
     }
   }
-  return step;
+  return crease ? int(SVDAG_COVERAGE_CORNERS) : step ? 0 : -1;
 }
 
 // The grid position of an edge pixel's k-th coverage ray: the grid's four corners first, then the
@@ -323,8 +334,8 @@ void svdagRenderPixel(uvec2 pixel)
   uint before = frame.sampling.x;
   uint samples = frame.sampling.y;
   const uint coverageRays = SVDAG_COVERAGE_GRID * SVDAG_COVERAGE_GRID;
-  bool labelEdge = false;
-  bool edge = coverage && inImage && surfaceEdge(pixel, width, height, labelEdge);
+  int pathRays = coverage && inImage ? coveragePathRays(pixel, width, height) : -1;
+  bool edge = pathRays >= 0;
   uvec4 coveredLabels = uvec4(0u), coveredKeys = uvec4(0u);
   vec4 coveredPaths[SVDAG_COVERAGE_SLOTS];
   for (uint k = 0u; k < SVDAG_COVERAGE_SLOTS; ++k)
@@ -372,7 +383,7 @@ void svdagRenderPixel(uvec2 pixel)
     uint rayIndex = index;
     uint slot = s;
     bool traces = true;
-    bool wholePath = labelEdge;
+    int rayPathRays = pathRays;
 #ifdef SVDAG_COVERAGE_SUBGROUP
     if (coverage)
     {
@@ -380,12 +391,14 @@ void svdagRenderPixel(uvec2 pixel)
       traces = slot < rays;
       uint owner = svdagBallotLane(edges, traces ? slot / phaseRays : 0u);
       rayIndex = subgroupShuffle(index, owner);
-      wholePath = subgroupShuffle(labelEdge ? 1u : 0u, owner) != 0u;
+      rayPathRays = subgroupShuffle(pathRays, owner);
     }
 #endif
+    uint coverageRay = phaseFirst + slot % phaseRays;
+    bool wholePath = int(coverageRay) < rayPathRays;
     if (coverage)
     {
-      uint sub = coverageSubPixel(phaseFirst + slot % phaseRays);
+      uint sub = coverageSubPixel(coverageRay);
       jitter = (vec2(sub % SVDAG_COVERAGE_GRID, sub / SVDAG_COVERAGE_GRID) + 0.5) /
         float(SVDAG_COVERAGE_GRID);
       // A stream of its own per (pixel, sub-pixel, seed), apart from the pixels' samples (its

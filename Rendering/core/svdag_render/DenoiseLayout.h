@@ -30,8 +30,8 @@
  * SVGF does. The last iteration resolves the pixels that have a coverage record (GpuLayout.h:
  * label edges and steps between entry faces): the colors of the surfaces their sub-pixel rays
  * hit, each the 7x7 neighbourhood's mean of the pixels showing it (same label and entry face;
- * once samples accumulate, not on a label edge where some are; on a label edge mixed with the
- * mean radiance of the surface's coverage rays, which were whole paths there), weighted by the
+ * once samples accumulate, not on a label edge where some are; where some of the pixel's coverage
+ * rays were whole paths, on label edges and creases, mixed with their mean radiance), weighted by the
  * rays' counts, then mixed with the pixel's own value by G / (G + samples), G the coverage rays.
  * Parameters live in a buffer reached through its device address (pushed as a uvec2), one slot
  * per dispatch of a frame. Only vec4 / uvec4 members: the std430 layout is the C++ struct's.
@@ -63,7 +63,7 @@ namespace gpu
 #define SVDAG_DENOISE_ITERATIONS 5u
 /* From this many accumulated samples on, the variance of the mean comes from the samples. */
 #define SVDAG_DENOISE_TEMPORAL_SAMPLES 4u
-/* On a label edge, a surface's window estimate counts as this many of its coverage paths
+/* Where coverage rays were whole paths, a surface's window estimate counts as this many of them
  * (denoise.comp's resolveEdge). */
 #define SVDAG_DENOISE_WINDOW_SAMPLES 4u
 /* The normal weight's power: 2^SVDAG_DENOISE_NORMAL_POWER_LOG2. */

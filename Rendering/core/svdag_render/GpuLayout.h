@@ -133,7 +133,10 @@ SVDAG_GPU_CONST SVDAG_SHADING_SMOOTH = 1u;
  * a label edge (a pixel-center label that differs from one of its 8 neighbours') each of these rays
  * is a whole camera path (the frame's bounces, next-event estimation, sun), so that the denoiser
  * has samples of every surface's radiance at the edge itself, where shading changes fastest
- * (occlusion at a crease); on a step within a label, first hits only. Its record is
+ * (occlusion at a crease). On a crease within a label (a step whose two faces meet concave: either
+ * pixel-center hit lies in front of the other's face plane) the grid's corner rays are whole paths
+ * (SVDAG_COVERAGE_CORNERS, below), the others first hits; on a convex step, first hits only. Its
+ * record is
  * SVDAG_COVERAGE_RECORD_VEC4S 16-byte words per pixel (from index SVDAG_COVERAGE_RECORD_VEC4S * i)
  * for up to SVDAG_COVERAGE_SLOTS surfaces: a uvec4 of slot k's label index + 1 (0: background); a
  * uvec4 of its count (bits 0..7) and its world entry face normal, octahedral, as two snorm8 (bits
