@@ -31,8 +31,9 @@
  * label edges and steps between entry faces): the colors of the surfaces their sub-pixel rays
  * hit, each the 7x7 neighbourhood's mean of the pixels showing it (same label and entry face;
  * once samples accumulate, not on a label edge where some are; where some of the pixel's coverage
- * rays were whole paths, on label edges and creases, mixed with their mean radiance), weighted by the
- * rays' counts, then mixed with the pixel's own value by G / (G + samples), G the coverage rays.
+ * rays were whole paths, on label edges and creases, mixed with their mean radiance), weighted by
+ * the rays' counts, then mixed with the pixel's own value by G / (G + samples), G the coverage
+ * rays.
  * Parameters live in a buffer reached through its device address (pushed as a uvec2), one slot
  * per dispatch of a frame. Only vec4 / uvec4 members: the std430 layout is the C++ struct's.
  */
