@@ -145,15 +145,14 @@ void prepare(uint x, uint y)
 // of its own label only, and nearest to the edge: there edge pixels count as much as the others
 // (preferring pixels away from the edge brightened creases, whose occlusion those do not see).
 // `own` (the pixel's value) stands for a surface of its own label where its label is not in the
-// window. On a label edge the coverage rays were whole paths, on a crease within a label its
-// corner rays (GpuLayout.h), whose mean is the surface's radiance at the edge itself but noisy,
-// where the window's mean is smooth but biased by how fast shading changes at the edge (occlusion
-// at a crease): a surface's color is then the
-// mean of both, the window's estimate counting as SVDAG_DENOISE_WINDOW_SAMPLES paths, or the
-// paths' mean alone where the window shows none of the surface. The estimate gives way to the
-// pixel's own mean as samples accumulate (weight G / (G + samples), G the coverage rays), so that
-// the accumulating image still converges to the path tracer's. The window is read once for all
-// the record's surfaces.
+// window. On a label edge the coverage rays were whole paths, on a crease within a label its corner
+// rays (GpuLayout.h), whose mean is the surface's radiance at the edge itself but noisy, where the
+// window's mean is smooth but biased by how fast shading changes at the edge (occlusion at a
+// crease): a surface's color is then the mean of both, the window's estimate counting as
+// SVDAG_DENOISE_WINDOW_SAMPLES paths, or the paths' mean alone where the window shows none of the
+// surface. The estimate gives way to the pixel's own mean as samples accumulate (weight G / (G +
+// samples), G the coverage rays), so that the accumulating image still converges to the path
+// tracer's. The window is read once for all the record's surfaces.
 vec4 resolveEdge(uint x, uint y, uvec4 labels, uvec4 keys, uint record, uint ownLabel, vec4 own)
 {
   uint width = p.sizes.x, height = p.sizes.y;

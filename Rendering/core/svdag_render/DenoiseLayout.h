@@ -27,15 +27,14 @@
  * the pixel center, so of its own label); later their samples may have hit the neighbouring
  * label, so no radiance of one label reaches a pixel inside another. Positions are recomputed
  * from the depth and the rays. Every iteration filters the variance with the squared weights, as
- * SVGF does. The last iteration resolves the pixels that have a coverage record (GpuLayout.h:
- * label edges and steps between entry faces): the colors of the surfaces their sub-pixel rays
- * hit, each the 7x7 neighbourhood's mean of the pixels showing it (same label and entry face;
- * once samples accumulate, not on a label edge where some are; where some of the pixel's coverage
- * rays were whole paths, on label edges and creases, mixed with their mean radiance), weighted by
- * the rays' counts, then mixed with the pixel's own value by G / (G + samples), G the coverage
- * rays.
- * Parameters live in a buffer reached through its device address (pushed as a uvec2), one slot
- * per dispatch of a frame. Only vec4 / uvec4 members: the std430 layout is the C++ struct's.
+ * SVGF does. The last iteration resolves the pixels that have a coverage record (GpuLayout.h: label
+ * edges and steps between entry faces): the colors of the surfaces their sub-pixel rays hit, each
+ * the 7x7 neighbourhood's mean of the pixels showing it (same label and entry face; once samples
+ * accumulate, not on a label edge where some are; where some of the pixel's coverage rays were
+ * whole paths, on label edges and creases, mixed with their mean radiance), weighted by the rays'
+ * counts, then mixed with the pixel's own value by G / (G + samples), G the coverage rays.
+ * Parameters live in a buffer reached through its device address (pushed as a uvec2), one slot per
+ * dispatch of a frame. Only vec4 / uvec4 members: the std430 layout is the C++ struct's.
  */
 #ifndef SVDAG_RENDER_DENOISE_LAYOUT_H
 #define SVDAG_RENDER_DENOISE_LAYOUT_H

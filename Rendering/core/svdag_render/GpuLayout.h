@@ -136,14 +136,13 @@ SVDAG_GPU_CONST SVDAG_SHADING_SMOOTH = 1u;
  * (occlusion at a crease). On a crease within a label (a step whose two faces meet concave: either
  * pixel-center hit lies in front of the other's face plane) the grid's corner rays are whole paths
  * (SVDAG_COVERAGE_CORNERS, below), the others first hits; on a convex step, first hits only. Its
- * record is
- * SVDAG_COVERAGE_RECORD_VEC4S 16-byte words per pixel (from index SVDAG_COVERAGE_RECORD_VEC4S * i)
- * for up to SVDAG_COVERAGE_SLOTS surfaces: a uvec4 of slot k's label index + 1 (0: background); a
- * uvec4 of its count (bits 0..7) and its world entry face normal, octahedral, as two snorm8 (bits
- * 16..31; 0 for none); then per slot a vec4: the sum of the radiance of its rays that were whole
- * paths (rgb; a miss: the background's) and their number (w). A count of 0 marks an unused slot,
- * all counts 0 any other pixel; rays beyond the slots go uncounted. Samples and accumulations are
- * untouched by that dispatch. */
+ * record is SVDAG_COVERAGE_RECORD_VEC4S 16-byte words per pixel (from index
+ * SVDAG_COVERAGE_RECORD_VEC4S * i) for up to SVDAG_COVERAGE_SLOTS surfaces: a uvec4 of slot k's
+ * label index + 1 (0: background); a uvec4 of its count (bits 0..7) and its world entry face
+ * normal, octahedral, as two snorm8 (bits 16..31; 0 for none); then per slot a vec4: the sum of the
+ * radiance of its rays that were whole paths (rgb; a miss: the background's) and their number (w).
+ * A count of 0 marks an unused slot, all counts 0 any other pixel; rays beyond the slots go
+ * uncounted. Samples and accumulations are untouched by that dispatch. */
 #define SVDAG_COVERAGE_GRID 4u
 #define SVDAG_COVERAGE_SLOTS 4u
 #define SVDAG_COVERAGE_RECORD_VEC4S (2u + SVDAG_COVERAGE_SLOTS)
