@@ -394,10 +394,11 @@ void svdagRenderPixel(uvec2 pixel)
       rayPathRays = subgroupShuffle(pathRays, owner);
     }
 #endif
-    uint coverageRay = phaseFirst + slot % phaseRays;
-    bool wholePath = int(coverageRay) < rayPathRays;
+    bool wholePath = false;
     if (coverage)
     {
+      uint coverageRay = phaseFirst + slot % phaseRays;
+      wholePath = int(coverageRay) < rayPathRays;
       uint sub = coverageSubPixel(coverageRay);
       jitter = (vec2(sub % SVDAG_COVERAGE_GRID, sub / SVDAG_COVERAGE_GRID) + 0.5) /
         float(SVDAG_COVERAGE_GRID);
