@@ -47,14 +47,21 @@ def hdr(renderer):
 
 
 def relabel(volume):
-    """The decoded labels as dense uint16 indices in VTK order (x fastest), their count and the
-    index of value 0 (None without background)."""
+    """The decoded labels as dense uint16 indices in VTK order (x fastest; index i is the i-th
+    smallest value), their count and the index of value 0 (None without background).
+
+    fastremap, connectomics' tool for this, as a ray caster's user would relabel: np.unique's
+    return_inverse sorts every voxel (1.9 s on a 250^3 volume, against 0.1 s here), which the
+    start-up bench would otherwise charge to vtkGPUVolumeRayCastMapper."""
+    import fastremap
+
     flat = volume.to_numpy().ravel(order="F")
-    values, inverse = np.unique(flat, return_inverse=True)
+    values = fastremap.unique(flat)
     if len(values) > 65536:
         raise RuntimeError(f"{len(values)} distinct values do not fit uint16 indices")
+    indices = fastremap.remap(flat, {value: i for i, value in enumerate(values.tolist())})
     background = int(np.searchsorted(values, 0)) if values[0] == 0 else None
-    return inverse.astype(np.uint16).reshape(-1), len(values), background
+    return indices.astype(np.uint16), len(values), background
 
 
 def index_image(volume, indices):

@@ -13,7 +13,7 @@ camera (pyvista's default isometric reset) for all three routes:
       add_segmentation(plotter, volume, sun=True, spp=1, lod="voxel") -> plotter.screenshot();
   (b) gpu-raycast: vtksvdag.read(path).to_numpy() (Debian's VTK cannot read gzip NRRD, so the
       labels are decoded from our reader; this time is counted as theirs) -> relabel to uint16
-      dense indices (np.unique return_inverse) -> vtkImageData -> vtkGPUVolumeRayCastMapper,
+      dense indices (fastremap, _scenes.relabel) -> vtkImageData -> vtkGPUVolumeRayCastMapper,
       nearest interpolation, categorical vtkColorTransferFunction (one point per label index,
       random colors, seed 0), opacity 0 for the background (value 0) and 1 for labels, shading on;
   (c) surfaces: the same labels and relabel -> vtkDiscreteFlyingEdges3D (GenerateValues over
