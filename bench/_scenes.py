@@ -83,8 +83,9 @@ def index_image(volume, indices):
 def gpu_raycast_volume(volume, relabelled=None):
     """A vtkVolume of `volume` through vtkGPUVolumeRayCastMapper: nearest interpolation, a random
     categorical color per label (seed 0), opacity 0 for the background and 1 for labels, shading
-    on. `relabelled`: relabel(volume) where the caller made it already. Returns (vtkVolume,
-    mapper)."""
+    off (VTK would shade with the label-index field's gradient, which is zero inside a label: its
+    inside black, only the borders colored). `relabelled`: relabel(volume) where the caller made
+    it already. Returns (vtkVolume, mapper)."""
     import vtkmodules.vtkRenderingVolumeOpenGL2  # noqa: F401  (the OpenGL volume mappers)
     from vtkmodules.vtkCommonDataModel import vtkPiecewiseFunction
     from vtkmodules.vtkRenderingCore import vtkColorTransferFunction, vtkVolume, vtkVolumeProperty
@@ -105,7 +106,7 @@ def gpu_raycast_volume(volume, relabelled=None):
     prop.SetColor(ctf)
     prop.SetScalarOpacity(otf)
     prop.SetInterpolationTypeToNearest()
-    prop.ShadeOn()
+    prop.ShadeOff()
     mapper = vtkGPUVolumeRayCastMapper()
     mapper.SetInputData(index_image(volume, indices))
     actor = vtkVolume()

@@ -23,7 +23,7 @@ first image is written (Python's start-up and imports included: what a user wait
   gpu-raycast           the same file into the same Plotter through vtkGPUVolumeRayCastMapper
                         (labels read with vtksvdag.read and decoded, as bench/vtk.py does:
                         Debian's VTK cannot read gzip NRRD; nearest interpolation, a categorical
-                        color per label, shading on), then `plotter.screenshot()`.
+                        color per label, shading off), then `plotter.screenshot()`.
 
 Cache states, each in fresh folders of its own:
   cold  Mesa's shader cache (MESA_SHADER_CACHE_DIR, for both lavapipe and llvmpipe) and ours

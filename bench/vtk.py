@@ -15,7 +15,7 @@ camera (pyvista's default isometric reset) for all three routes:
       labels are decoded from our reader; this time is counted as theirs) -> relabel to uint16
       dense indices (fastremap, _scenes.relabel) -> vtkImageData -> vtkGPUVolumeRayCastMapper,
       nearest interpolation, categorical vtkColorTransferFunction (one point per label index,
-      random colors, seed 0), opacity 0 for the background (value 0) and 1 for labels, shading on;
+      random colors, seed 0), opacity 0 for the background (value 0) and 1 for labels, shading off;
   (c) surfaces: the same labels and relabel -> vtkDiscreteFlyingEdges3D (GenerateValues over
       every label index but the background) -> vtkPolyDataMapper (scalar coloring off, one
       color), default shading.
@@ -360,8 +360,7 @@ def main(argv=None) -> int:
     parser.add_argument("--still-frames", type=int, default=5, help="still frames (median)")
     parser.add_argument("--size", type=int, default=512, help="window width and height")
     parser.add_argument("--bounces", type=int, default=4,
-                        help="our path tracer's scattering events per path (1: direct light only, "
-                             "the nearest to the ray cast's local shading)")
+                        help="our path tracer's scattering events per path (1: direct light only)")
     parser.add_argument("--timeout", type=float, default=900, help="seconds per route subprocess")
     parser.add_argument("--budget-all", action="store_true",
                         help="only route (a) interacting, on every shared volume")
