@@ -203,11 +203,12 @@ def main(argv=None) -> int:
     finally:
         shutil.rmtree(work, ignore_errors=True)
 
-    median = {}
-    for route in args.routes:
-        for cache in CACHES:
-            values = [r["first_image_s"] for r in rows if r["route"] == route and r["cache"] == cache]
-            median[route, cache] = statistics.median(values)
+    def median_of(field, route, cache):
+        return statistics.median(r[field] for r in rows
+                                 if r["route"] == route and r["cache"] == cache)
+
+    median = {(route, cache): median_of("first_image_s", route, cache)
+              for route in args.routes for cache in CACHES}
     print("\nmedian seconds to the first image")
     print(f"{'route':16s} " + " ".join(f"{c:>8s}" for c in CACHES))
     for route in args.routes:
@@ -221,8 +222,7 @@ def main(argv=None) -> int:
                     f"{median[route, c] / median['gpu-raycast', c]:8.2f}" for c in CACHES))
         # What every pyvista route pays before its renderer is involved: Python, the imports,
         # the Plotter and the file's read (ours reads with the same vtksvdag.read).
-        shared = {(field, c): statistics.median(r[field] for r in rows if r["cache"] == c and
-                                                r["route"] == "gpu-raycast")
+        shared = {(field, c): median_of(field, "gpu-raycast", c)
                   for field in ("plotter_s", "read_s") for c in CACHES}
         print("\nthe ray caster's route until its Plotter is ready and until it has read the "
               "file, median s,\nand the latter over its first image: the floor of the pyvista "
