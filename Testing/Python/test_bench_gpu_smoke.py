@@ -38,9 +38,17 @@ def test_gpu_script_prints_one_table(tmp_path):
         (f, lod, b) for f in "ab" for lod in ("voxel", "block") for b in ("1", "4"))
     for r in rows:
         # Per backend: accumulating, restarting, restarting denoised, the same traced at half
-        # resolution and upsampled; the ratio; the bytes.
+        # resolution and upsampled; the ratio; the denoiser's cost per backend (percent of the
+        # restarting frame, from the two columns before); the bytes.
         numbers = [float(v) for v in r[3:] if v != "|"]
-        assert len(numbers) == 11 and all(n > 0 for n in numbers), r
+        assert len(numbers) == 13, r
+        times, costs = numbers[:9] + numbers[11:], numbers[9:11]
+        assert all(n > 0 for n in times), r
+        for cost, restart, denoised in zip(costs, (numbers[1], numbers[5]), (numbers[2], numbers[6])):
+            # The times are printed to 0.005 ms and the cost to 0.5%.
+            low = 100.0 * ((denoised - 0.005) / (restart + 0.005) - 1.0) - 0.5
+            high = 100.0 * ((denoised + 0.005) / (restart - 0.005) - 1.0) + 0.5
+            assert low <= cost <= high, r
     # The start-up of each backend: every cache empty (with the full pipeline, with the
     # preview's first frame, with the smooth-shading and the clipping variants), and with our
     # pipeline cache warm; each with its compile seconds.
