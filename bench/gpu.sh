@@ -35,7 +35,7 @@ while [ $# -gt 0 ]; do
     --frames) frames="$2"; shift 2 ;;
     --width) width="$2"; shift 2 ;;
     --height) height="$2"; shift 2 ;;
-    -h|--help) sed -n '2,19p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,/^set -uo/{/^#/p}' "$0"; exit 0 ;;
     *) inputs+=("$1"); shift ;;
   esac
 done
