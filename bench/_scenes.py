@@ -56,12 +56,11 @@ def relabel(volume):
     import fastremap
 
     flat = volume.to_numpy().ravel(order="F")
-    values = fastremap.unique(flat)
+    values, inverse = fastremap.unique(flat, return_inverse=True)
     if len(values) > 65536:
         raise RuntimeError(f"{len(values)} distinct values do not fit uint16 indices")
-    indices = fastremap.remap(flat, {value: i for i, value in enumerate(values.tolist())})
     background = int(np.searchsorted(values, 0)) if values[0] == 0 else None
-    return indices.astype(np.uint16), len(values), background
+    return inverse.astype(np.uint16).reshape(-1), len(values), background
 
 
 def index_image(volume, indices):
